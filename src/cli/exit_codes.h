@@ -1,0 +1,10 @@
+// The program's exit codes: only src/cli picks them.
+#pragma once
+
+namespace patchscan::cli {
+
+constexpr int kExitOk = 0;
+constexpr int kExitInputError = 1;  // a scene file could not be read or is malformed
+constexpr int kExitUsage = 2;       // bad command line or option value
+
+}  // namespace patchscan::cli

@@ -1,0 +1,116 @@
+#include "cli/info.h"
+
+#include <bit>
+#include <iomanip>
+#include <ostream>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include "cli/exit_codes.h"
+#include "patch/screen.h"
+
+namespace patchscan::cli {
+namespace {
+
+std::string Range(double lo, double hi) {
+  std::ostringstream s;
+  s << '[' << lo << ", " << hi << ']';
+  return s.str();
+}
+
+std::string Box3(const Bounds3& b) {
+  std::ostringstream s;
+  for (int k = 0; k < 3; ++k) s << (k ? "  " : "") << "xyz"[k] << ' ' << Range(b.lo[k], b.hi[k]);
+  return s.str();
+}
+
+std::string Point(const Vec3& p) {
+  std::ostringstream s;
+  s << p.x() << ',' << p.y() << ',' << p.z();
+  return s.str();
+}
+
+std::string EdgeList(unsigned mask) {
+  std::string s;
+  for (PatchEdge e : {PatchEdge::U0, PatchEdge::U1, PatchEdge::V0, PatchEdge::V1})
+    if (mask & (1u << static_cast<int>(e))) s += (s.empty() ? "" : " ") + std::string(EdgeName(e));
+  return s.empty() ? "-" : s;
+}
+
+}  // namespace
+
+CLI::App* AddInfoCommand(CLI::App* app, InfoOptions* o) {
+  CLI::App* cmd = app->add_subcommand(
+      "info",
+      "Describe a scene file: surface count, control points, world bounds, collapsed "
+      "(degenerate) patch edges, the camera, and one line per surface with its bounds in "
+      "world and screen space.");
+  cmd->add_option("FILE", o->file, "scene file (.bpt)")->required();
+  AddCameraOptions(cmd, &o->camera);
+  return cmd;
+}
+
+int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
+  auto loaded = LoadScene(o.file);
+  if (auto* e = std::get_if<SourceError>(&loaded)) {
+    err << "patchscan: " << e->What() << '\n';
+    return kExitInputError;
+  }
+  const Scene& scene = std::get<Scene>(loaded);
+  auto resolved = ResolveCamera(o.camera, scene);
+  if (auto* why = std::get_if<std::string>(&resolved)) {
+    err << "patchscan: " << *why << '\n';
+    return kExitUsage;
+  }
+  const auto& [camera, framed] = std::get<ResolvedCamera>(resolved);
+
+  // Step 1: scene totals.
+  size_t nPatches = 0, nCollapsed = 0;
+  std::set<std::tuple<double, double, double>> distinct;
+  for (const Surface& s : scene.surfaces)
+    if (const auto* b = std::get_if<BicubicPatch>(&s.shape)) {
+      ++nPatches;
+      nCollapsed += std::popcount(CollapsedEdges(*b));
+      for (const Vec3& p : b->BezierPoints()) distinct.insert({p.x(), p.y(), p.z()});
+    }
+  out << "scene: " << scene.source << '\n'
+      << "surfaces: " << scene.surfaces.size() << " (" << nPatches << (nPatches == 1 ? " bicubic patch)\n" : " bicubic patches)\n");
+  if (nPatches > 0)
+    out << "control points: " << 16 * nPatches << " (" << distinct.size() << " distinct)\n"
+        << "collapsed edges: " << nCollapsed << '\n';
+  out << "world bounds: " << Box3(scene.WorldBounds()) << '\n'
+      << "camera: " << camera.width << 'x' << camera.height << ", eye " << Point(camera.eye)
+      << ", look-at " << Point(camera.lookAt) << ", up " << Point(camera.up) << ", fov "
+      << camera.fovDeg << ", hither " << camera.hither << (framed ? " (framed automatically)" : "")
+      << '\n';
+
+  // Step 2: one line per surface.
+  out << "surface  line  kind             collapsed  world bounds | screen bounds (x, y px)\n";
+  Bounds3 screenAll;
+  bool behindEye = false;
+  for (size_t i = 0; i < scene.surfaces.size(); ++i) {
+    const Surface& s = scene.surfaces[i];
+    const auto* b = std::get_if<BicubicPatch>(&s.shape);
+    const auto screen = ScreenBounds(s, ScreenMap(camera, s.worldFromObject));
+    std::string where = "reaches behind the eye";
+    if (screen) {
+      screenAll.Extend(*screen);
+      where = "x " + Range(screen->lo.x(), screen->hi.x()) + "  y " +
+              Range(screen->lo.y(), screen->hi.y());
+    } else {
+      behindEye = true;
+    }
+    out << std::setw(7) << i + 1 << std::setw(6) << scene.sourceLines[i] << "  " << std::left
+        << std::setw(17) << Describe(s).substr(0, 16) << std::setw(11)
+        << (b ? EdgeList(CollapsedEdges(*b)) : "-") << std::right << Box3(WorldBounds(s))
+        << " | " << where << '\n';
+  }
+  if (!screenAll.Empty())
+    out << "screen bounds: x " << Range(screenAll.lo.x(), screenAll.hi.x()) << "  y "
+        << Range(screenAll.lo.y(), screenAll.hi.y())
+        << (behindEye ? " (of the surfaces in front of the eye)" : "") << '\n';
+  return kExitOk;
+}
+
+}  // namespace patchscan::cli

@@ -1,0 +1,46 @@
+// patchscan: the command-line program. The only place that parses arguments, prints to the
+// terminal, or picks an exit code.
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "cli/exit_codes.h"
+#include "cli/info.h"
+
+#ifndef PATCHSCAN_VERSION
+#error "PATCHSCAN_VERSION must be defined by the build"
+#endif
+
+int main(int argc, char** argv) {
+  using namespace patchscan::cli;
+  CLI::App app(
+      "patchscan renders parametric surfaces (bicubic patches in any basis, quadrics) "
+      "directly, with Blinn's scan-line algorithm, and compares them with tessellated "
+      "renders through the same back end.",
+      "patchscan");
+  app.set_version_flag("--version", std::string("patchscan ") + PATCHSCAN_VERSION);
+  app.require_subcommand(1);
+  app.footer(
+      "Exit codes: 0 success, 1 unreadable or malformed input file, 2 bad command line.\n"
+      "Run 'patchscan COMMAND --help' for one command's options.");
+
+  InfoOptions info;
+  CLI::App* infoCmd = AddInfoCommand(&app, &info);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp&) {
+    // Top-level --help documents every command and option; a command's --help, its own.
+    const CLI::App* shown = infoCmd->parsed() ? infoCmd : &app;
+    std::cout << (shown == &app ? app.help("", CLI::AppFormatMode::All) : shown->help());
+    return kExitOk;
+  } catch (const CLI::CallForVersion&) {
+    std::cout << app.version() << '\n';
+    return kExitOk;
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "patchscan: " << e.what() << "\nRun 'patchscan --help' for usage.\n";
+    return kExitUsage;
+  }
+
+  if (infoCmd->parsed()) return RunInfo(info, std::cout, std::cerr);
+  return kExitUsage;
+}

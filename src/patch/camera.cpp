@@ -1,0 +1,95 @@
+#include "patch/camera.h"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+namespace patchscan {
+namespace {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+// The framed bounding sphere fills this fraction of the smaller half field of view.
+constexpr double kFrameFill = 0.95;
+// The hither plane of a framed camera, as a fraction of the distance to the scene's
+// nearest point: near enough never to clip the scene, far enough to keep 1/z well scaled.
+constexpr double kFrameHitherFraction = 0.5;
+
+struct ViewFrame {
+  Vec3 right, down, forward;
+};
+
+ViewFrame Frame(const Camera& c) {
+  const Vec3 forward = (c.lookAt - c.eye).normalized();
+  const Vec3 right = forward.cross(c.up).normalized();
+  return {right, forward.cross(right), forward};
+}
+
+}  // namespace
+
+std::optional<std::string> ValidateCamera(const Camera& c) {
+  std::ostringstream why;
+  if (c.width < 1 || c.height < 1 || c.width > kMaxImageSide || c.height > kMaxImageSide)
+    why << "image size " << c.width << "x" << c.height << " is outside 1x1 to " << kMaxImageSide
+        << "x" << kMaxImageSide;
+  else if (!c.eye.allFinite() || !c.lookAt.allFinite() || !c.up.allFinite())
+    why << "eye, look-at and up must be finite";
+  else if (!(c.fovDeg >= kMinFovDeg && c.fovDeg <= kMaxFovDeg))
+    why << "field of view " << c.fovDeg << " degrees is outside " << kMinFovDeg << " to "
+        << kMaxFovDeg;
+  else if ((c.lookAt - c.eye).norm() == 0.0)
+    why << "eye and look-at are the same point";
+  else if (c.up.norm() == 0.0 ||
+           (c.lookAt - c.eye).normalized().cross(c.up.normalized()).norm() < kMinUpSine)
+    why << "up vector is zero or along the view direction";
+  else if (!(c.hither > 0.0) || !std::isfinite(c.hither))
+    why << "hither distance must be positive and finite";
+  else
+    return std::nullopt;
+  return why.str();
+}
+
+double FocalPixels(const Camera& c) {
+  return 0.5 * c.height / std::tan(0.5 * c.fovDeg * kRadPerDeg);
+}
+
+Mat4 ScreenFromWorld(const Camera& c) {
+  const ViewFrame f = Frame(c);
+  const double focal = FocalPixels(c), cx = 0.5 * c.width, cy = 0.5 * c.height;
+  // Rows applied to (p - eye): X = focal * right + cx * forward, Y = focal * down +
+  // cy * forward, D = forward - hither, W = forward.
+  Mat4 m = Mat4::Zero();
+  m.block<1, 3>(0, 0) = (focal * f.right + cx * f.forward).transpose();
+  m.block<1, 3>(1, 0) = (focal * f.down + cy * f.forward).transpose();
+  m.block<1, 3>(2, 0) = f.forward.transpose();
+  m.block<1, 3>(3, 0) = f.forward.transpose();
+  m.block<4, 1>(0, 3) = -m.block<4, 3>(0, 0) * c.eye;
+  m(2, 3) -= c.hither;
+  return m;
+}
+
+Vec3 DefaultViewDirection(const Vec3& up) {
+  const Vec3 u = up.normalized();
+  // Front: -y, unless up is close to the y axis, then +z.
+  Vec3 front = std::abs(u.y()) < 0.9 ? Vec3(0, -1, 0) : Vec3(0, 0, 1);
+  front = (front - front.dot(u) * u).normalized();
+  const Vec3 right = (-front).cross(u);  // the screen's right when looking along -front
+  return (front + 0.45 * right + 0.55 * u).normalized();
+}
+
+Camera FrameBounds(const Bounds3& world, const Camera& base, const Vec3& direction) {
+  Camera c = base;
+  const Vec3 centre = world.Empty() ? Vec3::Zero() : world.Centre();
+  double radius = world.Empty() ? 1.0 : 0.5 * world.Diagonal().norm();
+  // A point-like scene still gets a camera: scale the radius from the scene's position.
+  radius = std::max(radius, 1e-9 * std::max(centre.cwiseAbs().maxCoeff(), 1e-300));
+  const double halfV = 0.5 * c.fovDeg * kRadPerDeg;
+  const double halfH = std::atan(std::tan(halfV) * c.width / c.height);
+  const double dist = radius / (kFrameFill * std::sin(std::min(halfV, halfH)));
+  c.lookAt = centre;
+  c.eye = centre + direction.normalized() * dist;
+  c.hither = kFrameHitherFraction * (dist - radius);
+  return c;
+}
+
+}  // namespace patchscan

@@ -1,0 +1,48 @@
+// The perspective camera and the screen space it defines (DESIGN.md, "Space").
+// Screen space: x right and y down in pixels (pixel (i, j) covers [i, i+1) x [j, j+1)),
+// and depth = 1 - hither / z, with z the distance along the view axis: depth is linear in
+// 1/z, 0 on the hither plane, approaching 1 at infinity, negative between eye and hither.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "patch/geometry.h"
+
+namespace patchscan {
+
+struct Camera {
+  int width = 640, height = 480;
+  Vec3 eye = Vec3(0, -10, 0), lookAt = Vec3(0, 0, 0), up = Vec3(0, 0, 1);
+  double fovDeg = 30.0;  // vertical field of view
+  double hither = 0.01;  // distance of the hither (near) plane from the eye, > 0
+};
+
+// Limits that keep the arithmetic of a camera meaningful.
+constexpr int kMaxImageSide = 1 << 16;   // pixel indices stay exact in int and float
+constexpr double kMinFovDeg = 1e-6;      // a narrower cone has a focal length beyond 1e11 px
+constexpr double kMaxFovDeg = 179.0;     // tan(fov/2) must stay finite
+constexpr double kMinUpSine = 1e-9;      // |up x view| below this: up is along the view
+
+// nullopt when the camera is usable; otherwise what is wrong with it, for the user.
+std::optional<std::string> ValidateCamera(const Camera& c);
+
+// The projective map from world space to homogeneous screen space (X, Y, D, W):
+// x = X/W, y = Y/W, depth = D/W, and W is the distance along the view axis.
+// Precondition: ValidateCamera(c) is nullopt.
+Mat4 ScreenFromWorld(const Camera& c);
+
+// The focal length in pixels: (height / 2) / tan(fov / 2).
+double FocalPixels(const Camera& c);
+
+// The default direction from the scene towards the eye for automatic framing: in front,
+// a little to the right and above, relative to `up` (front is -y for a z-up scene and +z
+// for a y-up scene).
+Vec3 DefaultViewDirection(const Vec3& up);
+
+// A camera that looks at the centre of `world` from `direction` (towards the eye) at the
+// distance where the box's bounding sphere fills the smaller field of view with a margin.
+// Keeps width, height, fov and up of `base`; sets eye, lookAt and hither.
+Camera FrameBounds(const Bounds3& world, const Camera& base, const Vec3& direction);
+
+}  // namespace patchscan

@@ -1,0 +1,38 @@
+// Small geometric vocabulary shared by every layer: vectors and axis-aligned boxes.
+#pragma once
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <limits>
+
+namespace patchscan {
+
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+using Vec4 = Eigen::Vector4d;
+using Mat4 = Eigen::Matrix4d;
+
+// An axis-aligned box in any space; empty until a point is added. Never allocates.
+template <int N>
+struct Bounds {
+  using Point = Eigen::Matrix<double, N, 1>;
+  Point lo = Point::Constant(std::numeric_limits<double>::infinity());
+  Point hi = Point::Constant(-std::numeric_limits<double>::infinity());
+
+  bool Empty() const { return (lo.array() > hi.array()).any(); }
+  void Extend(const Point& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  void Extend(const Bounds& b) {
+    lo = lo.cwiseMin(b.lo);
+    hi = hi.cwiseMax(b.hi);
+  }
+  Point Centre() const { return 0.5 * (lo + hi); }
+  Point Diagonal() const { return hi - lo; }
+};
+
+using Bounds2 = Bounds<2>;
+using Bounds3 = Bounds<3>;
+
+}  // namespace patchscan

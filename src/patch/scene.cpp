@@ -1,0 +1,30 @@
+#include "patch/scene.h"
+
+#include <filesystem>
+
+#include "patch/bpt_reader.h"
+
+namespace patchscan {
+
+Bounds3 Scene::WorldBounds() const {
+  Bounds3 b;
+  for (const Surface& s : surfaces) b.Extend(patchscan::WorldBounds(s));
+  return b;
+}
+
+std::variant<Scene, SourceError> LoadScene(const std::string& path) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  if (ext != ".bpt")
+    return SourceError{path, 0, "unknown scene format '" + ext + "' (known: .bpt)"};
+  auto read = ReadBpt(path);
+  if (auto* e = std::get_if<SourceError>(&read)) return *e;
+  Scene scene;
+  scene.source = path;
+  for (const BptPatch& p : std::get<BptFile>(read).patches) {
+    scene.surfaces.push_back(Surface{BicubicPatch(p.cv), Affine3::Identity()});
+    scene.sourceLines.push_back(p.line);
+  }
+  return scene;
+}
+
+}  // namespace patchscan

@@ -1,0 +1,50 @@
+// A Surface: one shape of any kind, placed in the world. Dispatch over the kinds happens
+// once per call of VisitShape (a std::visit); the shapes' own Evaluate functions are
+// inline and non-virtual, so a tracker that visits once per scan line pays no dispatch
+// per Newton iteration.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <span>
+#include <string>
+#include <variant>
+
+#include "patch/bicubic.h"
+#include "patch/quadrics.h"
+
+namespace patchscan {
+
+using Shape = std::variant<BicubicPatch, BilinearPatch, Sphere, Cylinder, Cone, Paraboloid,
+                           Hyperboloid, Disk, Torus, Saddle, MonkeySaddle>;
+
+using Affine3 = Eigen::Affine3d;
+
+struct Surface {
+  Shape shape;
+  Affine3 worldFromObject = Affine3::Identity();
+};
+
+template <class F>
+decltype(auto) VisitShape(const Surface& s, F&& f) {
+  return std::visit(std::forward<F>(f), s.shape);
+}
+
+// Object-space evaluation of any surface (one dispatch per call: for tests and
+// non-hot code; hot code visits once and calls the shape's Evaluate directly).
+inline void EvaluateObject(const Surface& s, double u, double v, DerivOrder order,
+                           SurfaceDerivs* out) {
+  VisitShape(s, [&](const auto& shape) { shape.Evaluate(u, v, order, out); });
+}
+
+// Points whose convex hull contains the surface, in object space.
+inline std::span<const Vec3> ObjectHull(const Surface& s) {
+  return VisitShape(s, [](const auto& shape) { return shape.Hull(); });
+}
+
+// A conservative world-space box of the surface (its hull's box, transformed).
+Bounds3 WorldBounds(const Surface& s);
+
+// One line naming the kind and its parameters.
+std::string Describe(const Surface& s);
+
+}  // namespace patchscan

@@ -1,0 +1,125 @@
+// The patchscan program end to end: exit codes, messages naming file:line, help, version.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace {
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+std::string Slurp(const std::filesystem::path& p) {
+  std::ifstream f(p);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+// Runs the program with `args` (shell words), capturing stdout, stderr and the exit code.
+Result Patchscan(const std::string& args) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const auto out = dir / ("patchscan_cli_out_" + std::to_string(::getpid()));
+  const auto err = dir / ("patchscan_cli_err_" + std::to_string(::getpid()));
+  const std::string cmd = std::string(PATCHSCAN_BINARY) + " " + args + " >" + out.string() +
+                          " 2>" + err.string() + " </dev/null";
+  const int status = std::system(cmd.c_str());
+  Result r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
+  std::filesystem::remove(out);
+  std::filesystem::remove(err);
+  return r;
+}
+
+const std::string kTeapot = PATCHSCAN_SURFACES_DIR "/teapot.bpt";
+
+TEST(Cli, InfoOnTheTeapot) {
+  const Result r = Patchscan("info " + kTeapot);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  for (const char* line : {"surfaces: 32 (32 bicubic patches)\n", "control points: 512 (290 distinct)\n",
+                           "collapsed edges: 8\n",
+                           "world bounds: x [-3, 3.525]  y [-2, 2]  z [0, 3.15]\n",
+                           "(framed automatically)"})
+    EXPECT_NE(r.out.find(line), std::string::npos) << "missing '" << line << "' in\n" << r.out;
+  // One line per patch: patch 21's line mentions its collapsed edge at the lid apex.
+  int rows = 0;
+  for (size_t i = 0; (i = r.out.find(" | x [", i)) != std::string::npos; ++i) ++rows;
+  EXPECT_EQ(rows, 32);
+}
+
+TEST(Cli, InfoWithAGivenCamera) {
+  const Result r = Patchscan("info " + kTeapot +
+                          " --size 320x200 --eye 0,-12,4 --look-at 0,0,1.5 --up 0,0,1 --fov 35");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("camera: 320x200, eye 0,-12,4, look-at 0,0,1.5, up 0,0,1, fov 35"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("framed automatically"), std::string::npos);
+}
+
+TEST(Cli, MalformedFileNamesFileAndLine) {
+  const auto path = std::filesystem::temp_directory_path() / "patchscan_cli_bad.bpt";
+  std::ofstream(path) << "1\n3 3\n0 0 0\n1 0\n";
+  const Result r = Patchscan("info " + path.string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(r.err, "patchscan: " + path.string() +
+                       ":4: expected 3 numbers (x y z of control point 2 of patch 1) alone on "
+                       "this line, found 2\n");
+  std::filesystem::remove(path);
+}
+
+TEST(Cli, MissingFileAndUnknownFormat) {
+  Result r = Patchscan("info /nonexistent.bpt");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err, "patchscan: /nonexistent.bpt: cannot open: No such file or directory\n");
+  r = Patchscan("info " PATCHSCAN_SURFACES_DIR "/README.md");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("unknown scene format '.md'"), std::string::npos) << r.err;
+}
+
+TEST(Cli, BadOptionsAreUsageErrors) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"--size 640", "--size: expected WIDTHxHEIGHT with positive whole numbers, found '640'"},
+      {"--size 0x10", "--size: expected WIDTHxHEIGHT with positive whole numbers, found '0x10'"},
+      {"--eye 1,2", "--eye: expected three numbers X,Y,Z, found '1,2'"},
+      {"--look-at a,b,c", "--look-at: expected three numbers X,Y,Z, found 'a,b,c'"},
+      {"--up 0,0,0", "--up: the up vector must not be zero"},
+      {"--eye 0,0,5 --look-at 0,0,0 --up 0,0,1", "camera: up vector is zero or along the view direction"},
+      {"--eye 1,1,1 --look-at 1,1,1", "camera: eye and look-at are the same point"},
+      {"--fov 0", "--fov: expected degrees"},
+      {"--hither -1", "--hither: expected a positive distance, found '-1'"},
+  };
+  for (const auto& [args, message] : cases) {
+    const Result r = Patchscan("info " + kTeapot + " " + args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_NE(r.err.find(message), std::string::npos) << args << "\n" << r.err;
+  }
+  EXPECT_EQ(Patchscan("").code, 2);
+  EXPECT_EQ(Patchscan("info").code, 2);
+  EXPECT_EQ(Patchscan("frobnicate").code, 2);
+}
+
+TEST(Cli, HelpDocumentsEveryOptionWithDefaults) {
+  const Result r = Patchscan("--help");
+  EXPECT_EQ(r.code, 0);
+  for (const char* word : {"info", "--size", "640x480", "--eye", "--look-at", "--up", "--fov",
+                           "30", "--hither", "--version", "Exit codes"})
+    EXPECT_NE(r.out.find(word), std::string::npos) << "help lacks " << word << "\n" << r.out;
+  const Result sub = Patchscan("info --help");
+  EXPECT_EQ(sub.code, 0);
+  EXPECT_NE(sub.out.find("--look-at"), std::string::npos) << sub.out;
+}
+
+TEST(Cli, Version) {
+  const Result r = Patchscan("--version");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.out.rfind("patchscan ", 0), 0u) << r.out;
+}
+
+}  // namespace
