@@ -6,5 +6,6 @@ namespace patchscan::cli {
 constexpr int kExitOk = 0;
 constexpr int kExitInputError = 1;  // a scene file could not be read or is malformed
 constexpr int kExitUsage = 2;       // bad command line or option value
+constexpr int kExitOutputError = 3; // an output file could not be written
 
 }  // namespace patchscan::cli

@@ -5,6 +5,7 @@
 
 #include "cli/exit_codes.h"
 #include "cli/info.h"
+#include "cli/render.h"
 
 #ifndef PATCHSCAN_VERSION
 #error "PATCHSCAN_VERSION must be defined by the build"
@@ -20,17 +21,20 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("patchscan ") + PATCHSCAN_VERSION);
   app.require_subcommand(1);
   app.footer(
-      "Exit codes: 0 success, 1 unreadable or malformed input file, 2 bad command line.\n"
+      "Exit codes: 0 success, 1 unreadable or malformed input file, 2 bad command line,\n"
+      "3 the output could not be written.\n"
       "Run 'patchscan COMMAND --help' for one command's options.");
 
   InfoOptions info;
   CLI::App* infoCmd = AddInfoCommand(&app, &info);
+  RenderOptions render;
+  CLI::App* renderCmd = AddRenderCommand(&app, &render);
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {
     // Top-level --help documents every command and option; a command's --help, its own.
-    const CLI::App* shown = infoCmd->parsed() ? infoCmd : &app;
+    const CLI::App* shown = infoCmd->parsed() ? infoCmd : renderCmd->parsed() ? renderCmd : &app;
     std::cout << (shown == &app ? app.help("", CLI::AppFormatMode::All) : shown->help());
     return kExitOk;
   } catch (const CLI::CallForVersion&) {
@@ -42,5 +46,6 @@ int main(int argc, char** argv) {
   }
 
   if (infoCmd->parsed()) return RunInfo(info, std::cout, std::cerr);
+  if (renderCmd->parsed()) return RunRender(render, std::cerr);
   return kExitUsage;
 }

@@ -1,6 +1,7 @@
 #include "patch/camera.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -9,10 +10,11 @@ namespace patchscan {
 namespace {
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-// The framed bounding sphere fills this fraction of the smaller half field of view.
-constexpr double kFrameFill = 0.95;
-// The hither plane of a framed camera, as a fraction of the distance to the scene's
-// nearest point: near enough never to clip the scene, far enough to keep 1/z well scaled.
+// The framed box's corners fill at most this fraction of the image's half-width and
+// half-height: a margin around the scene.
+constexpr double kFrameFill = 0.9;
+// The hither plane of a framed camera, as a fraction of the depth of the box's nearest
+// corner: near enough never to clip the scene, far enough to keep 1/z well scaled.
 constexpr double kFrameHitherFraction = 0.5;
 
 struct ViewFrame {
@@ -79,16 +81,39 @@ Vec3 DefaultViewDirection(const Vec3& up) {
 
 Camera FrameBounds(const Bounds3& world, const Camera& base, const Vec3& direction) {
   Camera c = base;
-  const Vec3 centre = world.Empty() ? Vec3::Zero() : world.Centre();
-  double radius = world.Empty() ? 1.0 : 0.5 * world.Diagonal().norm();
-  // A point-like scene still gets a camera: scale the radius from the scene's position.
-  radius = std::max(radius, 1e-9 * std::max(centre.cwiseAbs().maxCoeff(), 1e-300));
-  const double halfV = 0.5 * c.fovDeg * kRadPerDeg;
-  const double halfH = std::atan(std::tan(halfV) * c.width / c.height);
-  const double dist = radius / (kFrameFill * std::sin(std::min(halfV, halfH)));
+  Bounds3 box = world;
+  if (box.Empty()) box.Extend(Vec3::Zero());
+  const Vec3 centre = box.Centre();
+  // A point-like scene still gets a camera: give the box a size relative to its place.
+  const double floor = 1e-9 * std::max(centre.cwiseAbs().maxCoeff(), 1e-300);
+  if (box.Diagonal().maxCoeff() < floor) {
+    box.Extend(centre + Vec3::Constant(floor));
+    box.Extend(centre - Vec3::Constant(floor));
+  }
   c.lookAt = centre;
-  c.eye = centre + direction.normalized() * dist;
-  c.hither = kFrameHitherFraction * (dist - radius);
+  c.eye = centre + direction.normalized();  // provisional, for the view frame
+  const ViewFrame f = Frame(c);
+  // The eye sits at distance D from the centre, back along `forward`. A corner q (relative
+  // to the centre) is at depth D + q.forward and must satisfy |q.right| <= tanH * fill *
+  // depth and |q.down| <= tanV * fill * depth: each corner bounds D from below.
+  const double tanV = std::tan(0.5 * c.fovDeg * kRadPerDeg);
+  const double tanH = tanV * c.width / c.height;
+  double dist = 0.0, nearest = INFINITY;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 q = Vec3((k & 1) ? box.hi.x() : box.lo.x(), (k & 2) ? box.hi.y() : box.lo.y(),
+                        (k & 4) ? box.hi.z() : box.lo.z()) - centre;
+    const double depthOffset = q.dot(f.forward);
+    dist = std::max({dist, std::abs(q.dot(f.right)) / (kFrameFill * tanH) - depthOffset,
+                     std::abs(q.dot(f.down)) / (kFrameFill * tanV) - depthOffset,
+                     -depthOffset + box.Diagonal().norm() * 1e-3});
+  }
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 q = Vec3((k & 1) ? box.hi.x() : box.lo.x(), (k & 2) ? box.hi.y() : box.lo.y(),
+                        (k & 4) ? box.hi.z() : box.lo.z()) - centre;
+    nearest = std::min(nearest, dist + q.dot(f.forward));
+  }
+  c.eye = centre - f.forward * dist;
+  c.hither = kFrameHitherFraction * nearest;
   return c;
 }
 

@@ -41,7 +41,7 @@ double FocalPixels(const Camera& c);
 Vec3 DefaultViewDirection(const Vec3& up);
 
 // A camera that looks at the centre of `world` from `direction` (towards the eye) at the
-// distance where the box's bounding sphere fills the smaller field of view with a margin.
+// nearest distance where all eight corners of the box fall inside the image with a margin.
 // Keeps width, height, fov and up of `base`; sets eye, lookAt and hither.
 Camera FrameBounds(const Bounds3& world, const Camera& base, const Vec3& direction);
 

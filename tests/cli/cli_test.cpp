@@ -108,12 +108,43 @@ TEST(Cli, BadOptionsAreUsageErrors) {
 TEST(Cli, HelpDocumentsEveryOptionWithDefaults) {
   const Result r = Patchscan("--help");
   EXPECT_EQ(r.code, 0);
-  for (const char* word : {"info", "--size", "640x480", "--eye", "--look-at", "--up", "--fov",
-                           "30", "--hither", "--version", "Exit codes"})
+  for (const char* word : {"info", "render", "--output", "--mode", "--tess-rate", "--aa",
+                           "--shading", "--texture", "--cull-backfaces", "--stats", "--stats-json",
+                           "--size", "640x480", "--eye", "--look-at", "--up", "--fov", "30",
+                           "--hither", "--version", "Exit codes"})
     EXPECT_NE(r.out.find(word), std::string::npos) << "help lacks " << word << "\n" << r.out;
   const Result sub = Patchscan("info --help");
   EXPECT_EQ(sub.code, 0);
   EXPECT_NE(sub.out.find("--look-at"), std::string::npos) << sub.out;
+}
+
+TEST(Cli, RenderWritesTheImage) {
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_render";
+  std::filesystem::create_directories(dir);
+  const std::string out = (dir / "teapot.png").string();
+  const Result r = Patchscan("render " + kTeapot + " -o " + out + " --size 96x72 --tess-rate 4 --stats");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  EXPECT_NE(r.err.find("triangles n: 1024"), std::string::npos) << r.err;  // 32 x 4 x 4 x 2
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), {}), 1);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, FailedRenderLeavesNoFile) {
+  // Unknown image format, missing directory, bad scene: no output, non-zero exit.
+  Result r = Patchscan("render " + kTeapot + " -o /tmp/patchscan_cli_x.xyz");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("unknown image format '.xyz'"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists("/tmp/patchscan_cli_x.xyz"));
+  r = Patchscan("render " + kTeapot + " -o /nonexistent/dir/out.png");
+  EXPECT_NE(r.code, 0);
+  EXPECT_FALSE(std::filesystem::exists("/nonexistent/dir/out.png"));
+  r = Patchscan("render /nonexistent.bpt -o /tmp/patchscan_cli_y.png");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_FALSE(std::filesystem::exists("/tmp/patchscan_cli_y.png"));
+  r = Patchscan("render " + kTeapot + " -o /tmp/patchscan_cli_z.png --aa 9");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_FALSE(std::filesystem::exists("/tmp/patchscan_cli_z.png"));
 }
 
 TEST(Cli, Version) {

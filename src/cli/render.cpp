@@ -1,0 +1,131 @@
+#include "cli/render.h"
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <fstream>
+#include <ostream>
+
+#include "cli/exit_codes.h"
+#include "patch/tessellate.h"
+#include "raster/image_writer.h"
+#include "raster/scanline_renderer.h"
+#include "xscan/tess_feed.h"
+
+namespace patchscan::cli {
+
+CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
+  CLI::App* cmd = app->add_subcommand(
+      "render",
+      "Render a scene file to an image. The format follows the output's extension: .png, "
+      ".tif/.tiff, .jpg/.jpeg (no alpha) or .exr; alpha is coverage. The image is written to "
+      "a temporary file and renamed into place, so a failed render leaves no file.");
+  cmd->add_option("FILE", o->file, "scene file (.bpt)")->required();
+  cmd->add_option("-o,--output", o->output, "output image file")->required();
+  cmd->add_option("--mode", o->mode,
+                  "how surfaces become samples: tess = tessellated with OpenSubdiv's "
+                  "Bfr::Tessellation pattern (the only mode so far)")
+      ->check(CLI::IsMember({"tess"}))
+      ->capture_default_str();
+  cmd->add_option("--tess-rate", o->tessRate, "tessellation segments per patch edge (uniform)")
+      ->check(CLI::Range(1, kMaxTessRate))
+      ->capture_default_str();
+  cmd->add_option("--aa", o->aa,
+                  "supersampling: an l x l grid of samples per pixel whose edge samples are "
+                  "shared with the neighbours (1: one sample at the pixel centre)")
+      ->check(CLI::Range(1, raster::kMaxAa))
+      ->capture_default_str();
+  cmd->add_option("--shading", o->shading, "flat, gouraud or phong")
+      ->check(CLI::IsMember({"flat", "gouraud", "phong"}))
+      ->capture_default_str();
+  cmd->add_option("--texture", o->texture, "none, or checker: a procedural uv checker")
+      ->check(CLI::IsMember({"none", "checker"}))
+      ->capture_default_str();
+  cmd->add_flag("--cull-backfaces", o->cullBackFaces,
+                "drop triangles facing away from the eye (default: two-sided)");
+  cmd->add_flag("--stats", o->stats, "print counts and times to stderr");
+  cmd->add_option("--stats-json", o->statsJson, "write counts and times as JSON to this file");
+  AddCameraOptions(cmd, &o->camera);
+  return cmd;
+}
+
+int RunRender(const RenderOptions& o, std::ostream& err) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  auto loaded = LoadScene(o.file);
+  if (auto* e = std::get_if<SourceError>(&loaded)) {
+    err << "patchscan: " << e->What() << '\n';
+    return kExitInputError;
+  }
+  const Scene& scene = std::get<Scene>(loaded);
+  auto resolved = ResolveCamera(o.camera, scene);
+  if (auto* why = std::get_if<std::string>(&resolved)) {
+    err << "patchscan: " << *why << '\n';
+    return kExitUsage;
+  }
+  const Camera camera = std::get<ResolvedCamera>(resolved).camera;
+
+  // Step 1: tessellate and feed the back end.
+  TessMesh tess;
+  for (size_t k = 0; k < scene.surfaces.size(); ++k)
+    TessellateUniform(scene.surfaces[k], o.tessRate, static_cast<std::uint32_t>(k), &tess);
+  const raster::TriangleMesh mesh = ToRasterMesh(tess, camera);
+  const auto t1 = Clock::now();
+
+  // Step 2: render, streaming rows to the image.
+  raster::RenderSettings s;
+  s.width = camera.width;
+  s.height = camera.height;
+  s.aa = o.aa;
+  s.shading = o.shading == "flat"      ? raster::ShadingMode::Flat
+              : o.shading == "gouraud" ? raster::ShadingMode::Gouraud
+                                       : raster::ShadingMode::Phong;
+  s.cullBackFaces = o.cullBackFaces;
+  s.hither = camera.hither;
+  s.eye = camera.eye;
+  if (o.texture == "checker") s.material.checkerSquares = 8;
+  const Vec3 forward = (camera.lookAt - camera.eye).normalized();
+  const Vec3 right = forward.cross(camera.up).normalized();
+  s.lights = raster::DefaultLightRig(forward, right.cross(forward), right);
+
+  auto opened = raster::ImageWriter::Open(o.output, camera.width, camera.height);
+  if (auto* why = std::get_if<std::string>(&opened)) {
+    err << "patchscan: " << *why << '\n';
+    return kExitUsage;
+  }
+  auto& writer = *std::get<std::unique_ptr<raster::ImageWriter>>(opened);
+  const auto stats = raster::RenderMesh(mesh, s, writer);
+  if (!stats) {
+    err << "patchscan: " << o.output << ": writing the image failed\n";
+    return kExitOutputError;
+  }
+  if (auto committed = writer.Commit(); auto* why = std::get_if<std::string>(&committed)) {
+    err << "patchscan: " << *why << '\n';
+    return kExitOutputError;
+  }
+  const auto t2 = Clock::now();
+
+  // Step 3: statistics.
+  const double prepSec = std::chrono::duration<double>(t1 - t0).count();
+  const double renderSec = std::chrono::duration<double>(t2 - t1).count();
+  if (o.stats)
+    err << "triangles n: " << stats->nTriangles << " (set up " << stats->nTrianglesSetUp
+        << ")\nmost active on one sample row m: " << stats->maxActive
+        << "\nsamples tested: " << stats->nSamplesTested << "\nsamples covered: "
+        << stats->nSamplesCovered << "\nshading calls: " << stats->nShadingCalls
+        << "\ntime: load and tessellate " << prepSec << " s, render " << renderSec << " s\n";
+  if (!o.statsJson.empty()) {
+    std::ofstream js(o.statsJson);
+    js << "{\"triangles\": " << stats->nTriangles << ", \"triangles_set_up\": "
+       << stats->nTrianglesSetUp << ", \"max_active\": " << stats->maxActive
+       << ", \"samples_tested\": " << stats->nSamplesTested << ", \"samples_covered\": "
+       << stats->nSamplesCovered << ", \"shading_calls\": " << stats->nShadingCalls
+       << ", \"seconds_prepare\": " << prepSec << ", \"seconds_render\": " << renderSec << "}\n";
+    if (!js) {
+      err << "patchscan: " << o.statsJson << ": cannot write statistics\n";
+      return kExitOutputError;
+    }
+  }
+  return kExitOk;
+}
+
+}  // namespace patchscan::cli

@@ -1,0 +1,31 @@
+// `patchscan render FILE -o IMAGE`: render a scene to an image file.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <iosfwd>
+#include <string>
+
+#include "cli/camera_options.h"
+
+namespace patchscan::cli {
+
+struct RenderOptions {
+  std::string file, output;
+  std::string mode = "tess";
+  int tessRate = 8;
+  int aa = 3;
+  std::string shading = "phong";
+  std::string texture = "none";
+  bool cullBackFaces = false;
+  bool stats = false;
+  std::string statsJson;
+  CameraOptions camera;
+};
+
+CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* opts);
+
+// Renders; messages to `err`; returns the exit code. The image is written whole or not
+// at all.
+int RunRender(const RenderOptions& opts, std::ostream& err);
+
+}  // namespace patchscan::cli

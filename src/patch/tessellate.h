@@ -1,0 +1,37 @@
+// Tessellation of surfaces into triangles with OpenSubdiv's Bfr::Tessellation pattern
+// over the quad parameter domain, with exact positions, normals and uv at the vertices.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "patch/surface.h"
+
+namespace patchscan {
+
+struct TessVertex {
+  Vec3 position;  // world space
+  Vec3 normal;    // world space, unit; at a collapsed edge, the limit from inside
+  Vec2 uv;
+};
+
+struct TessMesh {
+  std::vector<TessVertex> vertices;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<std::uint32_t> surfaceOf;  // per triangle
+};
+
+// Largest accepted rate: rate^2 * 2 triangles per surface must stay a sane count.
+constexpr int kMaxTessRate = 4096;
+
+// Appends `s` tessellated uniformly at `rate` segments per edge (1..kMaxTessRate).
+void TessellateUniform(const Surface& s, int rate, std::uint32_t surfaceId, TessMesh* out);
+
+// The world-space unit normal of `s` at (u,v). Where dp/du x dp/dv vanishes (a collapsed
+// edge such as the teapot's lid apex), the normal is taken a step kNormalNudge towards
+// the domain's centre, its limit along that path.
+constexpr double kNormalNudge = 1e-6;
+Vec3 WorldNormal(const Surface& s, double u, double v);
+
+}  // namespace patchscan

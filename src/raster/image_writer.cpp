@@ -1,0 +1,67 @@
+#include "raster/image_writer.h"
+
+#include <OpenImageIO/imageio.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <system_error>
+
+namespace patchscan::raster {
+
+struct ImageWriter::Impl {
+  std::unique_ptr<OIIO::ImageOutput> out;
+  std::filesystem::path target, temp;
+  int width = 0, channels = 4;
+  bool committed = false;
+};
+
+ImageWriter::ImageWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+ImageWriter::~ImageWriter() {
+  if (!impl_->committed) {
+    if (impl_->out) impl_->out->close();
+    std::error_code ec;
+    std::filesystem::remove(impl_->temp, ec);
+  }
+}
+
+std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const std::string& path,
+                                                                          int width, int height) {
+  auto impl = std::make_unique<Impl>();
+  impl->target = path;
+  std::string ext = impl->target.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  OIIO::TypeDesc type;
+  if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") type = OIIO::TypeDesc::UINT8;
+  else if (ext == ".tif" || ext == ".tiff") type = OIIO::TypeDesc::UINT16;
+  else if (ext == ".exr") type = OIIO::TypeDesc::HALF;
+  else return path + ": unknown image format '" + ext + "' (known: .png .tif .tiff .jpg .jpeg .exr)";
+  impl->channels = (ext == ".jpg" || ext == ".jpeg") ? 3 : 4;  // JPEG has no alpha
+  impl->width = width;
+  std::string tempName = ".";
+  tempName += impl->target.stem().string();
+  tempName += ".partial-" + std::to_string(::getpid()) + ext;
+  impl->temp = impl->target.parent_path() / tempName;
+  impl->out = OIIO::ImageOutput::create(path);
+  if (!impl->out) return path + ": cannot create an image writer: " + OIIO::geterror();
+  OIIO::ImageSpec spec(width, height, impl->channels, type);
+  if (impl->channels == 4) spec.alpha_channel = 3;
+  if (!impl->out->open(impl->temp.string(), spec))
+    return path + ": cannot write: " + impl->out->geterror();
+  return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
+}
+
+bool ImageWriter::WriteRow(int y, const float* rgba) {
+  return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, rgba, 4 * sizeof(float));
+}
+
+std::variant<std::monostate, std::string> ImageWriter::Commit() {
+  if (!impl_->out->close()) return impl_->target.string() + ": " + impl_->out->geterror();
+  std::error_code ec;
+  std::filesystem::rename(impl_->temp, impl_->target, ec);
+  if (ec) return impl_->target.string() + ": cannot rename the finished image into place: " + ec.message();
+  impl_->committed = true;
+  return std::monostate{};
+}
+
+}  // namespace patchscan::raster

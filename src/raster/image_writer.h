@@ -1,0 +1,32 @@
+// Streams finished rows to an image file through OpenImageIO, all or nothing: rows go to a
+// temporary file beside the target, which is renamed onto the target only by Commit().
+// Destroying an uncommitted writer removes the temporary file.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <variant>
+
+#include "raster/scanline_renderer.h"
+
+namespace patchscan::raster {
+
+class ImageWriter final : public RowSink {
+ public:
+  // Opens the temporary file for `path`, with the format its extension names (.png, .tif,
+  // .tiff, .jpg, .jpeg, .exr). nullptr and a message when that fails.
+  static std::variant<std::unique_ptr<ImageWriter>, std::string> Open(const std::string& path,
+                                                                     int width, int height);
+  ~ImageWriter() override;
+
+  bool WriteRow(int y, const float* rgba) override;
+  // Closes the file and renames it onto the target; the message on failure.
+  std::variant<std::monostate, std::string> Commit();
+
+ private:
+  struct Impl;
+  explicit ImageWriter(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace patchscan::raster

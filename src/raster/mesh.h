@@ -1,0 +1,34 @@
+// What the back end eats: triangles whose vertices carry homogeneous screen position,
+// world position and normal, and uv, tagged with the surface they come from. The back
+// end never sees a surface (DESIGN.md): tessellated and direct renders differ only in
+// where these come from.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <vector>
+
+namespace patchscan::raster {
+
+using Vec2 = Eigen::Vector2d;
+using Vec3 = Eigen::Vector3d;
+
+struct RasterVertex {
+  Vec3 h;         // homogeneous screen position (X, Y, W): x = X/W, y = Y/W pixels, W = eye depth
+  Vec3 position;  // world space, for lighting
+  Vec3 normal;    // world space, not necessarily unit
+  Vec2 uv;
+};
+
+struct RasterTriangle {
+  std::uint32_t v[3];
+  std::uint32_t surfaceId;
+};
+
+struct TriangleMesh {
+  std::vector<RasterVertex> vertices;
+  std::vector<RasterTriangle> triangles;
+};
+
+}  // namespace patchscan::raster

@@ -1,0 +1,48 @@
+// The illumination model of paper 004 (COS 426, "Illumination model"):
+//   I = I_E + K_A I_AL + sum_i (K_D (N . L_i) I_i + K_S (V . R_i)^n I_i),
+// with directional and point lights (point lights attenuated by 1 / (1 + k d^2)),
+// shaded two-sided: a normal facing away from the eye is turned towards it.
+#pragma once
+
+#include <vector>
+
+#include "raster/mesh.h"
+
+namespace patchscan::raster {
+
+using Rgb = Eigen::Vector3d;
+
+struct Light {
+  enum class Kind { Directional, Point } kind = Kind::Directional;
+  Vec3 vector;           // Directional: direction the light travels; Point: position
+  Rgb intensity{1, 1, 1};
+  double attenuation = 0.0;  // k in 1 / (1 + k d^2), point lights only
+};
+
+struct Material {
+  Rgb colour{0.8, 0.8, 0.8};
+  Rgb emission{0, 0, 0};
+  double ka = 0.15, kd = 0.75, ks = 0.35;
+  double shininess = 40.0;     // n
+  int checkerSquares = 0;      // > 0: modulate colour by a uv checker of this many squares
+};
+
+struct LightRig {
+  Rgb ambient{1, 1, 1};  // I_AL
+  std::vector<Light> lights;
+};
+
+// A pleasant default for a camera looking along `forward` with `up` and `right`: a warm
+// key light from the upper left, a cool fill from the right, and a dim rim from behind.
+LightRig DefaultLightRig(const Vec3& forward, const Vec3& up, const Vec3& right);
+
+// Colour at world point p with normal n (any length), seen from `eye`, at uv.
+// Allocation-free.
+Rgb Shade(const Vec3& p, const Vec3& n, const Vec2& uv, const Vec3& eye, const Material& m,
+          const LightRig& rig);
+
+// Renormalization of a vector whose length is near 1 by one Newton step for 1/sqrt
+// (paper 000 §4.4, fast renormalization): exact to second order in (|v|^2 - 1).
+inline Vec3 Renormalize(const Vec3& v) { return v * (1.5 - 0.5 * v.squaredNorm()); }
+
+}  // namespace patchscan::raster

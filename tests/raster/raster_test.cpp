@@ -1,0 +1,199 @@
+// The back end: Olano-Greer setup against direct evaluation, coverage against exact
+// areas, shared edges covered exactly once, all-or-nothing image output.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <random>
+
+#include "raster/image_writer.h"
+#include "raster/scanline_renderer.h"
+#include "raster/triangle_setup.h"
+
+namespace patchscan::raster {
+namespace {
+
+// A simple pinhole for building test vertices: camera at the origin looking along +z,
+// focal f pixels, centre (cx, cy): X = f x + cx z, Y = f y + cy z, W = z.
+Vec3 Homogeneous(const Vec3& p, double f = 100, double cx = 64, double cy = 48) {
+  return Vec3(f * p.x() + cx * p.z(), f * p.y() + cy * p.z(), p.z());
+}
+
+TEST(TriangleSetup, PerspectiveCorrectBarycentricsMatchWorldSpace) {
+  // Interpolating with b_i = e_i / sum(e) at the projection of sum(b_i P_i) gives back b.
+  constexpr double kBaryTol = 1e-12;  // a 3x3 system of numbers near 1e2: rounding ~1e-14
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> d(-1, 1), depth(0.5, 5);
+  for (int n = 0; n < 200; ++n) {
+    const Vec3 p[3] = {Vec3(d(rng), d(rng), depth(rng)), Vec3(d(rng), d(rng), depth(rng)),
+                       Vec3(d(rng), d(rng), depth(rng))};
+    const auto t = SetupTriangle(Homogeneous(p[0]), Homogeneous(p[1]), Homogeneous(p[2]), false, 128, 96);
+    if (!t) continue;
+    Vec3 b(d(rng) + 1, d(rng) + 1, d(rng) + 1);
+    b /= b.sum();
+    const Vec3 h = Homogeneous(b[0] * p[0] + b[1] * p[1] + b[2] * p[2]);
+    const double x = h.x() / h.z(), y = h.y() / h.z();
+    double e[3];
+    Vec3 ev;
+    for (int i = 0; i < 3; ++i) ev[i] = t->edge[i].dot(Vec3(x, y, 1));
+    EXPECT_LE((ev / ev.sum() - b).norm(), kBaryTol) << "triangle " << n;
+    if (b.minCoeff() > 1e-9) {
+      EXPECT_TRUE(Inside(*t, x, y, e)) << "triangle " << n;
+    }
+    // 1/w interpolates as sum(e) |1/det|.
+    EXPECT_NEAR(ev.sum() * std::abs(t->invDet), 1.0 / h.z(), 1e-12 / h.z());
+  }
+}
+
+TEST(TriangleSetup, TriangleCrossingTheEyePlane) {
+  // One vertex behind the eye: points of the triangle in front of the eye are inside,
+  // the projections of points behind the eye are not.
+  const Vec3 p[3] = {Vec3(-1, -0.5, 2), Vec3(1, -0.4, 3), Vec3(0.2, 0.6, -1)};
+  const auto t = SetupTriangle(Homogeneous(p[0]), Homogeneous(p[1]), Homogeneous(p[2]), false, 128, 96);
+  ASSERT_TRUE(t);
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> d(0.01, 1);
+  int front = 0, behind = 0;
+  for (int n = 0; n < 500; ++n) {
+    Vec3 b(d(rng), d(rng), d(rng));
+    b /= b.sum();
+    const Vec3 q = b[0] * p[0] + b[1] * p[1] + b[2] * p[2];
+    if (std::abs(q.z()) < 1e-3) continue;
+    const Vec3 h = Homogeneous(q);
+    double e[3];
+    const bool in = Inside(*t, h.x() / h.z(), h.y() / h.z(), e);
+    if (q.z() > 0) {
+      EXPECT_TRUE(in) << "front point " << q.transpose();
+      ++front;
+    }
+  }
+  EXPECT_GT(front, 100);
+  // A pixel whose ray meets the triangle's plane only behind the eye is outside: the
+  // direction of the reflected vertex, (0.2, 0.6, -1) seen through the eye, hits the plane
+  // at negative depth.
+  const Vec3 h = Homogeneous(-p[2]);
+  double e[3];
+  EXPECT_FALSE(Inside(*t, h.x() / h.z(), h.y() / h.z(), e));
+  (void)behind;
+}
+
+TEST(TriangleSetup, BackFacesAndDegenerates) {
+  const Vec3 a(10, 10, 1), b(50, 10, 1), c(10, 40, 1);
+  ASSERT_TRUE(SetupTriangle(a, b, c, true, 128, 96));
+  EXPECT_TRUE(SetupTriangle(a, b, c, true, 128, 96)->frontFacing);
+  EXPECT_FALSE(SetupTriangle(a, c, b, true, 128, 96));  // back-facing, culled
+  EXPECT_TRUE(SetupTriangle(a, c, b, false, 128, 96));  // kept when two-sided
+  EXPECT_FALSE(SetupTriangle(a, b, Vec3(30, 10, 1), false, 128, 96));  // zero area
+}
+
+TEST(TriangleSetup, FanCoversEverySampleExactlyOnce) {
+  // Thin triangles around a vertex that lies on a sample, edges through samples: the tie
+  // rule gives every sample inside the fan to exactly one triangle.
+  const Vec3 centre(32, 32, 1);
+  constexpr int kSpokes = 24;
+  std::vector<TriangleSetup> fan;
+  for (int k = 0; k < kSpokes; ++k) {
+    auto spoke = [](int i) {
+      const int dx[] = {20, 20, 20, 10, 0, -10, -20, -20, -20, -20, -20, -10, 0, 10, 20, 20};
+      const int dy[] = {0, 10, 20, 20, 20, 20, 20, 10, 0, -10, -20, -20, -20, -20, -20, -10};
+      return Vec3(32 + dx[i % 16], 32 + dy[i % 16], 1);
+    };
+    if (k >= 16) break;
+    fan.push_back(*SetupTriangle(centre, spoke(k), spoke(k + 1), false, 64, 64));
+  }
+  // The fan's outer boundary belongs to its neighbours-to-be; test strictly inside it.
+  for (int y = 13; y <= 51; ++y)
+    for (int x = 13; x <= 51; ++x) {
+      int owners = 0;
+      double e[3];
+      for (const TriangleSetup& t : fan) owners += Inside(t, x, y, e);
+      EXPECT_EQ(owners, 1) << "sample (" << x << ", " << y << ")";
+    }
+}
+
+// Collects rows, for coverage sums.
+struct CaptureSink : RowSink {
+  int width;
+  std::vector<float> rgba;
+  explicit CaptureSink(int w) : width(w) {}
+  bool WriteRow(int, const float* row) override {
+    rgba.insert(rgba.end(), row, row + 4 * width);
+    return true;
+  }
+  double Coverage() const {
+    double sum = 0;
+    for (size_t i = 3; i < rgba.size(); i += 4) sum += rgba[i];
+    return sum;
+  }
+};
+
+TriangleMesh Mesh(const std::vector<Vec2>& xy, const std::vector<std::array<int, 3>>& tris) {
+  TriangleMesh m;
+  for (const Vec2& p : xy) m.vertices.push_back({Vec3(p.x(), p.y(), 1), Vec3(p.x(), p.y(), 5), Vec3(0, 0, -1), Vec2(0, 0)});
+  for (const auto& t : tris)
+    m.triangles.push_back({{static_cast<std::uint32_t>(t[0]), static_cast<std::uint32_t>(t[1]),
+                            static_cast<std::uint32_t>(t[2])}, 0});
+  return m;
+}
+
+TEST(ScanlineRenderer, CoverageMatchesArea) {
+  // Lattice-point counting error is bounded by the perimeter times the sample spacing.
+  const std::vector<Vec2> xy = {Vec2(10.3, 7.7), Vec2(100.9, 20.2), Vec2(40.1, 80.6)};
+  const double area = 0.5 * std::abs((xy[1] - xy[0]).x() * (xy[2] - xy[0]).y() -
+                                     (xy[1] - xy[0]).y() * (xy[2] - xy[0]).x());
+  const double perimeter = (xy[1] - xy[0]).norm() + (xy[2] - xy[1]).norm() + (xy[0] - xy[2]).norm();
+  for (int aa : {1, 2, 3, 4, 8}) {
+    RenderSettings s;
+    s.width = 128;
+    s.height = 96;
+    s.aa = aa;
+    s.hither = 0.01;
+    CaptureSink sink(s.width);
+    ASSERT_TRUE(RenderMesh(Mesh(xy, {{0, 1, 2}}), s, sink));
+    const double spacing = aa == 1 ? 1.0 : 1.0 / (aa - 1);
+    EXPECT_NEAR(sink.Coverage(), area, perimeter * spacing) << "aa " << aa;
+  }
+}
+
+TEST(ScanlineRenderer, SharedEdgeLeavesNoGapAndNoOverlap) {
+  // A square split along its diagonal, vertices on samples: every pixel inside is covered
+  // exactly once (alpha 1), the total is the area exactly.
+  const std::vector<Vec2> xy = {Vec2(8, 8), Vec2(72, 8), Vec2(72, 56), Vec2(8, 56)};
+  for (int aa : {1, 3}) {
+    RenderSettings s;
+    s.width = 80;
+    s.height = 64;
+    s.aa = aa;
+    s.hither = 0.01;
+    CaptureSink sink(s.width);
+    ASSERT_TRUE(RenderMesh(Mesh(xy, {{0, 1, 2}, {0, 2, 3}}), s, sink));
+    for (int y = 9; y < 55; ++y)
+      for (int x = 9; x < 71; ++x)
+        EXPECT_FLOAT_EQ(sink.rgba[(static_cast<size_t>(y) * 80 + x) * 4 + 3], 1.0f) << x << "," << y;
+  }
+}
+
+TEST(ImageWriter, AllOrNothing) {
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_writer_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "out.png").string();
+  std::filesystem::remove(path);
+  std::vector<float> row(4 * 8, 0.5f);
+  {
+    auto w = std::get<std::unique_ptr<ImageWriter>>(ImageWriter::Open(path, 8, 4));
+    for (int y = 0; y < 2; ++y) w->WriteRow(y, row.data());
+  }  // abandoned half way
+  EXPECT_TRUE(std::filesystem::is_empty(dir)) << "a partial file was left behind";
+  {
+    auto w = std::get<std::unique_ptr<ImageWriter>>(ImageWriter::Open(path, 8, 4));
+    for (int y = 0; y < 4; ++y) ASSERT_TRUE(w->WriteRow(y, row.data()));
+    ASSERT_TRUE(std::holds_alternative<std::monostate>(w->Commit()));
+  }
+  EXPECT_TRUE(std::filesystem::exists(path));
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), {}), 1);
+  auto bad = ImageWriter::Open((dir / "out.xyz").string(), 8, 4);
+  EXPECT_NE(std::get<std::string>(bad).find("unknown image format '.xyz'"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace patchscan::raster
