@@ -2,6 +2,9 @@
 
 #include <charconv>
 #include <cmath>
+#include <ostream>
+
+#include "cli/exit_codes.h"
 
 namespace patchscan::cli {
 namespace {
@@ -108,6 +111,21 @@ std::variant<ResolvedCamera, std::string> ResolveCamera(const CameraOptions& o,
   }
   if (auto why = ValidateCamera(c)) return "camera: " + *why;
   return r;
+}
+
+std::variant<LoadedScene, int> LoadSceneAndCamera(const std::string& file,
+                                                  const CameraOptions& opts, std::ostream& err) {
+  auto loaded = LoadScene(file);
+  if (auto* e = std::get_if<SourceError>(&loaded)) {
+    err << "patchscan: " << e->What() << '\n';
+    return kExitInputError;
+  }
+  auto resolved = ResolveCamera(opts, std::get<Scene>(loaded));
+  if (auto* why = std::get_if<std::string>(&resolved)) {
+    err << "patchscan: " << *why << '\n';
+    return kExitUsage;
+  }
+  return LoadedScene{std::move(std::get<Scene>(loaded)), std::get<ResolvedCamera>(resolved)};
 }
 
 }  // namespace patchscan::cli

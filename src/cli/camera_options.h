@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <iosfwd>
 #include <optional>
 #include <string>
 
@@ -29,6 +30,15 @@ struct ResolvedCamera {
 };
 std::variant<ResolvedCamera, std::string> ResolveCamera(const CameraOptions& opts,
                                                         const Scene& scene);
+
+// Loads a scene file and resolves the camera for it. On failure, prints the message to
+// `err` and returns the exit code to end with.
+struct LoadedScene {
+  Scene scene;
+  ResolvedCamera view;
+};
+std::variant<LoadedScene, int> LoadSceneAndCamera(const std::string& file,
+                                                  const CameraOptions& opts, std::ostream& err);
 
 // Parses "X,Y,Z" into a vector; nullopt if it is not three finite numbers.
 std::optional<Vec3> ParseVec3(const std::string& text);

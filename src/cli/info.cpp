@@ -52,18 +52,10 @@ CLI::App* AddInfoCommand(CLI::App* app, InfoOptions* o) {
 }
 
 int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
-  auto loaded = LoadScene(o.file);
-  if (auto* e = std::get_if<SourceError>(&loaded)) {
-    err << "patchscan: " << e->What() << '\n';
-    return kExitInputError;
-  }
-  const Scene& scene = std::get<Scene>(loaded);
-  auto resolved = ResolveCamera(o.camera, scene);
-  if (auto* why = std::get_if<std::string>(&resolved)) {
-    err << "patchscan: " << *why << '\n';
-    return kExitUsage;
-  }
-  const auto& [camera, framed] = std::get<ResolvedCamera>(resolved);
+  auto loaded = LoadSceneAndCamera(o.file, o.camera, err);
+  if (const int* code = std::get_if<int>(&loaded)) return *code;
+  const Scene& scene = std::get<LoadedScene>(loaded).scene;
+  const auto& [camera, framed] = std::get<LoadedScene>(loaded).view;
 
   // Step 1: scene totals.
   size_t nPatches = 0, nCollapsed = 0;

@@ -51,23 +51,16 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
 int RunRender(const RenderOptions& o, std::ostream& err) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
-  auto loaded = LoadScene(o.file);
-  if (auto* e = std::get_if<SourceError>(&loaded)) {
-    err << "patchscan: " << e->What() << '\n';
-    return kExitInputError;
-  }
-  const Scene& scene = std::get<Scene>(loaded);
-  auto resolved = ResolveCamera(o.camera, scene);
-  if (auto* why = std::get_if<std::string>(&resolved)) {
-    err << "patchscan: " << *why << '\n';
-    return kExitUsage;
-  }
-  const Camera camera = std::get<ResolvedCamera>(resolved).camera;
+  auto loaded = LoadSceneAndCamera(o.file, o.camera, err);
+  if (const int* code = std::get_if<int>(&loaded)) return *code;
+  const Scene& scene = std::get<LoadedScene>(loaded).scene;
+  const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
 
   // Step 1: tessellate and feed the back end.
   TessMesh tess;
   for (size_t k = 0; k < scene.surfaces.size(); ++k)
     TessellateUniform(scene.surfaces[k], o.tessRate, static_cast<std::uint32_t>(k), &tess);
+  WeldBoundaryVertices(&tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
   const raster::TriangleMesh mesh = ToRasterMesh(tess, camera);
   const auto t1 = Clock::now();
 

@@ -99,19 +99,15 @@ Camera FrameBounds(const Bounds3& world, const Camera& base, const Vec3& directi
   const double tanV = std::tan(0.5 * c.fovDeg * kRadPerDeg);
   const double tanH = tanV * c.width / c.height;
   double dist = 0.0, nearest = INFINITY;
-  for (int k = 0; k < 8; ++k) {
-    const Vec3 q = Vec3((k & 1) ? box.hi.x() : box.lo.x(), (k & 2) ? box.hi.y() : box.lo.y(),
-                        (k & 4) ? box.hi.z() : box.lo.z()) - centre;
+  const BoxHull corners = BoxCorners(box);
+  for (const Vec3& corner : corners) {
+    const Vec3 q = corner - centre;
     const double depthOffset = q.dot(f.forward);
     dist = std::max({dist, std::abs(q.dot(f.right)) / (kFrameFill * tanH) - depthOffset,
                      std::abs(q.dot(f.down)) / (kFrameFill * tanV) - depthOffset,
                      -depthOffset + box.Diagonal().norm() * 1e-3});
   }
-  for (int k = 0; k < 8; ++k) {
-    const Vec3 q = Vec3((k & 1) ? box.hi.x() : box.lo.x(), (k & 2) ? box.hi.y() : box.lo.y(),
-                        (k & 4) ? box.hi.z() : box.lo.z()) - centre;
-    nearest = std::min(nearest, dist + q.dot(f.forward));
-  }
+  for (const Vec3& corner : corners) nearest = std::min(nearest, dist + (corner - centre).dot(f.forward));
   c.eye = centre - f.forward * dist;
   c.hither = kFrameHitherFraction * nearest;
   return c;

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
 #include <limits>
 
 namespace patchscan {
@@ -34,5 +35,15 @@ struct Bounds {
 
 using Bounds2 = Bounds<2>;
 using Bounds3 = Bounds<3>;
+
+// The eight corners of a box (bit 0 of the index picks x, bit 1 y, bit 2 z).
+using BoxHull = std::array<Vec3, 8>;
+inline BoxHull BoxCorners(const Bounds3& box) {
+  BoxHull c;
+  for (int k = 0; k < 8; ++k)
+    c[k] = Vec3((k & 1) ? box.hi.x() : box.lo.x(), (k & 2) ? box.hi.y() : box.lo.y(),
+                (k & 4) ? box.hi.z() : box.lo.z());
+  return c;
+}
 
 }  // namespace patchscan

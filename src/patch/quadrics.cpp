@@ -40,14 +40,6 @@ double Deg(double rad) { return rad / kRadPerDeg; }
 
 }  // namespace
 
-BoxHull BoxCorners(const Bounds3& box) {
-  BoxHull c;
-  for (int k = 0; k < 8; ++k)
-    c[k] = Vec3((k & 1) ? box.hi.x() : box.lo.x(), (k & 2) ? box.hi.y() : box.lo.y(),
-                (k & 4) ? box.hi.z() : box.lo.z());
-  return c;
-}
-
 Bounds2 SectorBox(double rhoMin, double rhoMax, double t0, double t1) {
   // x = rho cos t and y = rho sin t are linear in rho and take their extremes over t at
   // the ends of the sweep or at multiples of 90 degrees inside it.

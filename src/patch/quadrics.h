@@ -12,10 +12,6 @@
 
 namespace patchscan {
 
-// The corners of an object-space box: a convex set that contains the surface.
-using BoxHull = std::array<Vec3, 8>;
-BoxHull BoxCorners(const Bounds3& box);
-
 // x, y bounds of the annular sector {rho (cos t, sin t) : rho in [rhoMin, rhoMax],
 // t between t0 and t1 (radians)}, 0 <= rhoMin <= rhoMax. Exact, not just conservative.
 Bounds2 SectorBox(double rhoMin, double rhoMax, double t0, double t1);

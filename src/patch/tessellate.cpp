@@ -50,3 +50,55 @@ void TessellateUniform(const Surface& s, int rate, std::uint32_t surfaceId, Tess
 }
 
 }  // namespace patchscan
+
+#include <cmath>
+#include <unordered_map>
+
+namespace patchscan {
+
+std::size_t WeldBoundaryVertices(TessMesh* mesh, double tolerance) {
+  // A hash grid of cell size `tolerance`: a match lies in one of the 27 cells around.
+  struct Key {
+    long long x, y, z;
+    bool operator==(const Key&) const = default;
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      return std::hash<long long>()(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL);
+    }
+  };
+  if (!(tolerance > 0.0)) return 0;
+  std::unordered_map<Key, std::vector<std::uint32_t>, KeyHash> grid;
+  auto cell = [&](const Vec3& p) {
+    return Key{static_cast<long long>(std::floor(p.x() / tolerance)),
+               static_cast<long long>(std::floor(p.y() / tolerance)),
+               static_cast<long long>(std::floor(p.z() / tolerance))};
+  };
+  std::size_t moved = 0;
+  for (std::uint32_t i = 0; i < mesh->vertices.size(); ++i) {
+    TessVertex& v = mesh->vertices[i];
+    if (!(v.uv.x() == 0 || v.uv.x() == 1 || v.uv.y() == 0 || v.uv.y() == 1)) continue;
+    const Key c = cell(v.position);
+    const TessVertex* match = nullptr;
+    for (long long dz = -1; dz <= 1 && !match; ++dz)
+      for (long long dy = -1; dy <= 1 && !match; ++dy)
+        for (long long dx = -1; dx <= 1 && !match; ++dx) {
+          auto it = grid.find({c.x + dx, c.y + dy, c.z + dz});
+          if (it == grid.end()) continue;
+          for (std::uint32_t j : it->second)
+            if ((mesh->vertices[j].position - v.position).norm() <= tolerance) {
+              match = &mesh->vertices[j];
+              break;
+            }
+        }
+    if (match) {
+      if (match->position != v.position) ++moved;
+      v.position = match->position;
+    } else {
+      grid[c].push_back(i);
+    }
+  }
+  return moved;
+}
+
+}  // namespace patchscan

@@ -35,3 +35,15 @@ constexpr double kNormalNudge = 1e-6;
 Vec3 WorldNormal(const Surface& s, double u, double v);
 
 }  // namespace patchscan
+
+namespace patchscan {
+
+// Two surfaces that share a boundary curve evaluate it through different arithmetic
+// (their own power forms), so their boundary vertices can differ in the last bits. This
+// snaps every boundary vertex to the first boundary vertex found within `tolerance` of
+// it, so that shared edges have bit-identical end points and the back end's tie rule
+// covers each sample on them exactly once. Returns how many vertices moved.
+constexpr double kWeldRelTol = 1e-10;  // of the mesh's extent: far above rounding, far below a pixel
+std::size_t WeldBoundaryVertices(TessMesh* mesh, double tolerance);
+
+}  // namespace patchscan
