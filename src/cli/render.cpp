@@ -1,6 +1,9 @@
 #include "cli/render.h"
 
 #include <Eigen/Geometry>
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <chrono>
 #include <fstream>
 #include <ostream>
@@ -12,6 +15,45 @@
 #include "xscan/tess_feed.h"
 
 namespace patchscan::cli {
+namespace {
+
+// Peak resident memory of this process so far, in KiB.
+long PeakResidentKiB() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss;
+}
+
+// Passes rows on, and when stderr is a terminal shows the percentage done, at most a few
+// times a second.
+class ProgressSink final : public raster::RowSink {
+ public:
+  ProgressSink(raster::RowSink& next, int height, std::ostream& err)
+      : next_(next), height_(height), err_(err), show_(isatty(STDERR_FILENO) != 0) {}
+  ~ProgressSink() override {
+    if (shown_) err_ << "\r              \r" << std::flush;
+  }
+  bool WriteRow(int y, const float* pixels) override {
+    if (show_) {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last_ > std::chrono::milliseconds(250)) {
+        last_ = now;
+        shown_ = true;
+        err_ << "\rrender: " << (100 * (y + 1)) / height_ << "%" << std::flush;
+      }
+    }
+    return next_.WriteRow(y, pixels);
+  }
+
+ private:
+  raster::RowSink& next_;
+  int height_;
+  std::ostream& err_;
+  bool show_, shown_ = false;
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+}  // namespace
 
 CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   CLI::App* cmd = app->add_subcommand(
@@ -29,6 +71,10 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   cmd->add_option("--tess-rate", o->tessRate, "tessellation segments per patch edge (uniform)")
       ->check(CLI::Range(1, kMaxTessRate))
       ->capture_default_str();
+  cmd->add_option("--tess-pixels", o->tessPixels,
+                  "screen-adaptive tessellation: per-edge rates making edges about this many "
+                  "pixels long (equal on shared edges), instead of --tess-rate")
+      ->check(CLI::Range(0.01, 1e6));
   cmd->add_option("--aa", o->aa,
                   "supersampling: an l x l grid of samples per pixel whose edge samples are "
                   "shared with the neighbours (1: one sample at the pixel centre)")
@@ -42,7 +88,16 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
       ->capture_default_str();
   cmd->add_flag("--cull-backfaces", o->cullBackFaces,
                 "drop triangles facing away from the eye (default: two-sided)");
-  cmd->add_flag("--stats", o->stats, "print counts and times to stderr");
+  cmd->add_flag("--hidden-line", o->hiddenLine,
+                "hidden-line mode: visible surfaces in white with their triangle edges in black, "
+                "unshaded");
+  cmd->add_flag("--aov", o->aov,
+                "also write the channels Z (eye distance), N.x N.y N.z (world normal), u v and id "
+                "(surface index) of the surface covering most of each pixel; .exr only");
+  cmd->add_option("--seed", o->seed,
+                  "seed of the stochastic extra shading calls (same seed, same image)")
+      ->capture_default_str();
+  cmd->add_flag("--stats", o->stats, "print counts, times and peak memory to stderr");
   cmd->add_option("--stats-json", o->statsJson, "write counts and times as JSON to this file");
   AddCameraOptions(cmd, &o->camera);
   return cmd;
@@ -55,11 +110,15 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   if (const int* code = std::get_if<int>(&loaded)) return *code;
   const Scene& scene = std::get<LoadedScene>(loaded).scene;
   const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
+  const auto tLoaded = Clock::now();
 
   // Step 1: tessellate and feed the back end.
   TessMesh tess;
   for (size_t k = 0; k < scene.surfaces.size(); ++k)
-    TessellateUniform(scene.surfaces[k], o.tessRate, static_cast<std::uint32_t>(k), &tess);
+    if (o.tessPixels > 0)
+      TessellateToScreen(scene.surfaces[k], camera, o.tessPixels, static_cast<std::uint32_t>(k), &tess);
+    else
+      TessellateUniform(scene.surfaces[k], o.tessRate, static_cast<std::uint32_t>(k), &tess);
   WeldBoundaryVertices(&tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
   const raster::TriangleMesh mesh = ToRasterMesh(tess, camera);
   const auto t1 = Clock::now();
@@ -73,6 +132,8 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
               : o.shading == "gouraud" ? raster::ShadingMode::Gouraud
                                        : raster::ShadingMode::Phong;
   s.cullBackFaces = o.cullBackFaces;
+  s.hiddenLine = o.hiddenLine;
+  s.seed = o.seed;
   s.hither = camera.hither;
   s.eye = camera.eye;
   if (o.texture == "checker") s.material.checkerSquares = 8;
@@ -80,13 +141,14 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   const Vec3 right = forward.cross(camera.up).normalized();
   s.lights = raster::DefaultLightRig(forward, right.cross(forward), right);
 
-  auto opened = raster::ImageWriter::Open(o.output, camera.width, camera.height);
+  auto opened = raster::ImageWriter::Open(o.output, camera.width, camera.height, o.aov);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';
     return kExitUsage;
   }
   auto& writer = *std::get<std::unique_ptr<raster::ImageWriter>>(opened);
-  const auto stats = raster::RenderMesh(mesh, s, writer);
+  ProgressSink progress(writer, camera.height, err);
+  const auto stats = raster::RenderMesh(mesh, s, progress);
   if (!stats) {
     err << "patchscan: " << o.output << ": writing the image failed\n";
     return kExitOutputError;
@@ -98,21 +160,28 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   const auto t2 = Clock::now();
 
   // Step 3: statistics.
-  const double prepSec = std::chrono::duration<double>(t1 - t0).count();
+  const double loadSec = std::chrono::duration<double>(tLoaded - t0).count();
+  const double tessSec = std::chrono::duration<double>(t1 - tLoaded).count();
   const double renderSec = std::chrono::duration<double>(t2 - t1).count();
+  const long peakKiB = PeakResidentKiB();
   if (o.stats)
     err << "triangles n: " << stats->nTriangles << " (set up " << stats->nTrianglesSetUp
         << ")\nmost active on one sample row m: " << stats->maxActive
         << "\nsamples tested: " << stats->nSamplesTested << "\nsamples covered: "
-        << stats->nSamplesCovered << "\nshading calls: " << stats->nShadingCalls
-        << "\ntime: load and tessellate " << prepSec << " s, render " << renderSec << " s\n";
+        << stats->nSamplesCovered << "\nshading calls: " << stats->nShadingCalls << " (+"
+        << stats->nExtraShadingCalls << " adaptive-stochastic, " << stats->nSuperSampledPixels
+        << " pixels super-sampled)\ntime: load " << loadSec << " s, tessellate " << tessSec
+        << " s, render " << renderSec << " s\npeak memory: " << peakKiB << " KiB\n";
   if (!o.statsJson.empty()) {
     std::ofstream js(o.statsJson);
     js << "{\"triangles\": " << stats->nTriangles << ", \"triangles_set_up\": "
        << stats->nTrianglesSetUp << ", \"max_active\": " << stats->maxActive
        << ", \"samples_tested\": " << stats->nSamplesTested << ", \"samples_covered\": "
        << stats->nSamplesCovered << ", \"shading_calls\": " << stats->nShadingCalls
-       << ", \"seconds_prepare\": " << prepSec << ", \"seconds_render\": " << renderSec << "}\n";
+       << ", \"extra_shading_calls\": " << stats->nExtraShadingCalls
+       << ", \"super_sampled_pixels\": " << stats->nSuperSampledPixels
+       << ", \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
+       << ", \"seconds_render\": " << renderSec << ", \"peak_rss_kib\": " << peakKiB << "}\n";
     if (!js) {
       err << "patchscan: " << o.statsJson << ": cannot write statistics\n";
       return kExitOutputError;

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <iosfwd>
 #include <string>
 
@@ -13,10 +14,14 @@ struct RenderOptions {
   std::string file, output;
   std::string mode = "tess";
   int tessRate = 8;
+  double tessPixels = 0.0;  // > 0: screen-adaptive tessellation instead of tessRate
   int aa = 3;
   std::string shading = "phong";
   std::string texture = "none";
   bool cullBackFaces = false;
+  bool hiddenLine = false;
+  bool aov = false;
+  std::uint64_t seed = 1;
   bool stats = false;
   std::string statsJson;
   CameraOptions camera;

@@ -3,6 +3,9 @@
 #include <opensubdiv/bfr/tessellation.h>
 
 #include <algorithm>
+#include <cmath>
+
+#include <Eigen/Geometry>
 
 namespace patchscan {
 
@@ -25,10 +28,11 @@ Vec3 WorldNormal(const Surface& s, double u, double v) {
   return len > 0.0 ? Vec3(w / len) : Vec3(0, 0, 1);
 }
 
-void TessellateUniform(const Surface& s, int rate, std::uint32_t surfaceId, TessMesh* out) {
-  rate = std::clamp(rate, 1, kMaxTessRate);
-  const Bfr::Parameterization quad(OpenSubdiv::Sdc::SCHEME_CATMARK, 4);
-  const Bfr::Tessellation tess(quad, rate, Bfr::Tessellation::Options().SetFacetSize(3));
+namespace {
+
+// Appends the vertices and triangles of one Bfr tessellation pattern of s's domain.
+void AppendPattern(const Surface& s, const Bfr::Tessellation& tess, std::uint32_t surfaceId,
+                   TessMesh* out) {
   std::vector<double> coords(2 * static_cast<size_t>(tess.GetNumCoords()));
   std::vector<int> facets(3 * static_cast<size_t>(tess.GetNumFacets()));
   tess.GetCoords(coords.data());
@@ -47,6 +51,81 @@ void TessellateUniform(const Surface& s, int rate, std::uint32_t surfaceId, Tess
                               base + static_cast<std::uint32_t>(facets[3 * f + 2])});
     out->surfaceOf.push_back(surfaceId);
   }
+}
+
+// Screen length in pixels of a world-space polyline; infinity if a point is not in front
+// of the eye.
+double ScreenLength(const std::array<Vec3, 17>& world, const Mat4& screenFromWorld) {
+  double len = 0.0;
+  Vec2 prev;
+  for (size_t k = 0; k < world.size(); ++k) {
+    const Vec4 h = screenFromWorld * world[k].homogeneous();
+    if (!(h.w() > 0.0)) return INFINITY;
+    const Vec2 q = h.head<2>() / h.w();
+    if (k > 0) len += (q - prev).norm();
+    prev = q;
+  }
+  return len;
+}
+
+}  // namespace
+
+void TessellateUniform(const Surface& s, int rate, std::uint32_t surfaceId, TessMesh* out) {
+  rate = std::clamp(rate, 1, kMaxTessRate);
+  const Bfr::Parameterization quad(OpenSubdiv::Sdc::SCHEME_CATMARK, 4);
+  AppendPattern(s, Bfr::Tessellation(quad, rate, Bfr::Tessellation::Options().SetFacetSize(3)),
+                surfaceId, out);
+}
+
+std::array<int, 4> ScreenEdgeRates(const Surface& s, const Camera& camera, double pixels) {
+  const Mat4 screenFromWorld = ScreenFromWorld(camera);
+  const PatchEdge edges[4] = {PatchEdge::V0, PatchEdge::U1, PatchEdge::V1, PatchEdge::U0};
+  std::array<int, 4> rates;
+  const auto* bicubic = std::get_if<BicubicPatch>(&s.shape);
+  for (int e = 0; e < 4; ++e) {
+    std::array<Vec3, 17> world;  // 16 segments along the edge
+    if (bicubic) {
+      // The edge's Bézier points in a canonical order, evaluated by de Casteljau: the
+      // same arithmetic in both patches that share the edge.
+      const auto& b = bicubic->BezierPoints();
+      std::array<Vec3, 4> cv;
+      for (int k = 0; k < 4; ++k) {
+        const int i = edges[e] == PatchEdge::U0 ? 0 : edges[e] == PatchEdge::U1 ? 3 : k;
+        const int j = edges[e] == PatchEdge::V0 ? 0 : edges[e] == PatchEdge::V1 ? 3 : k;
+        cv[k] = s.worldFromObject * b[4 * j + i];
+      }
+      if (std::lexicographical_compare(cv[3].data(), cv[3].data() + 3, cv[0].data(), cv[0].data() + 3))
+        std::reverse(cv.begin(), cv.end());
+      for (int k = 0; k <= 16; ++k) {
+        const double t = k / 16.0;
+        std::array<Vec3, 4> q = cv;
+        for (int m = 3; m > 0; --m)
+          for (int i = 0; i < m; ++i) q[i] = (1 - t) * q[i] + t * q[i + 1];
+        world[k] = q[0];
+      }
+    } else {
+      for (int k = 0; k <= 16; ++k) {
+        const double t = k / 16.0;
+        const double u = edges[e] == PatchEdge::U0 ? 0 : edges[e] == PatchEdge::U1 ? 1 : t;
+        const double v = edges[e] == PatchEdge::V0 ? 0 : edges[e] == PatchEdge::V1 ? 1 : t;
+        SurfaceDerivs d;
+        EvaluateObject(s, u, v, DerivOrder::Position, &d);
+        world[k] = s.worldFromObject * d.p;
+      }
+    }
+    const double len = ScreenLength(world, screenFromWorld);
+    const double wanted = std::ceil(len / pixels);  // infinite behind the eye
+    rates[e] = wanted < kMaxAdaptiveRate ? std::max(1, static_cast<int>(wanted)) : kMaxAdaptiveRate;
+  }
+  return rates;
+}
+
+void TessellateToScreen(const Surface& s, const Camera& camera, double pixels,
+                        std::uint32_t surfaceId, TessMesh* out) {
+  const std::array<int, 4> rates = ScreenEdgeRates(s, camera, pixels);
+  const Bfr::Parameterization quad(OpenSubdiv::Sdc::SCHEME_CATMARK, 4);
+  AppendPattern(s, Bfr::Tessellation(quad, 4, rates.data(), Bfr::Tessellation::Options().SetFacetSize(3)),
+                surfaceId, out);
 }
 
 }  // namespace patchscan

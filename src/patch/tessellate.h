@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "patch/camera.h"
 #include "patch/surface.h"
 
 namespace patchscan {
@@ -27,6 +28,17 @@ constexpr int kMaxTessRate = 4096;
 
 // Appends `s` tessellated uniformly at `rate` segments per edge (1..kMaxTessRate).
 void TessellateUniform(const Surface& s, int rate, std::uint32_t surfaceId, TessMesh* out);
+
+// Appends `s` tessellated with per-edge rates chosen so that tessellation edges are about
+// `pixels` long on the screen of `camera`. An edge's rate depends only on the edge curve
+// itself (for bicubic patches, on its four control points in a canonical order), so two
+// patches that share an edge give it the same rate and the mesh has no T-junctions.
+// Rates are 1..kMaxAdaptiveRate; an edge that reaches behind the eye gets the maximum.
+constexpr int kMaxAdaptiveRate = 256;
+// The four rates, in OpenSubdiv's quad edge order: v=0, u=1, v=1, u=0.
+std::array<int, 4> ScreenEdgeRates(const Surface& s, const Camera& camera, double pixels);
+void TessellateToScreen(const Surface& s, const Camera& camera, double pixels,
+                        std::uint32_t surfaceId, TessMesh* out);
 
 // The world-space unit normal of `s` at (u,v). Where dp/du x dp/dv vanishes (a collapsed
 // edge such as the teapot's lid apex), the normal is taken a step kNormalNudge towards

@@ -26,7 +26,8 @@ ImageWriter::~ImageWriter() {
 }
 
 std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const std::string& path,
-                                                                          int width, int height) {
+                                                                          int width, int height,
+                                                                          bool aovs) {
   auto impl = std::make_unique<Impl>();
   impl->target = path;
   std::string ext = impl->target.extension().string();
@@ -36,7 +37,9 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   else if (ext == ".tif" || ext == ".tiff") type = OIIO::TypeDesc::UINT16;
   else if (ext == ".exr") type = OIIO::TypeDesc::HALF;
   else return path + ": unknown image format '" + ext + "' (known: .png .tif .tiff .jpg .jpeg .exr)";
-  impl->channels = (ext == ".jpg" || ext == ".jpeg") ? 3 : 4;  // JPEG has no alpha
+  if (aovs && ext != ".exr") return path + ": AOV channels need an .exr output";
+  impl->channels = (ext == ".jpg" || ext == ".jpeg") ? 3 : aovs ? kChannels : 4;  // JPEG: no alpha
+  if (aovs) type = OIIO::TypeDesc::FLOAT;  // depth and ids need more than half precision
   impl->width = width;
   std::string tempName = ".";
   tempName += impl->target.stem().string();
@@ -45,14 +48,18 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   impl->out = OIIO::ImageOutput::create(path);
   if (!impl->out) return path + ": cannot create an image writer: " + OIIO::geterror();
   OIIO::ImageSpec spec(width, height, impl->channels, type);
-  if (impl->channels == 4) spec.alpha_channel = 3;
+  if (impl->channels >= 4) spec.alpha_channel = 3;
+  if (aovs) {
+    spec.channelnames = {"R", "G", "B", "A", "Z", "N.x", "N.y", "N.z", "u", "v", "id"};
+    spec.z_channel = kChannelZ;
+  }
   if (!impl->out->open(impl->temp.string(), spec))
     return path + ": cannot write: " + impl->out->geterror();
   return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
 }
 
-bool ImageWriter::WriteRow(int y, const float* rgba) {
-  return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, rgba, 4 * sizeof(float));
+bool ImageWriter::WriteRow(int y, const float* pixels) {
+  return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, pixels, kChannels * sizeof(float));
 }
 
 std::variant<std::monostate, std::string> ImageWriter::Commit() {

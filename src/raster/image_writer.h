@@ -14,12 +14,14 @@ namespace patchscan::raster {
 class ImageWriter final : public RowSink {
  public:
   // Opens the temporary file for `path`, with the format its extension names (.png, .tif,
-  // .tiff, .jpg, .jpeg, .exr). nullptr and a message when that fails.
+  // .tiff, .jpg, .jpeg, .exr): RGBA (RGB for JPEG); with `aovs`, which only EXR takes, also
+  // the channels Z (eye distance), N.x N.y N.z, u v and id. A message when that fails.
   static std::variant<std::unique_ptr<ImageWriter>, std::string> Open(const std::string& path,
-                                                                     int width, int height);
+                                                                     int width, int height,
+                                                                     bool aovs = false);
   ~ImageWriter() override;
 
-  bool WriteRow(int y, const float* rgba) override;
+  bool WriteRow(int y, const float* pixels) override;
   // Closes the file and renames it onto the target; the message on failure.
   std::variant<std::monostate, std::string> Commit();
 

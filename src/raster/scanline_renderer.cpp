@@ -46,13 +46,32 @@ struct ActiveTriangle {
   Rgb vertexColour[3];  // Gouraud only
 };
 
-// Barycentric coordinates of (x, y) for a set-up triangle: b_i = e_i / sum e.
-Vec3 Barycentric(const TriangleSetup& t, double x, double y) {
-  Vec3 e;
-  for (int i = 0; i < 3; ++i) e[i] = t.edge[i].x() * x + t.edge[i].y() * y + t.edge[i].z();
-  const double sum = e.sum();
-  return sum != 0.0 ? Vec3(e / sum) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
+// Screen distance in pixels from (x, y) to the nearest edge line of a triangle: each
+// oriented edge is an affine function of screen position, so |e| / |grad e| is exact.
+double EdgeDistance(const TriangleSetup& t, double x, double y) {
+  double d = INFINITY;
+  for (const Vec3& e : t.edge)
+    d = std::min(d, std::abs(e.x() * x + e.y() * y + e.z()) / std::hypot(e.x(), e.y()));
+  return d;
 }
+
+// A uniform number in [0, 1) from a seed and a sample's lattice position (splitmix64):
+// the same for the same render whatever order the samples are visited in.
+double UnitHash(std::uint64_t seed, int j, int i) {
+  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (static_cast<std::uint64_t>(j) * 0x100000001B3ull +
+                                                     static_cast<std::uint64_t>(i) + 1);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  z ^= z >> 31;
+  return static_cast<double>(z >> 11) * 0x1.0p-53;
+}
+
+// Half the width of a hidden-line mode line, in pixels.
+constexpr double kLineHalfWidth = 0.6;
+// A stochastic extra shading call that differs from the pixel's shading call by more than
+// this in any channel (colours near 1 at full intensity) marks a highlight or texture
+// detail that one call per pixel would alias.
+constexpr double kShadeDiscrepancy = 0.08;
 
 }  // namespace
 
@@ -92,23 +111,38 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
   active.reserve(1024);
   live.reserve(1024);
   std::vector<std::vector<Sample>> rows(s.aa, std::vector<Sample>(lat.nx));
-  std::vector<float> rgba(static_cast<size_t>(s.width) * 4);
+  std::vector<float> pixels(static_cast<size_t>(s.width) * kChannels);
   size_t nextY = 0;
 
-  auto shadeAt = [&](const ActiveTriangle& at, double x, double y) -> Rgb {
+  // Perspective-correct attributes of an active triangle at (x, y).
+  struct Attributes {
+    Vec3 b, position, normal;
+    Vec2 uv;
+    double w;
+  };
+  auto interpolate = [&](const ActiveTriangle& at, double x, double y) {
     const RasterTriangle& t = mesh.triangles[at.index];
-    const RasterVertex *v0 = &mesh.vertices[t.v[0]], *v1 = &mesh.vertices[t.v[1]],
-                       *v2 = &mesh.vertices[t.v[2]];
-    const Vec3 b = Barycentric(at.setup, x, y);
+    const RasterVertex &v0 = mesh.vertices[t.v[0]], &v1 = mesh.vertices[t.v[1]],
+                       &v2 = mesh.vertices[t.v[2]];
+    Attributes a;
+    Vec3 e;
+    for (int i = 0; i < 3; ++i) e[i] = at.setup.edge[i].x() * x + at.setup.edge[i].y() * y + at.setup.edge[i].z();
+    const double sum = e.sum();
+    a.b = sum != 0.0 ? Vec3(e / sum) : Vec3::Constant(1.0 / 3);
+    a.w = sum != 0.0 ? 1.0 / (sum * std::abs(at.setup.invDet)) : 0.0;
+    a.position = a.b[0] * v0.position + a.b[1] * v1.position + a.b[2] * v2.position;
+    a.uv = a.b[0] * v0.uv + a.b[1] * v1.uv + a.b[2] * v2.uv;
+    a.normal = s.shading == ShadingMode::Flat
+                   ? Vec3((v1.position - v0.position).cross(v2.position - v0.position))
+                   : Vec3(a.b[0] * v0.normal + a.b[1] * v1.normal + a.b[2] * v2.normal);
+    return a;
+  };
+  auto shadeAt = [&](const ActiveTriangle& at, double x, double y, std::int64_t& nCalls) -> Rgb {
+    const Attributes a = interpolate(at, x, y);
     if (s.shading == ShadingMode::Gouraud)
-      return b[0] * at.vertexColour[0] + b[1] * at.vertexColour[1] + b[2] * at.vertexColour[2];
-    ++stats.nShadingCalls;
-    const Vec3 p = b[0] * v0->position + b[1] * v1->position + b[2] * v2->position;
-    const Vec2 uv = b[0] * v0->uv + b[1] * v1->uv + b[2] * v2->uv;
-    const Vec3 n = s.shading == ShadingMode::Flat
-                       ? Vec3((v1->position - v0->position).cross(v2->position - v0->position))
-                       : Vec3(b[0] * v0->normal + b[1] * v1->normal + b[2] * v2->normal);
-    return Shade(p, n, uv, s.eye, s.material, s.lights);
+      return a.b[0] * at.vertexColour[0] + a.b[1] * at.vertexColour[1] + a.b[2] * at.vertexColour[2];
+    ++nCalls;
+    return Shade(a.position, a.normal, a.uv, s.eye, s.material, s.lights);
   };
 
   // Resolve one sample row: nearest triangle per sample.
@@ -176,6 +210,10 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
 
   // Step 3: pixel rows.
   const int perPixel = s.aa * s.aa;
+  // Paper 000 §3.4.2: each covered sample is shaded on its own with probability
+  // P = (l - 1) / (l^2 - 1) = 1 / (l + 1); a colour that differs from the pixel's one
+  // shading call by more than kShadeDiscrepancy makes the pixel shade every sample.
+  const double extraP = s.aa > 1 ? 1.0 / (s.aa + 1) : 0.0;
   for (int py = 0; py < s.height; ++py) {
     const int j0 = lat.FirstOfPixel(py);
     std::erase_if(live, [&](int k) {
@@ -197,35 +235,85 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
         int count;
         double sx, sy;
         int active;
+        Rgb rgb;
       };
       std::array<Group, kMaxAa * kMaxAa> groups;
-      int nGroups = 0, covered = 0;
+      std::array<int, kMaxAa * kMaxAa> groupOf;  // per sample, -1: not covered
+      int nGroups = 0, covered = 0, onLines = 0;
       const int i0 = lat.FirstOfPixel(px);
       for (int r = 0; r < s.aa; ++r)
         for (int c = 0; c < s.aa; ++c) {
           const Sample& smp = rows[r][i0 + c];
+          groupOf[r * s.aa + c] = -1;
           if (smp.active < 0) continue;
           ++covered;
+          const double x = lat.At(i0 + c), y = lat.At(j0 + r);
+          if (s.hiddenLine && EdgeDistance(active[smp.active].setup, x, y) < kLineHalfWidth) ++onLines;
           const std::uint32_t surface = mesh.triangles[active[smp.active].index].surfaceId;
           int g = 0;
           while (g < nGroups && groups[g].surface != surface) ++g;
-          if (g == nGroups) groups[nGroups++] = {surface, 0, 0.0, 0.0, smp.active};
+          if (g == nGroups) groups[nGroups++] = {surface, 0, 0.0, 0.0, smp.active, Rgb::Zero()};
+          groupOf[r * s.aa + c] = g;
           ++groups[g].count;
-          groups[g].sx += lat.At(i0 + c);
-          groups[g].sy += lat.At(j0 + r);
+          groups[g].sx += x;
+          groups[g].sy += y;
         }
       stats.nSamplesCovered += covered;
       Rgb colour = Rgb::Zero();
-      for (int g = 0; g < nGroups; ++g) {
-        const Group& gr = groups[g];
-        colour += (static_cast<double>(gr.count) / perPixel) *
-                  shadeAt(active[gr.active], gr.sx / gr.count, gr.sy / gr.count);
+      if (s.hiddenLine) {
+        // White surfaces, black triangle edges, no shading.
+        colour = Rgb::Constant(static_cast<double>(covered - onLines) / perPixel);
+      } else {
+        bool superSample = false;
+        for (int g = 0; g < nGroups; ++g) {
+          Group& gr = groups[g];
+          gr.rgb = shadeAt(active[gr.active], gr.sx / gr.count, gr.sy / gr.count, stats.nShadingCalls);
+          colour += (static_cast<double>(gr.count) / perPixel) * gr.rgb;
+        }
+        // Only the (l-1) x (l-1) samples a pixel owns (not its right and bottom edges, which
+        // belong to the neighbours) draw, so each sample draws once.
+        for (int k = 0; k < perPixel && !superSample && extraP > 0; ++k) {
+          const int r = k / s.aa, c = k % s.aa;
+          if (r == s.aa - 1 || c == s.aa - 1 || groupOf[k] < 0 ||
+              UnitHash(s.seed, j0 + r, i0 + c) >= extraP)
+            continue;
+          const Sample& smp = rows[r][i0 + c];
+          const Rgb rgb = shadeAt(active[smp.active], lat.At(i0 + c), lat.At(j0 + r), stats.nExtraShadingCalls);
+          superSample = (rgb - groups[groupOf[k]].rgb).cwiseAbs().maxCoeff() > kShadeDiscrepancy;
+        }
+        if (superSample) {
+          ++stats.nSuperSampledPixels;
+          colour = Rgb::Zero();
+          for (int k = 0; k < perPixel; ++k) {
+            if (groupOf[k] < 0) continue;
+            const Sample& smp = rows[k / s.aa][i0 + k % s.aa];
+            colour += shadeAt(active[smp.active], lat.At(i0 + k % s.aa), lat.At(j0 + k / s.aa),
+                              stats.nExtraShadingCalls) / perPixel;
+          }
+        }
       }
-      float* out = &rgba[static_cast<size_t>(px) * 4];
+      float* out = &pixels[static_cast<size_t>(px) * kChannels];
       for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(colour[k]);
       out[3] = static_cast<float>(static_cast<double>(covered) / perPixel);
+      // AOVs of the surface that covers most of the pixel, at its samples' centroid.
+      int major = -1;
+      for (int g = 0; g < nGroups; ++g)
+        if (major < 0 || groups[g].count > groups[major].count) major = g;
+      if (major < 0) {
+        std::fill(out + 4, out + kChannels, 0.0f);
+        out[kChannelId] = -1.0f;
+      } else {
+        const Group& gr = groups[major];
+        const Attributes a = interpolate(active[gr.active], gr.sx / gr.count, gr.sy / gr.count);
+        const Vec3 n = a.normal.normalized();
+        out[kChannelZ] = static_cast<float>(a.w);
+        for (int k = 0; k < 3; ++k) out[kChannelN + k] = static_cast<float>(n.allFinite() ? n[k] : 0.0);
+        out[kChannelUv] = static_cast<float>(a.uv.x());
+        out[kChannelUv + 1] = static_cast<float>(a.uv.y());
+        out[kChannelId] = static_cast<float>(gr.surface);
+      }
     }
-    if (!sink.WriteRow(py, rgba.data())) return std::nullopt;
+    if (!sink.WriteRow(py, pixels.data())) return std::nullopt;
   }
   return stats;
 }

@@ -26,6 +26,8 @@ struct RenderSettings {
   ShadingMode shading = ShadingMode::Phong;
   bool cullBackFaces = false;
   double hither = 0.0;  // eye distance of the hither plane: nearer samples are dropped
+  bool hiddenLine = false;  // white surfaces with their triangle edges in black, unshaded
+  std::uint64_t seed = 1;   // of the stochastic extra shading calls (paper 000 §3.4.2)
   Vec3 eye = Vec3::Zero();
   Material material;
   LightRig lights;
@@ -36,14 +38,23 @@ struct RenderSettings {
 struct RenderStats {
   std::int64_t nTriangles = 0, nTrianglesSetUp = 0, maxActive = 0;
   std::int64_t nSamplesTested = 0, nSamplesCovered = 0, nShadingCalls = 0;
+  std::int64_t nExtraShadingCalls = 0, nSuperSampledPixels = 0;
 };
 
-// Receives finished rows top to bottom: `rgba` holds width * 4 floats, colour
-// premultiplied by alpha (= coverage). Returning false stops the render.
+// The channels of a row handed to a RowSink, per pixel.
+constexpr int kChannelZ = 4;    // w, the eye distance along the view axis (0: no surface)
+constexpr int kChannelN = 5;    // 3 channels: unit world normal
+constexpr int kChannelUv = 8;   // 2 channels: surface (u, v)
+constexpr int kChannelId = 10;  // surface id, -1: no surface
+constexpr int kChannels = 11;
+
+// Receives finished rows top to bottom: `pixels` holds width * kChannels floats: colour
+// premultiplied by alpha (= coverage), alpha, then the AOV channels above, taken from the
+// surface covering most of the pixel. Returning false stops the render.
 class RowSink {
  public:
   virtual ~RowSink() = default;
-  virtual bool WriteRow(int y, const float* rgba) = 0;
+  virtual bool WriteRow(int y, const float* pixels) = 0;
 };
 
 // Renders `mesh`. nullopt if the sink stopped it. Allocates only before the first row.

@@ -56,3 +56,45 @@ TEST(Tessellate, TeapotIsCrackFree) {
 
 }  // namespace
 }  // namespace patchscan
+
+namespace patchscan {
+namespace {
+
+TEST(Tessellate, ScreenRatesAreEqualOnSharedEdges) {
+  // Edges of two teapot patches with the same four control points (in either order) get
+  // the same rate, so neighbours meet vertex to vertex.
+  auto loaded = LoadScene(PATCHSCAN_SURFACES_DIR "/teapot.bpt");
+  const Scene& scene = std::get<Scene>(loaded);
+  Camera cam = FrameBounds(scene.WorldBounds(), Camera{}, DefaultViewDirection(Vec3(0, 0, 1)));
+  using EdgeKey = std::array<std::tuple<double, double, double>, 4>;
+  auto key = [](const BicubicPatch& p, int e) {
+    // Bfr edge order v=0, u=1, v=1, u=0, points along the edge; sorted to ignore direction.
+    EdgeKey k;
+    for (int m = 0; m < 4; ++m) {
+      const int i = e == 1 ? 3 : e == 3 ? 0 : m, j = e == 0 ? 0 : e == 2 ? 3 : m;
+      const Vec3& q = p.BezierPoints()[4 * j + i];
+      k[m] = {q.x(), q.y(), q.z()};
+    }
+    if (k[3] < k[0]) std::reverse(k.begin(), k.end());
+    return k;
+  };
+  for (double pixels : {2.0, 7.5, 30.0}) {
+    std::map<EdgeKey, int> rateOf;
+    int shared = 0;
+    for (const Surface& s : scene.surfaces) {
+      const auto rates = ScreenEdgeRates(s, cam, pixels);
+      for (int e = 0; e < 4; ++e) {
+        const auto [it, inserted] = rateOf.emplace(key(std::get<BicubicPatch>(s.shape), e), rates[e]);
+        if (!inserted) {
+          ++shared;
+          EXPECT_EQ(it->second, rates[e]) << "pixels " << pixels;
+        }
+        EXPECT_GE(rates[e], 1);
+      }
+    }
+    EXPECT_GE(shared, 40);  // the teapot's patches share most of their edges
+  }
+}
+
+}  // namespace
+}  // namespace patchscan

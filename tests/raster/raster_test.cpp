@@ -116,7 +116,7 @@ struct CaptureSink : RowSink {
   std::vector<float> rgba;
   explicit CaptureSink(int w) : width(w) {}
   bool WriteRow(int, const float* row) override {
-    rgba.insert(rgba.end(), row, row + 4 * width);
+    for (int x = 0; x < width; ++x) rgba.insert(rgba.end(), row + x * kChannels, row + x * kChannels + 4);
     return true;
   }
   double Coverage() const {
@@ -177,7 +177,7 @@ TEST(ImageWriter, AllOrNothing) {
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "out.png").string();
   std::filesystem::remove(path);
-  std::vector<float> row(4 * 8, 0.5f);
+  std::vector<float> row(kChannels * 8, 0.5f);
   {
     auto w = std::get<std::unique_ptr<ImageWriter>>(ImageWriter::Open(path, 8, 4));
     for (int y = 0; y < 2; ++y) w->WriteRow(y, row.data());
