@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <ostream>
 
@@ -12,6 +13,7 @@
 #include "patch/tessellate.h"
 #include "raster/image_writer.h"
 #include "raster/scanline_renderer.h"
+#include "raster/texture.h"
 #include "xscan/tess_feed.h"
 
 namespace patchscan::cli {
@@ -83,8 +85,10 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   cmd->add_option("--shading", o->shading, "flat, gouraud or phong")
       ->check(CLI::IsMember({"flat", "gouraud", "phong"}))
       ->capture_default_str();
-  cmd->add_option("--texture", o->texture, "none, or checker: a procedural uv checker")
-      ->check(CLI::IsMember({"none", "checker"}))
+  cmd->add_option("--texture", o->texture,
+                  "none; checker, a procedural 8x8 uv checker; or an image file read through "
+                  "OpenImageIO's TextureSystem (mipmapped, opened only when a visible sample "
+                  "needs it; 'maketx' makes mipmapped files)")
       ->capture_default_str();
   cmd->add_flag("--cull-backfaces", o->cullBackFaces,
                 "drop triangles facing away from the eye (default: two-sided)");
@@ -136,7 +140,18 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   s.seed = o.seed;
   s.hither = camera.hither;
   s.eye = camera.eye;
-  if (o.texture == "checker") s.material.checkerSquares = 8;
+  std::unique_ptr<raster::ImageTexture> texture;
+  if (o.texture == "checker") {
+    s.material.checkerSquares = 8;
+  } else if (o.texture != "none") {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(o.texture, ec)) {
+      err << "patchscan: --texture: no such file '" << o.texture << "'\n";
+      return kExitUsage;
+    }
+    texture = std::make_unique<raster::ImageTexture>(o.texture);
+    s.material.texture = texture.get();
+  }
   const Vec3 forward = (camera.lookAt - camera.eye).normalized();
   const Vec3 right = forward.cross(camera.up).normalized();
   s.lights = raster::DefaultLightRig(forward, right.cross(forward), right);
@@ -150,6 +165,10 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   ProgressSink progress(writer, camera.height, err);
   const auto stats = raster::RenderMesh(mesh, s, progress);
   if (!stats) {
+    if (texture && !texture->Error().empty()) {
+      err << "patchscan: " << texture->Error() << '\n';
+      return kExitInputError;
+    }
     err << "patchscan: " << o.output << ": writing the image failed\n";
     return kExitOutputError;
   }
@@ -171,7 +190,9 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
         << stats->nSamplesCovered << "\nshading calls: " << stats->nShadingCalls << " (+"
         << stats->nExtraShadingCalls << " adaptive-stochastic, " << stats->nSuperSampledPixels
         << " pixels super-sampled)\ntime: load " << loadSec << " s, tessellate " << tessSec
-        << " s, render " << renderSec << " s\npeak memory: " << peakKiB << " KiB\n";
+        << " s, render " << renderSec << " s\npeak memory: " << peakKiB << " KiB\n"
+        << "texture: " << (texture ? (texture->Opened() ? "opened" : "never needed") : "none")
+        << (texture ? ", " + std::to_string(texture->Lookups()) + " lookups" : std::string()) << '\n';
   if (!o.statsJson.empty()) {
     std::ofstream js(o.statsJson);
     js << "{\"triangles\": " << stats->nTriangles << ", \"triangles_set_up\": "

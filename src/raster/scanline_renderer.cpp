@@ -81,6 +81,7 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
   stats.nTriangles = static_cast<std::int64_t>(mesh.triangles.size());
   const Lattice lat(s);
   const double invHither = 1.0 / s.hither;
+  bool failed = false;  // a texture could not be read: stop after this row
 
   // Step 1: the y-sorted list: each triangle's first and last sample row.
   struct YEntry {
@@ -117,7 +118,7 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
   // Perspective-correct attributes of an active triangle at (x, y).
   struct Attributes {
     Vec3 b, position, normal;
-    Vec2 uv;
+    Vec2 uv, duvdx, duvdy;  // uv and its change per pixel in x and y
     double w;
   };
   auto interpolate = [&](const ActiveTriangle& at, double x, double y) {
@@ -132,6 +133,21 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
     a.w = sum != 0.0 ? 1.0 / (sum * std::abs(at.setup.invDet)) : 0.0;
     a.position = a.b[0] * v0.position + a.b[1] * v1.position + a.b[2] * v2.position;
     a.uv = a.b[0] * v0.uv + a.b[1] * v1.uv + a.b[2] * v2.uv;
+    // uv = sum(uv_i e_i) / sum(e) with each e_i affine in (x, y): the quotient rule.
+    if (sum != 0.0) {
+      for (int axis = 0; axis < 2; ++axis) {
+        Vec2 numerator = Vec2::Zero();
+        double grad = 0.0;
+        for (int i = 0; i < 3; ++i) {
+          const double g = at.setup.edge[i][axis];
+          numerator += g * mesh.vertices[t.v[i]].uv;
+          grad += g;
+        }
+        (axis == 0 ? a.duvdx : a.duvdy) = (numerator - a.uv * grad) / sum;
+      }
+    } else {
+      a.duvdx = a.duvdy = Vec2::Zero();
+    }
     a.normal = s.shading == ShadingMode::Flat
                    ? Vec3((v1.position - v0.position).cross(v2.position - v0.position))
                    : Vec3(a.b[0] * v0.normal + a.b[1] * v1.normal + a.b[2] * v2.normal);
@@ -142,7 +158,9 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
     if (s.shading == ShadingMode::Gouraud)
       return a.b[0] * at.vertexColour[0] + a.b[1] * at.vertexColour[1] + a.b[2] * at.vertexColour[2];
     ++nCalls;
-    return Shade(a.position, a.normal, a.uv, s.eye, s.material, s.lights);
+    const auto base = SurfaceColour(s.material, a.uv, a.duvdx, a.duvdy);
+    if (!base) failed = true;
+    return Shade(a.position, a.normal, base.value_or(Rgb::Zero()), s.eye, s.material, s.lights);
   };
 
   // Resolve one sample row: nearest triangle per sample.
@@ -159,7 +177,10 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
       if (s.shading == ShadingMode::Gouraud)
         for (int k = 0; k < 3; ++k) {
           const RasterVertex& v = mesh.vertices[t.v[k]];
-          at.vertexColour[k] = Shade(v.position, v.normal, v.uv, s.eye, s.material, s.lights);
+          const auto base = SurfaceColour(s.material, v.uv, Vec2::Zero(), Vec2::Zero());
+          if (!base) failed = true;
+          at.vertexColour[k] = Shade(v.position, v.normal, base.value_or(Rgb::Zero()), s.eye,
+                                     s.material, s.lights);
           ++stats.nShadingCalls;
         }
       int slot;
@@ -313,7 +334,7 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
         out[kChannelId] = static_cast<float>(gr.surface);
       }
     }
-    if (!sink.WriteRow(py, pixels.data())) return std::nullopt;
+    if (failed || !sink.WriteRow(py, pixels.data())) return std::nullopt;
   }
   return stats;
 }

@@ -57,7 +57,8 @@ class RowSink {
   virtual bool WriteRow(int y, const float* pixels) = 0;
 };
 
-// Renders `mesh`. nullopt if the sink stopped it. Allocates only before the first row.
+// Renders `mesh`. nullopt if the sink stopped it or the material's texture could not be
+// read (the texture's Error() says why). Allocates only before the first row.
 std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSettings& settings,
                                       RowSink& sink);
 

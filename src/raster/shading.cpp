@@ -17,18 +17,28 @@ LightRig DefaultLightRig(const Vec3& forward, const Vec3& up, const Vec3& right)
   return rig;
 }
 
-Rgb Shade(const Vec3& p, const Vec3& n, const Vec2& uv, const Vec3& eye, const Material& m,
-          const LightRig& rig) {
-  const Vec3 v = (eye - p).normalized();
-  Vec3 nn = n.normalized();
-  if (!nn.allFinite()) nn = v;  // a degenerate normal: light it as if facing the eye
-  if (nn.dot(v) < 0.0) nn = -nn;
+std::optional<Rgb> SurfaceColour(const Material& m, const Vec2& uv, const Vec2& duvdx,
+                                 const Vec2& duvdy) {
   Rgb base = m.colour;
   if (m.checkerSquares > 0) {
     const long iu = static_cast<long>(std::floor(uv.x() * m.checkerSquares));
     const long iv = static_cast<long>(std::floor(uv.y() * m.checkerSquares));
     if ((iu + iv) & 1) base *= 0.25;
   }
+  if (m.texture) {
+    const auto t = m.texture->Lookup(uv, duvdx, duvdy);
+    if (!t) return std::nullopt;
+    base = base.cwiseProduct(*t);
+  }
+  return base;
+}
+
+Rgb Shade(const Vec3& p, const Vec3& n, const Rgb& base, const Vec3& eye, const Material& m,
+          const LightRig& rig) {
+  const Vec3 v = (eye - p).normalized();
+  Vec3 nn = n.normalized();
+  if (!nn.allFinite()) nn = v;  // a degenerate normal: light it as if facing the eye
+  if (nn.dot(v) < 0.0) nn = -nn;
   Rgb c = m.emission + m.ka * base.cwiseProduct(rig.ambient);
   for (const Light& light : rig.lights) {
     Vec3 l;  // towards the light

@@ -4,9 +4,11 @@
 // shaded two-sided: a normal facing away from the eye is turned towards it.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "raster/mesh.h"
+#include "raster/texture.h"
 
 namespace patchscan::raster {
 
@@ -25,6 +27,7 @@ struct Material {
   double ka = 0.15, kd = 0.75, ks = 0.35;
   double shininess = 40.0;     // n
   int checkerSquares = 0;      // > 0: modulate colour by a uv checker of this many squares
+  ImageTexture* texture = nullptr;  // not owned; modulates colour when set
 };
 
 struct LightRig {
@@ -36,9 +39,14 @@ struct LightRig {
 // key light from the upper left, a cool fill from the right, and a dim rim from behind.
 LightRig DefaultLightRig(const Vec3& forward, const Vec3& up, const Vec3& right);
 
-// Colour at world point p with normal n (any length), seen from `eye`, at uv.
-// Allocation-free.
-Rgb Shade(const Vec3& p, const Vec3& n, const Vec2& uv, const Vec3& eye, const Material& m,
+// The material's colour at uv, modulated by its checker or texture (filtered over the
+// footprint duvdx, duvdy of one pixel); nullopt if the texture cannot be read.
+std::optional<Rgb> SurfaceColour(const Material& m, const Vec2& uv, const Vec2& duvdx,
+                                 const Vec2& duvdy);
+
+// Colour at world point p with normal n (any length), seen from `eye`, for a surface of
+// colour `base`. Allocation-free.
+Rgb Shade(const Vec3& p, const Vec3& n, const Rgb& base, const Vec3& eye, const Material& m,
           const LightRig& rig);
 
 // Renormalization of a vector whose length is near 1 by one Newton step for 1/sqrt

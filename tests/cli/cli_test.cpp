@@ -147,6 +147,32 @@ TEST(Cli, FailedRenderLeavesNoFile) {
   EXPECT_FALSE(std::filesystem::exists("/tmp/patchscan_cli_z.png"));
 }
 
+TEST(Cli, TextureIsOpenedOnlyWhenVisible) {
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_texture";
+  std::filesystem::create_directories(dir);
+  const std::string tex = (dir / "tex.png").string(), out = (dir / "out.png").string();
+  // A 2x2 texture written through the program itself: render anything small to PNG.
+  ASSERT_EQ(Patchscan("render " + kTeapot + " -o " + tex + " --size 8x8").code, 0);
+  // Looking away from the teapot: no visible sample, so the texture is never opened.
+  Result r = Patchscan("render " + kTeapot + " -o " + out + " --size 32x24 --texture " + tex +
+                       " --eye 0,-10,1 --look-at 0,-20,1 --stats");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("texture: never needed"), std::string::npos) << r.err;
+  r = Patchscan("render " + kTeapot + " -o " + out + " --size 32x24 --texture " + tex + " --stats");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("texture: opened"), std::string::npos) << r.err;
+  // A missing file is a usage error; an unreadable one an input error; neither leaves output.
+  std::filesystem::remove(out);
+  r = Patchscan("render " + kTeapot + " -o " + out + " --texture " + (dir / "none.png").string());
+  EXPECT_EQ(r.code, 2);
+  std::ofstream(dir / "bad.png") << "not an image";
+  r = Patchscan("render " + kTeapot + " -o " + out + " --size 32x24 --texture " + (dir / "bad.png").string());
+  EXPECT_EQ(r.code, 1) << r.err;
+  EXPECT_NE(r.err.find("cannot read texture"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Cli, Version) {
   const Result r = Patchscan("--version");
   EXPECT_EQ(r.code, 0);

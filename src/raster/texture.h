@@ -1,0 +1,38 @@
+// An image texture read through OpenImageIO's TextureSystem (mipmapped, filtered over the
+// footprint given by the screen derivatives of uv). Nothing is created and no file is
+// opened until a visible sample first asks for a colour (paper 000 §5: lazy texture
+// loading), so a texture on a hidden surface costs nothing.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "raster/mesh.h"
+
+namespace patchscan::raster {
+
+class ImageTexture {
+ public:
+  explicit ImageTexture(std::string path);
+  ~ImageTexture();
+  ImageTexture(const ImageTexture&) = delete;
+  ImageTexture& operator=(const ImageTexture&) = delete;
+
+  // RGB at (s, t) = uv (t = 0 at the image's top, as in RenderMan), filtered with the
+  // derivatives of uv per pixel in x and y. nullopt if the texture cannot be read
+  // (Error() says why).
+  std::optional<Eigen::Vector3d> Lookup(const Vec2& uv, const Vec2& duvdx, const Vec2& duvdy);
+
+  bool Opened() const { return impl_ != nullptr; }
+  long Lookups() const { return nLookups_; }
+  const std::string& Error() const { return error_; }
+
+ private:
+  struct Impl;
+  std::string path_, error_;
+  std::unique_ptr<Impl> impl_;
+  long nLookups_ = 0;
+};
+
+}  // namespace patchscan::raster
