@@ -92,6 +92,11 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
       ->capture_default_str();
   cmd->add_flag("--cull-backfaces", o->cullBackFaces,
                 "drop triangles facing away from the eye (default: two-sided)");
+  cmd->add_option("--opacity", o->opacity,
+                  "opacity of every surface; below 1, linear transparency: each sample blends "
+                  "its 4 nearest surfaces front to back")
+      ->check(CLI::Range(1e-3, 1.0))
+      ->capture_default_str();
   cmd->add_flag("--hidden-line", o->hiddenLine,
                 "hidden-line mode: visible surfaces in white with their triangle edges in black, "
                 "unshaded");
@@ -137,6 +142,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
                                        : raster::ShadingMode::Phong;
   s.cullBackFaces = o.cullBackFaces;
   s.hiddenLine = o.hiddenLine;
+  s.opacity = o.opacity;
   s.seed = o.seed;
   s.hither = camera.hither;
   s.eye = camera.eye;

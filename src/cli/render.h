@@ -20,6 +20,7 @@ struct RenderOptions {
   std::string texture = "none";
   bool cullBackFaces = false;
   bool hiddenLine = false;
+  double opacity = 1.0;
   bool aov = false;
   std::uint64_t seed = 1;
   bool stats = false;

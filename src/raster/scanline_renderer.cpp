@@ -111,7 +111,10 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
   std::vector<int> live, freeSlots;
   active.reserve(1024);
   live.reserve(1024);
-  std::vector<std::vector<Sample>> rows(s.aa, std::vector<Sample>(lat.nx));
+  freeSlots.reserve(1024);
+  // With transparency each sample keeps its `layers` nearest fragments, nearest first.
+  const int layers = s.opacity < 1.0 ? kMaxLayers : 1;
+  std::vector<std::vector<Sample>> rows(s.aa, std::vector<Sample>(static_cast<size_t>(lat.nx) * layers));
   std::vector<float> pixels(static_cast<size_t>(s.width) * kChannels);
   size_t nextY = 0;
 
@@ -224,7 +227,11 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
         if (!Inside(t, x, y, e)) continue;
         const double invW = (e[0] + e[1] + e[2]) * std::abs(t.invDet);
         if (!(invW <= invHither)) continue;  // nearer than the hither plane
-        if (invW > row[i].invW) row[i] = {invW, static_cast<std::int32_t>(k)};
+        Sample* keep = &row[static_cast<size_t>(i) * layers];
+        if (!(invW > keep[layers - 1].invW)) continue;
+        int at = layers - 1;  // insertion into the sorted layers, dropping the farthest
+        for (; at > 0 && invW > keep[at - 1].invW; --at) keep[at] = keep[at - 1];
+        keep[at] = {invW, static_cast<std::int32_t>(k)};
       }
     }
   };
@@ -253,52 +260,65 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
       // Group the pixel's samples by surface: one shading call per visible surface.
       struct Group {
         std::uint32_t surface;
+        int layer;
         int count;
         double sx, sy;
         int active;
         Rgb rgb;
       };
-      std::array<Group, kMaxAa * kMaxAa> groups;
-      std::array<int, kMaxAa * kMaxAa> groupOf;  // per sample, -1: not covered
+      std::array<Group, kMaxAa * kMaxAa * kMaxLayers> groups;
+      std::array<int, kMaxAa * kMaxAa> groupOf;  // per sample, its nearest layer's; -1: none
       int nGroups = 0, covered = 0, onLines = 0;
+      double alpha = 0.0;  // summed over samples: 1 - (1 - opacity)^(fragments)
       const int i0 = lat.FirstOfPixel(px);
       for (int r = 0; r < s.aa; ++r)
         for (int c = 0; c < s.aa; ++c) {
-          const Sample& smp = rows[r][i0 + c];
+          const Sample* keep = &rows[r][static_cast<size_t>(i0 + c) * layers];
           groupOf[r * s.aa + c] = -1;
-          if (smp.active < 0) continue;
+          if (keep[0].active < 0) continue;
           ++covered;
           const double x = lat.At(i0 + c), y = lat.At(j0 + r);
-          if (s.hiddenLine && EdgeDistance(active[smp.active].setup, x, y) < kLineHalfWidth) ++onLines;
-          const std::uint32_t surface = mesh.triangles[active[smp.active].index].surfaceId;
-          int g = 0;
-          while (g < nGroups && groups[g].surface != surface) ++g;
-          if (g == nGroups) groups[nGroups++] = {surface, 0, 0.0, 0.0, smp.active, Rgb::Zero()};
-          groupOf[r * s.aa + c] = g;
-          ++groups[g].count;
-          groups[g].sx += x;
-          groups[g].sy += y;
+          if (s.hiddenLine && EdgeDistance(active[keep[0].active].setup, x, y) < kLineHalfWidth) ++onLines;
+          double through = 1.0;  // light passing the layers in front
+          for (int layer = 0; layer < layers && keep[layer].active >= 0; ++layer) {
+            const std::uint32_t surface = mesh.triangles[active[keep[layer].active].index].surfaceId;
+            int g = 0;
+            while (g < nGroups && (groups[g].surface != surface || groups[g].layer != layer)) ++g;
+            if (g == nGroups)
+              groups[nGroups++] = {surface, layer, 0, 0.0, 0.0, keep[layer].active, Rgb::Zero()};
+            if (layer == 0) groupOf[r * s.aa + c] = g;
+            ++groups[g].count;
+            groups[g].sx += x;
+            groups[g].sy += y;
+            through *= 1.0 - s.opacity;
+          }
+          alpha += 1.0 - through;
         }
       stats.nSamplesCovered += covered;
       Rgb colour = Rgb::Zero();
       if (s.hiddenLine) {
         // White surfaces, black triangle edges, no shading.
         colour = Rgb::Constant(static_cast<double>(covered - onLines) / perPixel);
+        alpha = covered;
       } else {
         bool superSample = false;
         for (int g = 0; g < nGroups; ++g) {
+          // Linear transparency: layer k is seen through k layers of opacity a, and
+          // contributes a (1 - a)^k of its colour.
           Group& gr = groups[g];
           gr.rgb = shadeAt(active[gr.active], gr.sx / gr.count, gr.sy / gr.count, stats.nShadingCalls);
-          colour += (static_cast<double>(gr.count) / perPixel) * gr.rgb;
+          const double weight = s.opacity * std::pow(1.0 - s.opacity, gr.layer);
+          colour += (weight * gr.count / perPixel) * gr.rgb;
         }
         // Only the (l-1) x (l-1) samples a pixel owns (not its right and bottom edges, which
         // belong to the neighbours) draw, so each sample draws once.
-        for (int k = 0; k < perPixel && !superSample && extraP > 0; ++k) {
+        // With transparency the extra calls are not made (one call per surface and layer).
+        for (int k = 0; k < perPixel && !superSample && extraP > 0 && layers == 1; ++k) {
           const int r = k / s.aa, c = k % s.aa;
           if (r == s.aa - 1 || c == s.aa - 1 || groupOf[k] < 0 ||
               UnitHash(s.seed, j0 + r, i0 + c) >= extraP)
             continue;
-          const Sample& smp = rows[r][i0 + c];
+          const Sample& smp = rows[r][static_cast<size_t>(i0 + c) * layers];
           const Rgb rgb = shadeAt(active[smp.active], lat.At(i0 + c), lat.At(j0 + r), stats.nExtraShadingCalls);
           superSample = (rgb - groups[groupOf[k]].rgb).cwiseAbs().maxCoeff() > kShadeDiscrepancy;
         }
@@ -307,7 +327,7 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
           colour = Rgb::Zero();
           for (int k = 0; k < perPixel; ++k) {
             if (groupOf[k] < 0) continue;
-            const Sample& smp = rows[k / s.aa][i0 + k % s.aa];
+            const Sample& smp = rows[k / s.aa][static_cast<size_t>(i0 + k % s.aa) * layers];
             colour += shadeAt(active[smp.active], lat.At(i0 + k % s.aa), lat.At(j0 + k / s.aa),
                               stats.nExtraShadingCalls) / perPixel;
           }
@@ -315,11 +335,11 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
       }
       float* out = &pixels[static_cast<size_t>(px) * kChannels];
       for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(colour[k]);
-      out[3] = static_cast<float>(static_cast<double>(covered) / perPixel);
+      out[3] = static_cast<float>(alpha / perPixel);
       // AOVs of the surface that covers most of the pixel, at its samples' centroid.
       int major = -1;
       for (int g = 0; g < nGroups; ++g)
-        if (major < 0 || groups[g].count > groups[major].count) major = g;
+        if (groups[g].layer == 0 && (major < 0 || groups[g].count > groups[major].count)) major = g;
       if (major < 0) {
         std::fill(out + 4, out + kChannels, 0.0f);
         out[kChannelId] = -1.0f;

@@ -19,6 +19,9 @@ enum class ShadingMode { Flat, Gouraud, Phong };
 // Largest supersampling grid side: the per-pixel grouping of samples by surface is sized
 // for l x l = 64 samples.
 constexpr int kMaxAa = 8;
+// With transparency, the nearest fragments kept per sample: beyond four layers of opacity
+// 0.5 less than 1/16 of the light remains.
+constexpr int kMaxLayers = 4;
 
 struct RenderSettings {
   int width = 0, height = 0;
@@ -26,6 +29,7 @@ struct RenderSettings {
   ShadingMode shading = ShadingMode::Phong;
   bool cullBackFaces = false;
   double hither = 0.0;  // eye distance of the hither plane: nearer samples are dropped
+  double opacity = 1.0;     // (0, 1]: below 1, linear transparency over kMaxLayers layers
   bool hiddenLine = false;  // white surfaces with their triangle edges in black, unshaded
   std::uint64_t seed = 1;   // of the stochastic extra shading calls (paper 000 §3.4.2)
   Vec3 eye = Vec3::Zero();

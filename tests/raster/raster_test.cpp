@@ -172,6 +172,37 @@ TEST(ScanlineRenderer, SharedEdgeLeavesNoGapAndNoOverlap) {
   }
 }
 
+TEST(ScanlineRenderer, LinearTransparency) {
+  // Two emissive squares at different depths with opacity 1/2: where both cover, the
+  // front one gives 1/2 and the one behind 1/4 of its colour; alpha is 3/4.
+  TriangleMesh m;
+  auto square = [&](double x0, double y0, double depth, std::uint32_t id) {
+    const auto base = static_cast<std::uint32_t>(m.vertices.size());
+    for (auto [dx, dy] : {std::pair{0, 0}, {40, 0}, {40, 40}, {0, 40}})
+      m.vertices.push_back({Vec3((x0 + dx) * depth, (y0 + dy) * depth, depth), Vec3(0, 0, depth),
+                            Vec3(0, 0, -1), Vec2(0, 0)});
+    m.triangles.push_back({{base, base + 1, base + 2}, id});
+    m.triangles.push_back({{base, base + 2, base + 3}, id});
+  };
+  square(4.5, 4.5, 2.0, 0);    // behind
+  square(24.5, 24.5, 1.0, 1);  // in front
+  RenderSettings s;
+  s.width = s.height = 72;
+  s.aa = 1;
+  s.hither = 0.01;
+  s.opacity = 0.5;
+  s.material.ka = s.material.kd = s.material.ks = 0;
+  s.material.emission = Rgb(1, 1, 1);
+  CaptureSink sink(s.width);
+  ASSERT_TRUE(RenderMesh(m, s, sink));
+  auto at = [&](int x, int y, int c) { return sink.rgba[(static_cast<size_t>(y) * 72 + x) * 4 + c]; };
+  EXPECT_FLOAT_EQ(at(30, 30, 3), 0.75f);  // both
+  EXPECT_FLOAT_EQ(at(30, 30, 0), 0.75f);
+  EXPECT_FLOAT_EQ(at(10, 10, 3), 0.5f);   // the back one alone
+  EXPECT_FLOAT_EQ(at(60, 60, 0), 0.5f);   // the front one alone
+  EXPECT_FLOAT_EQ(at(70, 2, 3), 0.0f);    // nothing
+}
+
 TEST(ImageWriter, AllOrNothing) {
   const auto dir = std::filesystem::temp_directory_path() / "patchscan_writer_test";
   std::filesystem::create_directories(dir);

@@ -1,0 +1,19 @@
+// Counts every call of the global operator new in the test binary that includes this
+// header (include it in exactly one source file of that binary).
+#pragma once
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+namespace patchscan::test {
+inline std::atomic<long> gAllocations{0};
+}
+
+void* operator new(std::size_t n) {
+  ++patchscan::test::gAllocations;
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
