@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <random>
 
+#include <OpenImageIO/imageio.h>
+
 #include "raster/image_writer.h"
 #include "raster/scanline_renderer.h"
 #include "raster/triangle_setup.h"
@@ -201,6 +203,63 @@ TEST(ScanlineRenderer, LinearTransparency) {
   EXPECT_FLOAT_EQ(at(10, 10, 3), 0.5f);   // the back one alone
   EXPECT_FLOAT_EQ(at(60, 60, 0), 0.5f);   // the front one alone
   EXPECT_FLOAT_EQ(at(70, 2, 3), 0.0f);    // nothing
+}
+
+TEST(Shading, FastRenormalizationIsSecondOrder) {
+  // |Renormalize(v)| - 1 = -(3/8) e^2 + O(e^3) for |v|^2 = 1 + e.
+  for (double e : {-0.02, -0.005, 0.001, 0.01, 0.02}) {
+    const Vec3 v = Vec3(0.3, -0.5, 0.8).normalized() * std::sqrt(1 + e);
+    EXPECT_NEAR(Renormalize(v).norm(), 1.0, 0.375 * e * e * 1.1 + 1e-15) << "e " << e;
+  }
+}
+
+TEST(Shading, IlluminationModelTerms) {
+  // One point light straight above a surface facing up, eye above too: diffuse kd * (N.L)
+  // attenuated by 1 / (1 + k d^2), plus full specular (R = V) and ambient.
+  Material m;
+  m.colour = Rgb(0.5, 0.25, 1.0);
+  m.ka = 0.1;
+  m.kd = 0.6;
+  m.ks = 0.3;
+  LightRig rig;
+  rig.ambient = Rgb(1, 1, 1);
+  rig.lights.push_back({Light::Kind::Point, Vec3(0, 0, 2), Rgb(1, 1, 1), 0.25});
+  const Rgb c = Shade(Vec3::Zero(), Vec3(0, 0, 3), m.colour, Vec3(0, 0, 10), m, rig);
+  const double fall = 1.0 / (1.0 + 0.25 * 4.0);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_NEAR(c[k], 0.1 * m.colour[k] + fall * (0.6 * m.colour[k] + 0.3), 1e-12) << k;
+  // A directional light from below does not light the top; the normal facing away from
+  // the eye is turned towards it (two-sided), so the result is the same for -n.
+  rig.lights = {{Light::Kind::Directional, Vec3(0, 0, 1), Rgb(1, 1, 1), 0.0}};
+  const Rgb below = Shade(Vec3::Zero(), Vec3(0, 0, -1), m.colour, Vec3(0, 0, 10), m, rig);
+  EXPECT_LE((below - 0.1 * m.colour).norm(), 1e-12);
+}
+
+TEST(ImageWriter, FormatsAndChannels) {
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_writer_formats";
+  std::filesystem::create_directories(dir);
+  std::vector<float> row(kChannels * 4);
+  for (int x = 0; x < 4; ++x)
+    for (int c = 0; c < kChannels; ++c) row[x * kChannels + c] = 0.25f * static_cast<float>(c % 4);
+  const std::tuple<const char*, bool, int> cases[] = {
+      {"a.png", false, 4}, {"a.tif", false, 4}, {"a.jpg", false, 3}, {"a.exr", false, 4}, {"b.exr", true, 11}};
+  for (const auto& [name, aov, channels] : cases) {
+    const std::string path = (dir / name).string();
+    auto w = std::get<std::unique_ptr<ImageWriter>>(ImageWriter::Open(path, 4, 2, aov));
+    ASSERT_TRUE(w->WriteRow(0, row.data()) && w->WriteRow(1, row.data()));
+    ASSERT_TRUE(std::holds_alternative<std::monostate>(w->Commit()));
+    auto in = OIIO::ImageInput::open(path);
+    ASSERT_TRUE(in) << name;
+    EXPECT_EQ(in->spec().nchannels, channels) << name;
+    if (aov) {
+      EXPECT_EQ(in->spec().channelindex("Z"), in->spec().z_channel) << name;
+      EXPECT_GE(in->spec().channelindex("id"), 0);
+      EXPECT_GE(in->spec().channelindex("N.x"), 0);
+    }
+  }
+  EXPECT_NE(std::get<std::string>(ImageWriter::Open((dir / "c.png").string(), 4, 2, true)).find("need an .exr"),
+            std::string::npos);
+  std::filesystem::remove_all(dir);
 }
 
 TEST(ImageWriter, AllOrNothing) {
