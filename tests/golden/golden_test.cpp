@@ -21,7 +21,7 @@ constexpr double kGoldenRmse = 1.0 / 255;
 constexpr double kGoldenFailThreshold = 8.0 / 255;
 constexpr double kGoldenMaxFailFraction = 0.005;
 
-const std::filesystem::path kGoldenDir = PATCHSCAN_TESTDATA_DIR "/../golden";
+const std::filesystem::path kGoldenDir = PATCHSCAN_TESTS_DIR "/golden";
 
 struct Case {
   std::string name, args;
