@@ -235,6 +235,40 @@ TEST(Shading, IlluminationModelTerms) {
   EXPECT_LE((below - 0.1 * m.colour).norm(), 1e-12);
 }
 
+TEST(ScanlineRenderer, TriangleCrossingTheEyePlaneRendersOnlyItsFrontPart) {
+  // A ground-like triangle running from in front of the eye to far behind it: rendered
+  // without clipping, every output finite, the part beyond the hither plane covered and
+  // the hither plane respected (no sample nearer than it).
+  auto h = [](const Vec3& p) { return Homogeneous(p, 100, 64, 48); };
+  TriangleMesh m;
+  const Vec3 p[3] = {Vec3(-3, 1, 10), Vec3(3, 1, 10), Vec3(0, 1, -5)};
+  for (const Vec3& q : p) m.vertices.push_back({h(q), q, Vec3(0, -1, 0), Vec2(0, 0)});
+  m.triangles.push_back({{0, 1, 2}, 0});
+  struct AovSink : RowSink {
+    std::vector<float> px;
+    bool WriteRow(int, const float* row) override {
+      px.insert(px.end(), row, row + 128 * kChannels);
+      return true;
+    }
+  } sink;
+  RenderSettings s;
+  s.width = 128;
+  s.height = 96;
+  s.aa = 2;
+  s.hither = 0.5;
+  s.lights = DefaultLightRig(Vec3(0, 0, 1), Vec3(0, -1, 0), Vec3(1, 0, 0));
+  ASSERT_TRUE(RenderMesh(m, s, sink));
+  int covered = 0;
+  for (size_t i = 0; i < sink.px.size(); i += kChannels) {
+    for (int c = 0; c < kChannels; ++c) ASSERT_TRUE(std::isfinite(sink.px[i + c]));
+    if (sink.px[i + 3] > 0) {
+      ++covered;
+      EXPECT_GE(sink.px[i + kChannelZ], 0.5f * (1 - 1e-5f)) << "nearer than the hither plane";
+    }
+  }
+  EXPECT_GT(covered, 500);
+}
+
 TEST(ImageWriter, FormatsAndChannels) {
   const auto dir = std::filesystem::temp_directory_path() / "patchscan_writer_formats";
   std::filesystem::create_directories(dir);
