@@ -1,0 +1,150 @@
+#include "tracker/edge_scan.h"
+
+#include <algorithm>
+
+namespace patchscan {
+namespace {
+
+// y along the edge and its first two derivatives in t, and J, at t.
+struct EdgeSample {
+  double y, yt, ytt, j;
+  double tangent, across;  // |dp/dt| and |dp/d(other)| in screen space
+};
+
+template <class ShapeT>
+EdgeSample SampleEdge(const ShapeT& shape, const ScreenMap& map, PatchEdge e, double t) {
+  const Vec2d uv = EdgePoint(e, t);
+  ScreenDerivs d;
+  EvaluateScreen(shape, map, uv.x(), uv.y(), DerivOrder::Second, &d);
+  const bool alongV = e == PatchEdge::U0 || e == PatchEdge::U1;
+  const Vec3& pt = alongV ? d.dpdv : d.dpdu;
+  const Vec3& ptt = alongV ? d.d2pdv2 : d.d2pdu2;
+  const Vec3& across = alongV ? d.dpdu : d.dpdv;
+  return {d.p.y(), pt.y(), ptt.y(), SilhouetteJ(d), pt.head<2>().norm(), across.head<2>().norm()};
+}
+
+// An edge whose screen tangent is this small against the cross derivative everywhere
+// is collapsed to a point (the lid apex): exact collapse leaves rounding-level tangents.
+constexpr double kCollapsedRelTangent = 1e-9;
+
+template <class ShapeT>
+std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEdge e) {
+  // Step 1: collapsed edges have no crossing to track.
+  bool collapsed = true;
+  for (int k = 0; k <= 4 && collapsed; ++k) {
+    const EdgeSample s = SampleEdge(shape, map, e, k / 4.0);
+    collapsed = s.tangent <= kCollapsedRelTangent * std::max(s.across, 1e-300);
+  }
+  if (collapsed) return {};
+  // Step 2: critical points of y(t): sign changes of y_t between samples, refined by
+  // Newton on y_t = 0 inside the bracket (bisection when Newton leaves it).
+  std::vector<double> cuts = {0.0};
+  double tPrev = 0.0, gPrev = SampleEdge(shape, map, e, 0.0).yt;
+  for (int k = 1; k <= kEdgeCriticalSamples; ++k) {
+    const double t = double(k) / kEdgeCriticalSamples;
+    const double g = SampleEdge(shape, map, e, t).yt;
+    if ((gPrev < 0 && g > 0) || (gPrev > 0 && g < 0)) {
+      double lo = tPrev, hi = t, glo = gPrev;
+      double x = 0.5 * (lo + hi);
+      for (int it = 0; it < 100 && hi - lo > 1e-15; ++it) {
+        const EdgeSample s = SampleEdge(shape, map, e, x);
+        if ((s.yt > 0) == (glo > 0)) lo = x, glo = s.yt; else hi = x;
+        const double newton = x - s.yt / s.ytt;
+        x = (newton > lo && newton < hi && std::isfinite(newton)) ? newton : 0.5 * (lo + hi);
+      }
+      cuts.push_back(x);
+    }
+    tPrev = t;
+    gPrev = g;
+  }
+  cuts.push_back(1.0);
+  std::vector<EdgePiece> pieces;
+  for (size_t k = 0; k + 1 < cuts.size(); ++k) {
+    const double ya = SampleEdge(shape, map, e, cuts[k]).y, yb = SampleEdge(shape, map, e, cuts[k + 1]).y;
+    if (cuts[k + 1] > cuts[k]) pieces.push_back({e, cuts[k], cuts[k + 1], std::min(ya, yb), std::max(ya, yb)});
+  }
+  return pieces;
+}
+
+}  // namespace
+
+std::vector<EdgePiece> MonotoneEdgePieces(const Surface& s, const ScreenMap& map, PatchEdge e) {
+  return VisitShape(s, [&](const auto& shape) { return Pieces(shape, map, e); });
+}
+
+EdgeScan::EdgeScan(const Surface& s, const ScreenMap& map, bool extrapolate, double tolerancePx)
+    : surface_(s), map_(map), extrapolate_(extrapolate), tolerancePx_(tolerancePx) {
+  for (PatchEdge e : {PatchEdge::U0, PatchEdge::U1, PatchEdge::V0, PatchEdge::V1}) {
+    const auto p = MonotoneEdgePieces(s, map, e);
+    pieces_.insert(pieces_.end(), p.begin(), p.end());
+  }
+  std::stable_sort(pieces_.begin(), pieces_.end(),
+                   [](const EdgePiece& a, const EdgePiece& b) { return a.yTop < b.yTop; });
+  trackers_.reserve(pieces_.size());
+}
+
+void EdgeScan::Advance(double yScan) {
+  VisitShape(surface_, [&](const auto& shape) {
+    // Step 1: delete trackers whose piece the scan line has left (a minimum, §3.2.3).
+    std::erase_if(trackers_, [&](const EdgeTracker& t) {
+      const bool gone = pieces_[t.piece].yBottom < yScan;
+      stats_.nDeleted += gone;
+      return gone;
+    });
+    // Step 2: create trackers on pieces whose top the scan line has passed (§3.2.2).
+    for (; nextPiece_ < pieces_.size() && pieces_[nextPiece_].yTop <= yScan; ++nextPiece_) {
+      if (pieces_[nextPiece_].yBottom < yScan) continue;  // passed between two lines
+      const EdgePiece& p = pieces_[nextPiece_];
+      const double yAt0 = SampleEdge(shape, map_, p.edge, p.t0).y;
+      trackers_.push_back({static_cast<int>(nextPiece_), yAt0 <= p.yTop ? p.t0 : p.t1, 0.0, false});
+      ++stats_.nCreated;
+    }
+    // Step 3: Newton from the extrapolated start (§3.5), bisection on the piece if it fails.
+    for (EdgeTracker& tr : trackers_) {
+      const EdgePiece& p = pieces_[tr.piece];
+      const double start = extrapolate_ && tr.hasPrev ? 2.0 * tr.t - tr.tPrev : tr.t;
+      auto f = [&](double t, double* v, double* d) {
+        const EdgeSample s = SampleEdge(shape, map_, p.edge, t);
+        *v = s.y - yScan;
+        *d = s.yt;
+      };
+      // The piece is monotone and holds yScan, so it brackets the crossing: bisection
+      // there seeds a new tracker (whose start is a critical point, where Newton divides
+      // by zero) and repairs a failed Newton step.
+      auto bisect = [&]() {
+        double lo = p.t0, hi = p.t1, flo, dummy;
+        f(lo, &flo, &dummy);
+        for (int it = 0; it < 200; ++it) {
+          const double mid = 0.5 * (lo + hi);
+          if (mid <= lo || mid >= hi) break;
+          double fm;
+          f(mid, &fm, &dummy);
+          if ((fm > 0) == (flo > 0)) lo = mid, flo = fm; else hi = mid;
+        }
+        return std::abs(flo) < tolerancePx_ ? lo : hi;
+      };
+      double t;
+      if (!tr.hasPrev) {
+        t = bisect();
+      } else {
+        ++stats_.nNewtonCalls;
+        const auto r = SolveNewton1(f, std::clamp(start, p.t0, p.t1), p.t0, p.t1, tolerancePx_);
+        stats_.nNewtonIterations += r.iterations;
+        t = r.t;
+        if (r.status != NewtonStatus::Converged) {
+          ++stats_.nRepairs;
+          t = bisect();
+        }
+      }
+      const double j = SampleEdge(shape, map_, p.edge, t).j;
+      tr.folded = tr.hasPrev && ((j > 0 && tr.j < 0) || (j < 0 && tr.j > 0));
+      stats_.nFolds += tr.folded;
+      tr.j = j;
+      tr.tPrev = tr.hasPrev ? tr.t : t;
+      tr.t = t;
+      tr.hasPrev = true;
+    }
+  });
+}
+
+}  // namespace patchscan

@@ -1,0 +1,90 @@
+// Boundary-edge trackers of the Y scan (paper 001 §3.2.1): the points where the scan line
+// crosses the four boundary edges of a surface, advanced from one scan line to the next
+// by univariate Newton on y(edge(t)) = yScan from a start extrapolated from the last two
+// positions (§3.5).
+//
+// Each edge is first cut into pieces on which y is monotone (its critical points are the
+// edge and corner maxima and minima of §3.2.2): a tracker is created when the scan line
+// passes the top of a piece and deleted when it passes the bottom, and inside a piece
+// there is exactly one crossing, so a failed Newton step is repaired by bisection on the
+// piece, never by guessing.
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "patch/screen.h"
+#include "tracker/newton.h"
+
+namespace patchscan {
+
+// The boundary edge e as a curve in the domain: U0 = (0, t), U1 = (1, t), V0 = (t, 0),
+// V1 = (t, 1), t in [0, 1].
+inline Vec2d EdgePoint(PatchEdge e, double t) {
+  switch (e) {
+    case PatchEdge::U0: return {0.0, t};
+    case PatchEdge::U1: return {1.0, t};
+    case PatchEdge::V0: return {t, 0.0};
+    case PatchEdge::V1: return {t, 1.0};
+  }
+  return {t, 0.0};
+}
+
+// A piece [t0, t1] of an edge on which screen y is monotone.
+struct EdgePiece {
+  PatchEdge edge;
+  double t0, t1;
+  double yTop, yBottom;  // smallest and largest y on the piece
+};
+
+// Samples per edge when looking for the critical points of y along it: y along a cubic
+// edge in perspective has at most a few; two within 1/64 of the edge would be missed.
+constexpr int kEdgeCriticalSamples = 64;
+// Convergence of edge trackers in screen y: far below the 1e-3 px the exact mode allows.
+constexpr double kEdgeTolPx = 1e-7;
+
+// The monotone pieces of one edge of `s` (none for a collapsed edge).
+std::vector<EdgePiece> MonotoneEdgePieces(const Surface& s, const ScreenMap& map, PatchEdge e);
+
+struct EdgeTracker {
+  int piece;            // index into EdgeScan::Pieces()
+  double t, tPrev;      // on this and the previous scan line
+  bool hasPrev = false;
+  double j = 0.0;       // Blinn's Zn (the silhouette function J) here; a sign change is a fold
+  bool folded = false;  // J changed sign since the previous scan line (§3.2.2.3)
+};
+
+struct EdgeScanStats {
+  long nNewtonCalls = 0, nNewtonIterations = 0, nRepairs = 0;
+  long nCreated = 0, nDeleted = 0, nFolds = 0;
+};
+
+// All boundary-edge trackers of one surface, advanced scan line by scan line.
+class EdgeScan {
+ public:
+  // `tolerancePx`: convergence in screen y (Blinn stopped at a tenth of a raster).
+  EdgeScan(const Surface& s, const ScreenMap& map, bool extrapolate = true,
+           double tolerancePx = kEdgeTolPx);
+
+  // Moves every tracker to the scan line yScan (non-decreasing from call to call),
+  // creating and deleting trackers at the pieces' ends. Allocation-free after the first
+  // calls have sized the tracker list.
+  void Advance(double yScan);
+
+  const std::vector<EdgeTracker>& Trackers() const { return trackers_; }
+  const std::vector<EdgePiece>& Pieces() const { return pieces_; }
+  const EdgeScanStats& Stats() const { return stats_; }
+  Vec2d Uv(const EdgeTracker& t) const { return EdgePoint(pieces_[t.piece].edge, t.t); }
+
+ private:
+  const Surface& surface_;
+  const ScreenMap& map_;
+  bool extrapolate_;
+  double tolerancePx_;
+  std::vector<EdgePiece> pieces_;   // sorted by yTop
+  std::vector<EdgeTracker> trackers_;
+  size_t nextPiece_ = 0;
+  EdgeScanStats stats_;
+};
+
+}  // namespace patchscan
