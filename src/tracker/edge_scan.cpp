@@ -81,22 +81,34 @@ EdgeScan::EdgeScan(const Surface& s, const ScreenMap& map, bool extrapolate, dou
   std::stable_sort(pieces_.begin(), pieces_.end(),
                    [](const EdgePiece& a, const EdgePiece& b) { return a.yTop < b.yTop; });
   trackers_.reserve(pieces_.size());
+  folds_.reserve(2 * pieces_.size());
 }
 
 void EdgeScan::Advance(double yScan) {
   VisitShape(surface_, [&](const auto& shape) {
     // Step 1: delete trackers whose piece the scan line has left (a minimum, §3.2.3).
+    folds_.clear();
     std::erase_if(trackers_, [&](const EdgeTracker& t) {
-      const bool gone = pieces_[t.piece].yBottom < yScan;
-      stats_.nDeleted += gone;
-      return gone;
+      const EdgePiece& p = pieces_[t.piece];
+      if (p.yBottom >= yScan) return false;
+      ++stats_.nDeleted;
+      const double bottom = SampleEdge(shape, map_, p.edge, p.t0).y >= p.yBottom ? p.t0 : p.t1;
+      const double j = SampleEdge(shape, map_, p.edge, bottom).j;
+      if ((j > 0 && t.j < 0) || (j < 0 && t.j > 0)) {
+        folds_.push_back(EdgePoint(p.edge, bottom));
+        ++stats_.nFolds;
+      }
+      return true;
     });
     // Step 2: create trackers on pieces whose top the scan line has passed (§3.2.2).
     for (; nextPiece_ < pieces_.size() && pieces_[nextPiece_].yTop <= yScan; ++nextPiece_) {
       if (pieces_[nextPiece_].yBottom < yScan) continue;  // passed between two lines
       const EdgePiece& p = pieces_[nextPiece_];
       const double yAt0 = SampleEdge(shape, map_, p.edge, p.t0).y;
-      trackers_.push_back({static_cast<int>(nextPiece_), yAt0 <= p.yTop ? p.t0 : p.t1, 0.0, false});
+      const double top = yAt0 <= p.yTop ? p.t0 : p.t1;
+      // J at the piece's top, where the tracker is born: a silhouette that crosses the
+      // edge between the top and the first scan line is a fold too.
+      trackers_.push_back({static_cast<int>(nextPiece_), top, top, false, SampleEdge(shape, map_, p.edge, top).j});
       ++stats_.nCreated;
     }
     // Step 3: Newton from the extrapolated start (§3.5), bisection on the piece if it fails.
@@ -137,8 +149,9 @@ void EdgeScan::Advance(double yScan) {
         }
       }
       const double j = SampleEdge(shape, map_, p.edge, t).j;
-      tr.folded = tr.hasPrev && ((j > 0 && tr.j < 0) || (j < 0 && tr.j > 0));
+      tr.folded = (j > 0 && tr.j < 0) || (j < 0 && tr.j > 0);
       stats_.nFolds += tr.folded;
+      if (tr.folded) folds_.push_back(EdgePoint(p.edge, t));
       tr.j = j;
       tr.tPrev = tr.hasPrev ? tr.t : t;
       tr.t = t;

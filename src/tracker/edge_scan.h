@@ -51,7 +51,8 @@ struct EdgeTracker {
   double t, tPrev;      // on this and the previous scan line
   bool hasPrev = false;
   double j = 0.0;       // Blinn's Zn (the silhouette function J) here; a sign change is a fold
-  bool folded = false;  // J changed sign since the previous scan line (§3.2.2.3)
+  bool folded = false;  // J changed sign since the previous scan line, or since the
+                        // piece's top for a new tracker (§3.2.2.3)
 };
 
 struct EdgeScanStats {
@@ -74,6 +75,10 @@ class EdgeScan {
   const std::vector<EdgeTracker>& Trackers() const { return trackers_; }
   const std::vector<EdgePiece>& Pieces() const { return pieces_; }
   const EdgeScanStats& Stats() const { return stats_; }
+  // Where a silhouette crossed a boundary edge since the previous scan line (§3.2.2.3):
+  // a tracker whose J changed sign (its position), or a tracker deleted at the bottom of
+  // its piece after J changed sign on the way there (that end). Refilled by Advance.
+  const std::vector<Vec2d>& Folds() const { return folds_; }
   Vec2d Uv(const EdgeTracker& t) const { return EdgePoint(pieces_[t.piece].edge, t.t); }
 
  private:
@@ -83,6 +88,7 @@ class EdgeScan {
   double tolerancePx_;
   std::vector<EdgePiece> pieces_;   // sorted by yTop
   std::vector<EdgeTracker> trackers_;
+  std::vector<Vec2d> folds_;
   size_t nextPiece_ = 0;
   EdgeScanStats stats_;
 };

@@ -1,0 +1,164 @@
+#include "tracker/silhouette_scan.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+
+namespace patchscan {
+namespace {
+
+// F = (y - yScan, J / max(|s_u|, |s_v|)) and its Jacobian at uv.
+template <class ShapeT>
+void SilhouetteSystem(const ShapeT& shape, const ScreenMap& map, double yScan, const Vec2d& uv,
+                      Vec2d* f, Mat2d* jac) {
+  ScreenDerivs d;
+  EvaluateScreen(shape, map, uv.x(), uv.y(), DerivOrder::Second, &d);
+  const Vec2 su = d.dpdu.head<2>(), sv = d.dpdv.head<2>();
+  // J / max(|s_u|, |s_v|) is in pixels, like y - yScan, so one tolerance and the
+  // damping's residual compare like with like.
+  const double norm = std::max(std::max(su.norm(), sv.norm()), 1e-300);
+  const double j = su.x() * sv.y() - sv.x() * su.y();
+  // dJ/du = x_uu y_v + x_u y_uv - x_uv y_u - x_v y_uu; dJ/dv likewise. The normalization
+  // is treated as constant in the Jacobian: it changes only the step length, not the root.
+  const double ju = d.d2pdu2.x() * sv.y() + su.x() * d.d2pduv.y() - d.d2pduv.x() * su.y() -
+                    sv.x() * d.d2pdu2.y();
+  const double jv = d.d2pduv.x() * sv.y() + su.x() * d.d2pdv2.y() - d.d2pdv2.x() * su.y() -
+                    sv.x() * d.d2pduv.y();
+  *f = Vec2d(d.p.y() - yScan, j / norm);
+  *jac << su.y(), sv.y(), ju / norm, jv / norm;
+}
+
+// Convergence in y: as for the edge trackers.
+const Vec2d kTolerance(kEdgeTolPx, kEdgeTolPx);
+
+}  // namespace
+
+SilhouetteScan::SilhouetteScan(const Surface& s, const ScreenMap& map,
+                               std::vector<Stationary> stationary, bool extrapolate)
+    : surface_(s), map_(map), stationary_(std::move(stationary)), extrapolate_(extrapolate) {
+  std::erase_if(stationary_, [](const Stationary& p) {
+    return p.kind != StationaryKind::StrictMaximum && p.kind != StationaryKind::Saddle;
+  });
+  std::stable_sort(stationary_.begin(), stationary_.end(),
+                   [](const Stationary& a, const Stationary& b) { return a.y < b.y; });
+}
+
+template <class ShapeT>
+bool SilhouetteScan::Solve(const ShapeT& shape, double yScan, const Vec2d& start, Vec2d* uv,
+                           DomainRule domain) {
+  NewtonOptions opt;
+  opt.domain = domain;
+  ++stats_.nNewtonCalls;
+  const auto r = SolveNewton2(
+      [&](const Vec2d& p, Vec2d* f, Mat2d* j) { SilhouetteSystem(shape, map_, yScan, p, f, j); },
+      start.cwiseMax(0.0).cwiseMin(1.0), kTolerance, opt);
+  stats_.nNewtonIterations += r.iterations;
+  *uv = r.uv;
+  if (r.status == NewtonStatus::LeftDomain) ++stats_.nDeletedLeft;
+  return r.status == NewtonStatus::Converged;
+}
+
+template <class ShapeT>
+void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeScan& edges) {
+  // Step 1: move the existing trackers; a failure is a minimum or an exit (§3.2.3).
+  std::erase_if(trackers_, [&](SilhouetteTracker& t) {
+    const Vec2d start = extrapolate_ && t.hasPrev ? Vec2d(2.0 * t.uv - t.uvPrev) : t.uv;
+    Vec2d uv;
+    // Steps are clipped at the boundary, not refused: a path that grazes an edge on its
+    // way to a crossing inside still arrives; one whose crossing has left the domain
+    // stalls on the boundary and fails.
+    if (!Solve(shape, yScan, start, &uv, DomainRule::Clip)) {
+      ++stats_.nDeletedFailed;
+      return true;
+    }
+    t.uvPrev = t.uv;
+    t.uv = uv;
+    t.hasPrev = true;
+    return false;
+  });
+  // A new tracker's seed may sit on the boundary (a fold) with the first step pointing
+  // out: seeds are solved with steps clipped at the boundary.
+  auto add = [&](const Vec2d& start, long* counter) {
+    Vec2d uv;
+    if (!Solve(shape, yScan, start, &uv, DomainRule::Clip)) return false;
+    for (const SilhouetteTracker& t : trackers_)
+      if ((t.uv - uv).norm() < kSameTrackerUv) return true;  // already tracked
+    trackers_.push_back({uv, uv, false});
+    ++*counter;
+    return true;
+  };
+  // Step 2: maxima and saddles passed since the last scan line.
+  for (; nextStationary_ < stationary_.size() && stationary_[nextStationary_].y <= yScan;
+       ++nextStationary_) {
+    const Stationary& p = stationary_[nextStationary_];
+    const double drop = yScan - p.y;  // how far h has fallen below the point
+    ScreenDerivs d;
+    EvaluateScreen(shape, map_, p.uv.x(), p.uv.y(), DerivOrder::First, &d);
+    const Vec2d gx(d.dpdu.x(), d.dpdv.x());  // screen x gradient
+    if (p.kind == StationaryKind::StrictMaximum) {
+      // Level curve h = h_max - drop ~ ellipse d^T (-H) d = 2 drop; its points of extreme
+      // x are the silhouette: d = +-sqrt(2 drop / g^T (-H)^-1 g) (-H)^-1 g (§3.2.2.2).
+      const Mat2d negH = -p.hessH;
+      const Vec2d w = negH.inverse() * gx;
+      const double q = gx.dot(w);
+      if (q > 0 && drop >= 0) {
+        const Vec2d delta = std::sqrt(2.0 * drop / q) * w;
+        add(p.uv + delta, &stats_.nCreatedAtMaxima);
+        add(p.uv - delta, &stats_.nCreatedAtMaxima);
+      }
+    } else {
+      // Below a saddle the level curve is a hyperbola whose vertices lie along the
+      // Hessian's negative eigenvector: seeds there, and along the positive one for the
+      // silhouette branches passing through (§3.2.2.4).
+      const Eigen::SelfAdjointEigenSolver<Mat2d> eig(p.hessH);
+      for (int k = 0; k < 2; ++k) {
+        const double lambda = std::abs(eig.eigenvalues()[k]);
+        if (lambda == 0.0) continue;
+        const Vec2d delta = std::sqrt(2.0 * std::max(drop, 1e-3) / lambda) * eig.eigenvectors().col(k);
+        add(p.uv + delta, &stats_.nCreatedAtSaddles);
+        add(p.uv - delta, &stats_.nCreatedAtSaddles);
+      }
+    }
+  }
+  // Step 3: folds: J changed sign at a boundary-edge tracker (§3.2.2.3).
+  // The crossing may have run well inside since it crossed the edge: when Newton from
+  // the edge point fails, start again a quarter and half way towards the domain's centre.
+  for (const Vec2d& uv : edges.Folds())
+    for (double towards : {0.0, 0.25, 0.5})
+      if (add(uv + towards * (Vec2d(0.5, 0.5) - uv), &stats_.nCreatedAtFolds)) break;
+  // Step 4: trackers that converged onto one crossing are one tracker.
+  for (size_t a = 0; a < trackers_.size(); ++a)
+    for (size_t b = a + 1; b < trackers_.size();)
+      if ((trackers_[a].uv - trackers_[b].uv).norm() < kSameTrackerUv) {
+        trackers_.erase(trackers_.begin() + static_cast<long>(b));
+        ++stats_.nMerged;
+      } else {
+        ++b;
+      }
+}
+
+void SilhouetteScan::Advance(double yScan, const EdgeScan& edges) {
+  VisitShape(surface_, [&](const auto& shape) { AdvanceImpl(shape, yScan, edges); });
+}
+
+std::vector<Vec2d> SilhouetteCrossingsBruteForce(const Surface& s, const ScreenMap& map,
+                                                 double yScan, int grid) {
+  std::vector<Vec2d> found;
+  VisitShape(s, [&](const auto& shape) {
+    NewtonOptions opt;
+    opt.domain = DomainRule::Fail;
+    opt.maxIterations = 50;
+    for (int j = 0; j <= grid; ++j)
+      for (int i = 0; i <= grid; ++i) {
+        const auto r = SolveNewton2(
+            [&](const Vec2d& p, Vec2d* f, Mat2d* jac) { SilhouetteSystem(shape, map, yScan, p, f, jac); },
+            Vec2d(double(i) / grid, double(j) / grid), kTolerance, opt);
+        if (r.status != NewtonStatus::Converged) continue;
+        bool seen = false;
+        for (const Vec2d& q : found) seen = seen || (q - r.uv).norm() < kSameTrackerUv * 100;
+        if (!seen) found.push_back(r.uv);
+      }
+  });
+  return found;
+}
+
+}  // namespace patchscan

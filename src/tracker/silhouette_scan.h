@@ -1,0 +1,69 @@
+// Silhouette trackers of the Y scan (paper 001 §3.2.1–3.2.3): the points where the scan
+// line crosses the silhouette J = 0 inside the domain, advanced scan line by scan line by
+// bivariate Newton on (y - yScan, J) = 0 from a start extrapolated from the last two
+// positions (§3.5).
+//
+// Trackers are created when the scan line passes a strict maximum (two seeds on the
+// ellipse that approximates the level curve there, §3.2.2.2), when a boundary-edge
+// tracker's J changes sign (a fold, §3.2.2.3) and when it passes a saddle (seeds on the
+// hyperbola there, §3.2.2.4); they are deleted when Newton fails (a minimum, §3.2.3) or
+// leaves [0,1]^2.
+#pragma once
+
+#include <vector>
+
+#include "tracker/edge_scan.h"
+#include "tracker/maxima.h"
+
+namespace patchscan {
+
+struct SilhouetteTracker {
+  Vec2d uv, uvPrev;
+  bool hasPrev = false;
+};
+
+struct SilhouetteScanStats {
+  long nNewtonCalls = 0, nNewtonIterations = 0;
+  long nCreatedAtMaxima = 0, nCreatedAtFolds = 0, nCreatedAtSaddles = 0;
+  long nDeletedFailed = 0, nDeletedLeft = 0, nMerged = 0;
+};
+
+// Both equations are solved in pixels: y - yScan, and J / max(|s_u|, |s_v|), to the edge
+// trackers' tolerance kEdgeTolPx.
+// Two trackers closer than this in (u,v) are the same crossing.
+constexpr double kSameTrackerUv = 1e-7;
+
+class SilhouetteScan {
+ public:
+  // `stationary`: the surface's maxima and saddles (FindStationaryPoints).
+  SilhouetteScan(const Surface& s, const ScreenMap& map, std::vector<Stationary> stationary,
+                 bool extrapolate = true);
+
+  // Moves to scan line yScan (non-decreasing); `edges` must already be at yScan (its
+  // folds create trackers here).
+  void Advance(double yScan, const EdgeScan& edges);
+
+  const std::vector<SilhouetteTracker>& Trackers() const { return trackers_; }
+  const SilhouetteScanStats& Stats() const { return stats_; }
+
+ private:
+  template <class ShapeT>
+  void AdvanceImpl(const ShapeT& shape, double yScan, const EdgeScan& edges);
+  template <class ShapeT>
+  bool Solve(const ShapeT& shape, double yScan, const Vec2d& start, Vec2d* uv, DomainRule domain);
+
+  const Surface& surface_;
+  const ScreenMap& map_;
+  std::vector<Stationary> stationary_;  // maxima and saddles, by y
+  size_t nextStationary_ = 0;
+  bool extrapolate_;
+  std::vector<SilhouetteTracker> trackers_;
+  SilhouetteScanStats stats_;
+};
+
+// All solutions of y = yScan, J = 0 in [0,1]^2 found by Newton from a grid of starts and
+// merged: slow and independent of any tracking, for tests and repairs.
+std::vector<Vec2d> SilhouetteCrossingsBruteForce(const Surface& s, const ScreenMap& map,
+                                                 double yScan, int grid = 48);
+
+}  // namespace patchscan

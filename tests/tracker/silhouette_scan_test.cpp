@@ -1,0 +1,134 @@
+// Silhouette trackers against a many-start solve of (y = yScan, J = 0) on every scan line.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <iostream>
+
+#include "tracker/silhouette_scan.h"
+
+namespace patchscan {
+namespace {
+
+Camera View(const Vec3& eye) {
+  Camera c;
+  c.width = 128;
+  c.height = 96;
+  c.eye = eye;
+  c.lookAt = Vec3::Zero();
+  c.up = Vec3(0, 0, 1);
+  c.fovDeg = 40;
+  c.hither = 0.01;
+  return c;
+}
+
+// Tracked and brute-force crossings agree, scan line by scan line, to kMatchUv.
+// Brute-force points on a collapsed edge (a pole, where J vanishes identically) are not
+// silhouette crossings and are left out.
+constexpr double kMatchUv = 1e-6;
+
+void ExpectTracksMatch(const Surface& s, const Camera& cam, const char* name,
+                       SilhouetteScanStats* statsOut = nullptr) {
+  const ScreenMap map(cam, s.worldFromObject);
+  EdgeScan edges(s, map);
+  SilhouetteScan sil(s, map, FindStationaryPoints(s, map));
+  long compared = 0;
+  for (int row = 0; row < cam.height; ++row) {
+    const double y = row + 0.5;
+    edges.Advance(y);
+    sil.Advance(y, edges);
+    std::vector<Vec2d> want = SilhouetteCrossingsBruteForce(s, map, y);
+    std::erase_if(want, [&](const Vec2d& p) {
+      ScreenDerivs d;
+      EvaluateScreen(s, map, p.x(), p.y(), DerivOrder::First, &d);
+      return d.dpdu.head<2>().norm() < 1e-6 * d.dpdv.head<2>().norm() ||
+             d.dpdv.head<2>().norm() < 1e-6 * d.dpdu.head<2>().norm();
+    });
+    ASSERT_EQ(sil.Trackers().size(), want.size()) << name << " scan line y " << y;
+    for (const SilhouetteTracker& t : sil.Trackers()) {
+      double best = INFINITY;
+      for (const Vec2d& w : want) best = std::min(best, (w - t.uv).norm());
+      EXPECT_LE(best, kMatchUv) << name << " y " << y << " tracker at " << t.uv.transpose();
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 50) << name;
+  if (statsOut) *statsOut = sil.Stats();
+}
+
+TEST(SilhouetteScan, SphereBornAtItsMaximumAndThroughTheSeam) {
+  // Poles to the side: the silhouette circle starts at the top (a strict maximum) and
+  // crosses the seam u = 0 / u = 1, where folds on the edge trackers create trackers.
+  Surface sphere{Sphere(1, -1, 1, 360), Affine3(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()))};
+  sphere.worldFromObject.prerotate(Eigen::AngleAxisd(0.35, Vec3::UnitZ()));
+  SilhouetteScanStats st;
+  ExpectTracksMatch(sphere, View(Vec3(0.5, -5, 1.5)), "sphere", &st);
+  EXPECT_EQ(st.nCreatedAtMaxima, 2);
+  EXPECT_GT(st.nCreatedAtFolds, 0);
+  EXPECT_GT(st.nDeletedLeft + st.nDeletedFailed, 0);
+}
+
+TEST(SilhouetteScan, TorusWithSaddlesAndAnInnerSilhouette) {
+  Surface torus{Torus(1.5, 0.5, 0, 360, 360), Affine3(Eigen::AngleAxisd(0.4, Vec3::UnitZ()))};
+  torus.worldFromObject.prerotate(Eigen::AngleAxisd(0.9, Vec3::UnitX()));
+  SilhouetteScanStats st;
+  ExpectTracksMatch(torus, View(Vec3(0.3, -9, 1.0)), "torus", &st);
+  EXPECT_GT(st.nCreatedAtSaddles, 0);
+  EXPECT_EQ(st.nCreatedAtMaxima, 2);
+}
+
+}  // namespace
+}  // namespace patchscan
+
+#include "patch/scene.h"
+
+namespace patchscan {
+namespace {
+
+TEST(SilhouetteScan, TeapotAgreesWithBruteForceOnNearlyEveryScanLine) {
+  // Known gap: a silhouette that enters through an edge and runs far inside within one
+  // scan line can be missed for a line or two (no linking along level curves yet to
+  // check parity). Measured: 1 of 3072 (patch, scan line) pairs at 128 x 96; the bound
+  // below allows 3 and fails on any regression beyond.
+  constexpr int kAllowedMismatches = 3;
+  auto loaded = LoadScene(PATCHSCAN_SURFACES_DIR "/teapot.bpt");
+  const Scene& scene = std::get<Scene>(loaded);
+  Camera base;
+  base.width = 128;
+  base.height = 96;
+  const Camera cam = FrameBounds(scene.WorldBounds(), base, DefaultViewDirection(Vec3(0, 0, 1)));
+  int mismatches = 0;
+  for (size_t k = 0; k < scene.surfaces.size(); ++k) {
+    const Surface& s = scene.surfaces[k];
+    const ScreenMap map(cam, s.worldFromObject);
+    EdgeScan edges(s, map);
+    SilhouetteScan sil(s, map, FindStationaryPoints(s, map));
+    for (int row = 0; row < cam.height; ++row) {
+      const double y = row + 0.5;
+      edges.Advance(y);
+      sil.Advance(y, edges);
+      auto want = SilhouetteCrossingsBruteForce(s, map, y, 32);
+      std::erase_if(want, [&](const Vec2d& p) {  // collapsed edges: J vanishes identically
+        ScreenDerivs d;
+        EvaluateScreen(s, map, p.x(), p.y(), DerivOrder::First, &d);
+        return d.dpdu.head<2>().norm() < 1e-6 * d.dpdv.head<2>().norm() ||
+               d.dpdv.head<2>().norm() < 1e-6 * d.dpdu.head<2>().norm();
+      });
+      bool same = want.size() == sil.Trackers().size();
+      for (const SilhouetteTracker& t : sil.Trackers()) {
+        double best = INFINITY;
+        for (const Vec2d& w : want) best = std::min(best, (w - t.uv).norm());
+        same = same && best <= kMatchUv;
+      }
+      if (!same) {
+        ++mismatches;
+        std::cerr << "patch " << k + 1 << " y " << y << ": tracked " << sil.Trackers().size()
+                  << ", brute force " << want.size() << "\n";
+      }
+    }
+  }
+  EXPECT_LE(mismatches, kAllowedMismatches);
+}
+
+}  // namespace
+}  // namespace patchscan
