@@ -22,6 +22,15 @@ Camera View(const Vec3& eye) {
   return c;
 }
 
+// Whether uv is on a collapsed edge (a pole, the lid apex), where J vanishes identically:
+// brute-force solutions there are not silhouette crossings.
+bool OnCollapsedEdge(const Surface& s, const ScreenMap& map, const Vec2d& p) {
+  ScreenDerivs d;
+  EvaluateScreen(s, map, p.x(), p.y(), DerivOrder::First, &d);
+  return d.dpdu.head<2>().norm() < 1e-6 * d.dpdv.head<2>().norm() ||
+         d.dpdv.head<2>().norm() < 1e-6 * d.dpdu.head<2>().norm();
+}
+
 // Tracked and brute-force crossings agree, scan line by scan line, to kMatchUv.
 // Brute-force points on a collapsed edge (a pole, where J vanishes identically) are not
 // silhouette crossings and are left out.
@@ -38,12 +47,7 @@ void ExpectTracksMatch(const Surface& s, const Camera& cam, const char* name,
     edges.Advance(y);
     sil.Advance(y, edges);
     std::vector<Vec2d> want = SilhouetteCrossingsBruteForce(s, map, y);
-    std::erase_if(want, [&](const Vec2d& p) {
-      ScreenDerivs d;
-      EvaluateScreen(s, map, p.x(), p.y(), DerivOrder::First, &d);
-      return d.dpdu.head<2>().norm() < 1e-6 * d.dpdv.head<2>().norm() ||
-             d.dpdv.head<2>().norm() < 1e-6 * d.dpdu.head<2>().norm();
-    });
+    std::erase_if(want, [&](const Vec2d& p) { return OnCollapsedEdge(s, map, p); });
     ASSERT_EQ(sil.Trackers().size(), want.size()) << name << " scan line y " << y;
     for (const SilhouetteTracker& t : sil.Trackers()) {
       double best = INFINITY;
@@ -108,12 +112,7 @@ TEST(SilhouetteScan, TeapotAgreesWithBruteForceOnNearlyEveryScanLine) {
       edges.Advance(y);
       sil.Advance(y, edges);
       auto want = SilhouetteCrossingsBruteForce(s, map, y, 32);
-      std::erase_if(want, [&](const Vec2d& p) {  // collapsed edges: J vanishes identically
-        ScreenDerivs d;
-        EvaluateScreen(s, map, p.x(), p.y(), DerivOrder::First, &d);
-        return d.dpdu.head<2>().norm() < 1e-6 * d.dpdv.head<2>().norm() ||
-               d.dpdv.head<2>().norm() < 1e-6 * d.dpdu.head<2>().norm();
-      });
+      std::erase_if(want, [&](const Vec2d& p) { return OnCollapsedEdge(s, map, p); });
       bool same = want.size() == sil.Trackers().size();
       for (const SilhouetteTracker& t : sil.Trackers()) {
         double best = INFINITY;
