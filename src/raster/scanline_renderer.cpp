@@ -34,10 +34,35 @@ struct Lattice {
   }
 };
 
+// A sample's hold on one fragment: for triangles the slot of the triangle in the active
+// store, for exact fragments the fragment's index in its sample row's pool.
 struct Sample {
-  double invW;          // 1 / w of the nearest surface; 0: nothing covers the sample
-  std::int32_t active;  // slot of that nearest triangle in the active store; -1: none
+  double invW;          // 1 / w of the fragment; 0: none
+  std::int32_t handle;  // -1: none
 };
+
+// Keeps the `layers` nearest fragments of a sample, nearest first. Returns whether the
+// new one was kept.
+bool InsertNearest(Sample* keep, int layers, double invW, std::int32_t handle) {
+  if (!(invW > keep[layers - 1].invW)) return false;
+  int at = layers - 1;  // insertion into the sorted layers, dropping the farthest
+  for (; at > 0 && invW > keep[at - 1].invW; --at) keep[at] = keep[at - 1];
+  keep[at] = {invW, handle};
+  return true;
+}
+
+// One layer of one sample of the pixel being resolved.
+struct Member {
+  int r;  // sample row within the pixel's rows
+  Sample smp;
+};
+
+// The colour of a surface point: the material's (textured) colour lit by the rig.
+Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, bool* failed) {
+  const auto base = SurfaceColour(s.material, a.uv, a.duvdx, a.duvdy);
+  if (!base) *failed = true;
+  return Shade(a.position, a.normal, base.value_or(Rgb::Zero()), s.eye, s.material, s.lights);
+}
 
 struct ActiveTriangle {
   TriangleSetup setup;
@@ -45,15 +70,6 @@ struct ActiveTriangle {
   int lastRow;
   Rgb vertexColour[3];  // Gouraud only
 };
-
-// Screen distance in pixels from (x, y) to the nearest edge line of a triangle: each
-// oriented edge is an affine function of screen position, so |e| / |grad e| is exact.
-double EdgeDistance(const TriangleSetup& t, double x, double y) {
-  double d = INFINITY;
-  for (const Vec3& e : t.edge)
-    d = std::min(d, std::abs(e.x() * x + e.y() * y + e.z()) / std::hypot(e.x(), e.y()));
-  return d;
-}
 
 // A uniform number in [0, 1) from a seed and a sample's lattice position (splitmix64):
 // the same for the same render whatever order the samples are visited in.
@@ -73,137 +89,54 @@ constexpr double kLineHalfWidth = 0.6;
 // detail that one call per pixel would alias.
 constexpr double kShadeDiscrepancy = 0.08;
 
-}  // namespace
-
-std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSettings& s,
-                                      RowSink& sink) {
-  RenderStats stats;
-  stats.nTriangles = static_cast<std::int64_t>(mesh.triangles.size());
-  const Lattice lat(s);
-  const double invHither = 1.0 / s.hither;
-  bool failed = false;  // a texture could not be read: stop after this row
-
-  // Step 1: the y-sorted list: each triangle's first and last sample row.
-  struct YEntry {
-    int first, last;
-    std::uint32_t index;
-  };
-  std::vector<YEntry> ySorted;
-  ySorted.reserve(mesh.triangles.size());
-  for (std::uint32_t k = 0; k < mesh.triangles.size(); ++k) {
-    const RasterTriangle& t = mesh.triangles[k];
-    const Vec3 &a = mesh.vertices[t.v[0]].h, &b = mesh.vertices[t.v[1]].h, &c = mesh.vertices[t.v[2]].h;
-    double yMin = 0, yMax = s.height;
-    if (a.z() > 0 && b.z() > 0 && c.z() > 0) {
-      yMin = std::min({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()});
-      yMax = std::max({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()});
+// The triangles of a mesh as the back end's geometry: the y-sorted list with integer
+// sample-row bounds, and the active store whose slots do not move while a sample refers
+// to them (a triangle is retired at the start of the first pixel row none of whose
+// sample rows it reaches).
+class TriangleGeometry {
+ public:
+  TriangleGeometry(const TriangleMesh& mesh, const RenderSettings& s, const Lattice& lat,
+                   int layers, RenderStats& stats)
+      : mesh_(mesh), s_(s), lat_(lat), layers_(layers), invHither_(1.0 / s.hither), stats_(stats) {
+    stats.nTriangles = static_cast<std::int64_t>(mesh.triangles.size());
+    ySorted_.reserve(mesh.triangles.size());
+    for (std::uint32_t k = 0; k < mesh.triangles.size(); ++k) {
+      const RasterTriangle& t = mesh.triangles[k];
+      const Vec3 &a = mesh.vertices[t.v[0]].h, &b = mesh.vertices[t.v[1]].h, &c = mesh.vertices[t.v[2]].h;
+      double yMin = 0, yMax = s.height;
+      if (a.z() > 0 && b.z() > 0 && c.z() > 0) {
+        yMin = std::min({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()});
+        yMax = std::max({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()});
+      }
+      const int first = lat.Ceil(yMin, lat.ny), last = lat.Floor(yMax, lat.ny);
+      if (first <= last) ySorted_.push_back({first, last, k});
     }
-    const int first = lat.Ceil(yMin, lat.ny), last = lat.Floor(yMax, lat.ny);
-    if (first <= last) ySorted.push_back({first, last, k});
+    std::stable_sort(ySorted_.begin(), ySorted_.end(),
+                     [](const YEntry& p, const YEntry& q) { return p.first < q.first; });
+    active_.reserve(1024);
+    live_.reserve(1024);
+    freeSlots_.reserve(1024);
   }
-  std::stable_sort(ySorted.begin(), ySorted.end(),
-                   [](const YEntry& p, const YEntry& q) { return p.first < q.first; });
 
-  // Step 2: buffers sized by the image width, reused for every row. Active triangles live
-  // in slots that do not move while a sample refers to them: a triangle is retired at the
-  // start of the first pixel row none of whose sample rows it reaches.
-  std::vector<ActiveTriangle> active;  // the slots
-  std::vector<int> live, freeSlots;
-  active.reserve(1024);
-  live.reserve(1024);
-  freeSlots.reserve(1024);
-  // With transparency each sample keeps its `layers` nearest fragments, nearest first.
-  const int layers = s.opacity < 1.0 ? kMaxLayers : 1;
-  std::vector<std::vector<Sample>> rows(s.aa, std::vector<Sample>(static_cast<size_t>(lat.nx) * layers));
-  std::vector<float> pixels(static_cast<size_t>(s.width) * kChannels);
-  size_t nextY = 0;
+  bool Failed() const { return failed_; }
 
-  // Perspective-correct attributes of an active triangle at (x, y).
-  struct Attributes {
-    Vec3 b, position, normal;
-    Vec2 uv, duvdx, duvdy;  // uv and its change per pixel in x and y
-    double w;
-  };
-  auto interpolate = [&](const ActiveTriangle& at, double x, double y) {
-    const RasterTriangle& t = mesh.triangles[at.index];
-    const RasterVertex &v0 = mesh.vertices[t.v[0]], &v1 = mesh.vertices[t.v[1]],
-                       &v2 = mesh.vertices[t.v[2]];
-    Attributes a;
-    Vec3 e;
-    for (int i = 0; i < 3; ++i) e[i] = at.setup.edge[i].x() * x + at.setup.edge[i].y() * y + at.setup.edge[i].z();
-    const double sum = e.sum();
-    a.b = sum != 0.0 ? Vec3(e / sum) : Vec3::Constant(1.0 / 3);
-    a.w = sum != 0.0 ? 1.0 / (sum * std::abs(at.setup.invDet)) : 0.0;
-    a.position = a.b[0] * v0.position + a.b[1] * v1.position + a.b[2] * v2.position;
-    a.uv = a.b[0] * v0.uv + a.b[1] * v1.uv + a.b[2] * v2.uv;
-    // uv = sum(uv_i e_i) / sum(e) with each e_i affine in (x, y): the quotient rule.
-    if (sum != 0.0) {
-      for (int axis = 0; axis < 2; ++axis) {
-        Vec2 numerator = Vec2::Zero();
-        double grad = 0.0;
-        for (int i = 0; i < 3; ++i) {
-          const double g = at.setup.edge[i][axis];
-          numerator += g * mesh.vertices[t.v[i]].uv;
-          grad += g;
-        }
-        (axis == 0 ? a.duvdx : a.duvdy) = (numerator - a.uv * grad) / sum;
-      }
-    } else {
-      a.duvdx = a.duvdy = Vec2::Zero();
-    }
-    a.normal = s.shading == ShadingMode::Flat
-                   ? Vec3((v1.position - v0.position).cross(v2.position - v0.position))
-                   : Vec3(a.b[0] * v0.normal + a.b[1] * v1.normal + a.b[2] * v2.normal);
-    return a;
-  };
-  auto shadeAt = [&](const ActiveTriangle& at, double x, double y, std::int64_t& nCalls) -> Rgb {
-    const Attributes a = interpolate(at, x, y);
-    if (s.shading == ShadingMode::Gouraud)
-      return a.b[0] * at.vertexColour[0] + a.b[1] * at.vertexColour[1] + a.b[2] * at.vertexColour[2];
-    ++nCalls;
-    const auto base = SurfaceColour(s.material, a.uv, a.duvdx, a.duvdy);
-    if (!base) failed = true;
-    return Shade(a.position, a.normal, base.value_or(Rgb::Zero()), s.eye, s.material, s.lights);
-  };
+  void BeginPixelRow(int j0) {
+    std::erase_if(live_, [&](int k) {
+      if (active_[k].lastRow >= j0) return false;
+      freeSlots_.push_back(k);
+      return true;
+    });
+  }
 
-  // Resolve one sample row: nearest triangle per sample.
-  auto scanRow = [&](int j, std::vector<Sample>& row) {
-    // Activate the triangles whose first sample row this is.
-    for (; nextY < ySorted.size() && ySorted[nextY].first <= j; ++nextY) {
-      const YEntry& y = ySorted[nextY];
-      const RasterTriangle& t = mesh.triangles[y.index];
-      const auto setup = SetupTriangle(mesh.vertices[t.v[0]].h, mesh.vertices[t.v[1]].h,
-                                       mesh.vertices[t.v[2]].h, s.cullBackFaces, s.width, s.height);
-      if (!setup) continue;
-      ++stats.nTrianglesSetUp;
-      ActiveTriangle at{*setup, y.index, y.last, {}};
-      if (s.shading == ShadingMode::Gouraud)
-        for (int k = 0; k < 3; ++k) {
-          const RasterVertex& v = mesh.vertices[t.v[k]];
-          const auto base = SurfaceColour(s.material, v.uv, Vec2::Zero(), Vec2::Zero());
-          if (!base) failed = true;
-          at.vertexColour[k] = Shade(v.position, v.normal, base.value_or(Rgb::Zero()), s.eye,
-                                     s.material, s.lights);
-          ++stats.nShadingCalls;
-        }
-      int slot;
-      if (!freeSlots.empty()) {
-        slot = freeSlots.back();
-        freeSlots.pop_back();
-        active[slot] = at;
-      } else {
-        slot = static_cast<int>(active.size());
-        active.push_back(at);
-      }
-      live.push_back(slot);
-    }
-    stats.maxActive = std::max<std::int64_t>(stats.maxActive, static_cast<std::int64_t>(live.size()));
+  void SwapRows(int, int) {}
 
-    std::fill(row.begin(), row.end(), Sample{0.0, -1});
-    const double y = lat.At(j);
-    for (const int k : live) {
-      if (active[k].lastRow < j) continue;  // done, retired at the next pixel row
-      const TriangleSetup& t = active[k].setup;
+  // Resolves sample row j: the nearest triangles per sample.
+  void ScanRow(int j, int /*r*/, double y, Sample* row) {
+    Activate(j);
+    stats_.maxActive = std::max<std::int64_t>(stats_.maxActive, static_cast<std::int64_t>(live_.size()));
+    for (const int k : live_) {
+      if (active_[k].lastRow < j) continue;  // done, retired at the next pixel row
+      const TriangleSetup& t = active_[k].setup;
       // The span: each edge, and the hither edge sum(e) <= |det| / hither, is a half-line.
       double lo = -INFINITY, hi = INFINITY;
       Vec3 sum = Vec3::Zero();
@@ -217,26 +150,228 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
         sum += e;
       }
       const double absDet = 1.0 / std::abs(t.invDet);
-      clip(-sum.x(), absDet * invHither - (sum.y() * y + sum.z()));
+      clip(-sum.x(), absDet * invHither_ - (sum.y() * y + sum.z()));
       // One sample of slack each side: the exact test below decides.
-      const int i0 = std::max(0, lat.Ceil(lo, lat.nx) - 1), i1 = std::min(lat.nx - 1, lat.Floor(hi, lat.nx) + 1);
+      const int i0 = std::max(0, lat_.Ceil(lo, lat_.nx) - 1), i1 = std::min(lat_.nx - 1, lat_.Floor(hi, lat_.nx) + 1);
       for (int i = i0; i <= i1; ++i) {
-        const double x = lat.At(i);
         double e[3];
-        ++stats.nSamplesTested;
-        if (!Inside(t, x, y, e)) continue;
+        ++stats_.nSamplesTested;
+        if (!Inside(t, lat_.At(i), y, e)) continue;
         const double invW = (e[0] + e[1] + e[2]) * std::abs(t.invDet);
-        if (!(invW <= invHither)) continue;  // nearer than the hither plane
-        Sample* keep = &row[static_cast<size_t>(i) * layers];
-        if (!(invW > keep[layers - 1].invW)) continue;
-        int at = layers - 1;  // insertion into the sorted layers, dropping the farthest
-        for (; at > 0 && invW > keep[at - 1].invW; --at) keep[at] = keep[at - 1];
-        keep[at] = {invW, static_cast<std::int32_t>(k)};
+        if (!(invW <= invHither_)) continue;  // nearer than the hither plane
+        InsertNearest(&row[static_cast<size_t>(i) * layers_], layers_, invW, k);
       }
     }
+  }
+
+  std::uint32_t SurfaceOf(int /*r*/, const Sample& smp) const {
+    return mesh_.triangles[active_[smp.handle].index].surfaceId;
+  }
+  // Screen distance in pixels from (x, y) to the nearest edge line of the sample's
+  // triangle: each oriented edge is an affine function of screen position, so
+  // |e| / |grad e| is exact.
+  double EdgeDistance(int /*r*/, const Sample& smp, double x, double y) const {
+    const TriangleSetup& t = active_[smp.handle].setup;
+    double d = INFINITY;
+    for (const Vec3& e : t.edge)
+      d = std::min(d, std::abs(e.x() * x + e.y() * y + e.z()) / std::hypot(e.x(), e.y()));
+    return d;
+  }
+  Rgb ShadeSample(int /*r*/, const Sample& smp, double x, double y, std::int64_t& nCalls) {
+    return ShadeAt(active_[smp.handle], x, y, nCalls);
+  }
+  // A group of samples of one triangle-meshed surface is shaded once, at its centroid.
+  Rgb ShadeGroup(const Member* m, int /*n*/, double cx, double cy, std::int64_t& nCalls) {
+    return ShadeAt(active_[m[0].smp.handle], cx, cy, nCalls);
+  }
+  Fragment GroupFragment(const Member* m, int /*n*/, double cx, double cy) const {
+    return Interpolate(active_[m[0].smp.handle], cx, cy).f;
+  }
+
+ private:
+  struct YEntry {
+    int first, last;
+    std::uint32_t index;
+  };
+  // Perspective-correct attributes of an active triangle at (x, y), and its barycentrics.
+  struct Attributes {
+    Fragment f;
+    Vec3 b;
   };
 
-  // Step 3: pixel rows.
+  void Activate(int j) {
+    for (; nextY_ < ySorted_.size() && ySorted_[nextY_].first <= j; ++nextY_) {
+      const YEntry& y = ySorted_[nextY_];
+      const RasterTriangle& t = mesh_.triangles[y.index];
+      const auto setup = SetupTriangle(mesh_.vertices[t.v[0]].h, mesh_.vertices[t.v[1]].h,
+                                       mesh_.vertices[t.v[2]].h, s_.cullBackFaces, s_.width, s_.height);
+      if (!setup) continue;
+      ++stats_.nTrianglesSetUp;
+      ActiveTriangle at{*setup, y.index, y.last, {}};
+      if (s_.shading == ShadingMode::Gouraud)
+        for (int k = 0; k < 3; ++k) {
+          const RasterVertex& v = mesh_.vertices[t.v[k]];
+          Fragment f;
+          f.position = v.position;
+          f.normal = v.normal;
+          f.uv = v.uv;
+          f.duvdx = f.duvdy = Vec2::Zero();
+          at.vertexColour[k] = ShadeFragment(f, s_, &failed_);
+          ++stats_.nShadingCalls;
+        }
+      int slot;
+      if (!freeSlots_.empty()) {
+        slot = freeSlots_.back();
+        freeSlots_.pop_back();
+        active_[slot] = at;
+      } else {
+        slot = static_cast<int>(active_.size());
+        active_.push_back(at);
+      }
+      live_.push_back(slot);
+    }
+  }
+
+  Attributes Interpolate(const ActiveTriangle& at, double x, double y) const {
+    const RasterTriangle& t = mesh_.triangles[at.index];
+    const RasterVertex &v0 = mesh_.vertices[t.v[0]], &v1 = mesh_.vertices[t.v[1]],
+                       &v2 = mesh_.vertices[t.v[2]];
+    Attributes a;
+    Fragment& f = a.f;
+    Vec3 e;
+    for (int i = 0; i < 3; ++i) e[i] = at.setup.edge[i].x() * x + at.setup.edge[i].y() * y + at.setup.edge[i].z();
+    const double sum = e.sum();
+    a.b = sum != 0.0 ? Vec3(e / sum) : Vec3::Constant(1.0 / 3);
+    f.w = sum != 0.0 ? 1.0 / (sum * std::abs(at.setup.invDet)) : 0.0;
+    f.position = a.b[0] * v0.position + a.b[1] * v1.position + a.b[2] * v2.position;
+    f.uv = a.b[0] * v0.uv + a.b[1] * v1.uv + a.b[2] * v2.uv;
+    // uv = sum(uv_i e_i) / sum(e) with each e_i affine in (x, y): the quotient rule.
+    if (sum != 0.0) {
+      for (int axis = 0; axis < 2; ++axis) {
+        Vec2 numerator = Vec2::Zero();
+        double grad = 0.0;
+        for (int i = 0; i < 3; ++i) {
+          const double g = at.setup.edge[i][axis];
+          numerator += g * mesh_.vertices[t.v[i]].uv;
+          grad += g;
+        }
+        (axis == 0 ? f.duvdx : f.duvdy) = (numerator - f.uv * grad) / sum;
+      }
+    } else {
+      f.duvdx = f.duvdy = Vec2::Zero();
+    }
+    f.normal = s_.shading == ShadingMode::Flat
+                   ? Vec3((v1.position - v0.position).cross(v2.position - v0.position))
+                   : Vec3(a.b[0] * v0.normal + a.b[1] * v1.normal + a.b[2] * v2.normal);
+    f.surfaceId = t.surfaceId;
+    return a;
+  }
+
+  Rgb ShadeAt(const ActiveTriangle& at, double x, double y, std::int64_t& nCalls) {
+    const Attributes a = Interpolate(at, x, y);
+    if (s_.shading == ShadingMode::Gouraud)
+      return a.b[0] * at.vertexColour[0] + a.b[1] * at.vertexColour[1] + a.b[2] * at.vertexColour[2];
+    ++nCalls;
+    return ShadeFragment(a.f, s_, &failed_);
+  }
+
+  const TriangleMesh& mesh_;
+  const RenderSettings& s_;
+  const Lattice& lat_;
+  int layers_;
+  double invHither_;
+  RenderStats& stats_;
+  bool failed_ = false;  // a texture could not be read
+  std::vector<YEntry> ySorted_;
+  size_t nextY_ = 0;
+  std::vector<ActiveTriangle> active_;  // the slots
+  std::vector<int> live_, freeSlots_;
+};
+
+// Exact per-sample fragments as the back end's geometry: each sample row's fragments live
+// in a pool of that row, which lasts while the pixel row needs it.
+class FragmentGeometry final : public FragmentRow {
+ public:
+  FragmentGeometry(FragmentSource& source, const RenderSettings& s, const Lattice& lat,
+                   int layers, RenderStats& stats)
+      : source_(source), s_(s), lat_(lat), layers_(layers), stats_(stats), pools_(s.aa) {
+    for (auto& p : pools_) p.reserve(static_cast<size_t>(lat.nx) * layers);
+  }
+
+  bool Failed() const { return failed_; }
+  void BeginPixelRow(int) {}
+  void SwapRows(int a, int b) { std::swap(pools_[a], pools_[b]); }
+
+  void ScanRow(int /*j*/, int r, double y, Sample* row) {
+    pool_ = &pools_[r];
+    pool_->clear();
+    row_ = row;
+    const SampleColumns columns{lat_.offset, lat_.spacing, lat_.nx};
+    if (!source_.ScanRow(y, columns, *this)) failed_ = true;
+  }
+
+  void Add(int column, const Fragment& f) override {
+    ++stats_.nSamplesTested;
+    if (column < 0 || column >= lat_.nx || !(f.w >= s_.hither)) return;
+    if (s_.cullBackFaces && f.normal.dot(s_.eye - f.position) < 0.0) return;
+    const auto handle = static_cast<std::int32_t>(pool_->size());
+    if (InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / f.w, handle))
+      pool_->push_back(f);
+  }
+
+  std::uint32_t SurfaceOf(int r, const Sample& smp) const { return pools_[r][smp.handle].surfaceId; }
+  double EdgeDistance(int, const Sample&, double, double) const { return INFINITY; }
+  Rgb ShadeSample(int r, const Sample& smp, double, double, std::int64_t& nCalls) {
+    ++nCalls;
+    return ShadeFragment(pools_[r][smp.handle], s_, &failed_);
+  }
+  Rgb ShadeGroup(const Member* m, int n, double cx, double cy, std::int64_t& nCalls) {
+    ++nCalls;
+    return ShadeFragment(GroupFragment(m, n, cx, cy), s_, &failed_);
+  }
+  // A group of exact samples of one surface is shaded once, with its samples' attributes
+  // averaged: the surface at their centroid to second order.
+  Fragment GroupFragment(const Member* m, int n, double, double) const {
+    Fragment f = pools_[m[0].r][m[0].smp.handle];
+    for (int k = 1; k < n; ++k) {
+      const Fragment& g = pools_[m[k].r][m[k].smp.handle];
+      f.w += g.w;
+      f.position += g.position;
+      f.normal += g.normal;
+      f.uv += g.uv;
+      f.duvdx += g.duvdx;
+      f.duvdy += g.duvdy;
+    }
+    const double inv = 1.0 / n;
+    f.w *= inv;
+    f.position *= inv;
+    f.normal *= inv;
+    f.uv *= inv;
+    f.duvdx *= inv;
+    f.duvdy *= inv;
+    return f;
+  }
+
+ private:
+  FragmentSource& source_;
+  const RenderSettings& s_;
+  const Lattice& lat_;
+  int layers_;
+  RenderStats& stats_;
+  bool failed_ = false;
+  std::vector<std::vector<Fragment>> pools_;  // per sample row of the pixel row
+  std::vector<Fragment>* pool_ = nullptr;    // the row being scanned
+  Sample* row_ = nullptr;
+};
+
+// The pixel rows, for either geometry: sample rows resolved, samples grouped by surface
+// per pixel, one shading call per group plus the adaptive-stochastic extra calls, and
+// the finished row handed to the sink.
+template <class Geometry>
+std::optional<RenderStats> RenderRows(Geometry& geo, const RenderSettings& s, const Lattice& lat,
+                                      int layers, RenderStats& stats, RowSink& sink) {
+  std::vector<std::vector<Sample>> rows(s.aa, std::vector<Sample>(static_cast<size_t>(lat.nx) * layers));
+  std::vector<float> pixels(static_cast<size_t>(s.width) * kChannels);
   const int perPixel = s.aa * s.aa;
   // Paper 000 §3.4.2: each covered sample is shaded on its own with probability
   // P = (l - 1) / (l^2 - 1) = 1 / (l + 1); a colour that differs from the pixel's one
@@ -244,56 +379,64 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
   const double extraP = s.aa > 1 ? 1.0 / (s.aa + 1) : 0.0;
   for (int py = 0; py < s.height; ++py) {
     const int j0 = lat.FirstOfPixel(py);
-    std::erase_if(live, [&](int k) {
-      if (active[k].lastRow >= j0) return false;
-      freeSlots.push_back(k);
-      return true;
-    });
+    geo.BeginPixelRow(j0);
     for (int r = 0; r < s.aa; ++r) {
       if (r == 0 && py > 0 && s.aa > 1) {
         std::swap(rows[0], rows[s.aa - 1]);  // the shared edge row, already resolved
+        geo.SwapRows(0, s.aa - 1);
         continue;
       }
-      scanRow(j0 + r, rows[r]);
+      std::fill(rows[r].begin(), rows[r].end(), Sample{0.0, -1});
+      geo.ScanRow(j0 + r, r, lat.At(j0 + r), rows[r].data());
     }
     for (int px = 0; px < s.width; ++px) {
-      // Group the pixel's samples by surface: one shading call per visible surface.
+      // Group the pixel's samples by surface and layer: one shading call per group.
       struct Group {
         std::uint32_t surface;
         int layer;
         int count;
         double sx, sy;
-        int active;
         Rgb rgb;
       };
       std::array<Group, kMaxAa * kMaxAa * kMaxLayers> groups;
+      std::array<Member, kMaxAa * kMaxAa * kMaxLayers> members;
+      std::array<int, kMaxAa * kMaxAa * kMaxLayers> memberGroup;
       std::array<int, kMaxAa * kMaxAa> groupOf;  // per sample, its nearest layer's; -1: none
-      int nGroups = 0, covered = 0, onLines = 0;
+      int nGroups = 0, nMembers = 0, covered = 0, onLines = 0;
       double alpha = 0.0;  // summed over samples: 1 - (1 - opacity)^(fragments)
       const int i0 = lat.FirstOfPixel(px);
       for (int r = 0; r < s.aa; ++r)
         for (int c = 0; c < s.aa; ++c) {
           const Sample* keep = &rows[r][static_cast<size_t>(i0 + c) * layers];
           groupOf[r * s.aa + c] = -1;
-          if (keep[0].active < 0) continue;
+          if (keep[0].handle < 0) continue;
           ++covered;
           const double x = lat.At(i0 + c), y = lat.At(j0 + r);
-          if (s.hiddenLine && EdgeDistance(active[keep[0].active].setup, x, y) < kLineHalfWidth) ++onLines;
+          if (s.hiddenLine && geo.EdgeDistance(r, keep[0], x, y) < kLineHalfWidth) ++onLines;
           double through = 1.0;  // light passing the layers in front
-          for (int layer = 0; layer < layers && keep[layer].active >= 0; ++layer) {
-            const std::uint32_t surface = mesh.triangles[active[keep[layer].active].index].surfaceId;
+          for (int layer = 0; layer < layers && keep[layer].handle >= 0; ++layer) {
+            const std::uint32_t surface = geo.SurfaceOf(r, keep[layer]);
             int g = 0;
             while (g < nGroups && (groups[g].surface != surface || groups[g].layer != layer)) ++g;
-            if (g == nGroups)
-              groups[nGroups++] = {surface, layer, 0, 0.0, 0.0, keep[layer].active, Rgb::Zero()};
+            if (g == nGroups) groups[nGroups++] = {surface, layer, 0, 0.0, 0.0, Rgb::Zero()};
             if (layer == 0) groupOf[r * s.aa + c] = g;
             ++groups[g].count;
             groups[g].sx += x;
             groups[g].sy += y;
+            members[nMembers] = {r, keep[layer]};
+            memberGroup[nMembers++] = g;
             through *= 1.0 - s.opacity;
           }
           alpha += 1.0 - through;
         }
+      // The members of group g, gathered in place at the front of `gathered`.
+      std::array<Member, kMaxAa * kMaxAa> gathered;
+      auto gather = [&](int g) {
+        int n = 0;
+        for (int k = 0; k < nMembers; ++k)
+          if (memberGroup[k] == g) gathered[n++] = members[k];
+        return n;
+      };
       stats.nSamplesCovered += covered;
       Rgb colour = Rgb::Zero();
       if (s.hiddenLine) {
@@ -306,7 +449,8 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
           // Linear transparency: layer k is seen through k layers of opacity a, and
           // contributes a (1 - a)^k of its colour.
           Group& gr = groups[g];
-          gr.rgb = shadeAt(active[gr.active], gr.sx / gr.count, gr.sy / gr.count, stats.nShadingCalls);
+          const int n = gather(g);
+          gr.rgb = geo.ShadeGroup(gathered.data(), n, gr.sx / gr.count, gr.sy / gr.count, stats.nShadingCalls);
           const double weight = s.opacity * std::pow(1.0 - s.opacity, gr.layer);
           colour += (weight * gr.count / perPixel) * gr.rgb;
         }
@@ -319,7 +463,7 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
               UnitHash(s.seed, j0 + r, i0 + c) >= extraP)
             continue;
           const Sample& smp = rows[r][static_cast<size_t>(i0 + c) * layers];
-          const Rgb rgb = shadeAt(active[smp.active], lat.At(i0 + c), lat.At(j0 + r), stats.nExtraShadingCalls);
+          const Rgb rgb = geo.ShadeSample(r, smp, lat.At(i0 + c), lat.At(j0 + r), stats.nExtraShadingCalls);
           superSample = (rgb - groups[groupOf[k]].rgb).cwiseAbs().maxCoeff() > kShadeDiscrepancy;
         }
         if (superSample) {
@@ -327,9 +471,10 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
           colour = Rgb::Zero();
           for (int k = 0; k < perPixel; ++k) {
             if (groupOf[k] < 0) continue;
-            const Sample& smp = rows[k / s.aa][static_cast<size_t>(i0 + k % s.aa) * layers];
-            colour += shadeAt(active[smp.active], lat.At(i0 + k % s.aa), lat.At(j0 + k / s.aa),
-                              stats.nExtraShadingCalls) / perPixel;
+            const int r = k / s.aa;
+            const Sample& smp = rows[r][static_cast<size_t>(i0 + k % s.aa) * layers];
+            colour += geo.ShadeSample(r, smp, lat.At(i0 + k % s.aa), lat.At(j0 + r),
+                                      stats.nExtraShadingCalls) / perPixel;
           }
         }
       }
@@ -345,18 +490,40 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
         out[kChannelId] = -1.0f;
       } else {
         const Group& gr = groups[major];
-        const Attributes a = interpolate(active[gr.active], gr.sx / gr.count, gr.sy / gr.count);
-        const Vec3 n = a.normal.normalized();
+        const int n = gather(major);
+        const Fragment a = geo.GroupFragment(gathered.data(), n, gr.sx / gr.count, gr.sy / gr.count);
+        const Vec3 nrm = a.normal.normalized();
         out[kChannelZ] = static_cast<float>(a.w);
-        for (int k = 0; k < 3; ++k) out[kChannelN + k] = static_cast<float>(n.allFinite() ? n[k] : 0.0);
+        for (int k = 0; k < 3; ++k) out[kChannelN + k] = static_cast<float>(nrm.allFinite() ? nrm[k] : 0.0);
         out[kChannelUv] = static_cast<float>(a.uv.x());
         out[kChannelUv + 1] = static_cast<float>(a.uv.y());
         out[kChannelId] = static_cast<float>(gr.surface);
       }
     }
-    if (failed || !sink.WriteRow(py, pixels.data())) return std::nullopt;
+    if (geo.Failed() || !sink.WriteRow(py, pixels.data())) return std::nullopt;
   }
   return stats;
+}
+
+}  // namespace
+
+std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSettings& s,
+                                      RowSink& sink) {
+  RenderStats stats;
+  const Lattice lat(s);
+  // With transparency each sample keeps its `layers` nearest fragments, nearest first.
+  const int layers = s.opacity < 1.0 ? kMaxLayers : 1;
+  TriangleGeometry geo(mesh, s, lat, layers, stats);
+  return RenderRows(geo, s, lat, layers, stats, sink);
+}
+
+std::optional<RenderStats> RenderFragments(FragmentSource& source, const RenderSettings& s,
+                                           RowSink& sink) {
+  RenderStats stats;
+  const Lattice lat(s);
+  const int layers = s.opacity < 1.0 ? kMaxLayers : 1;
+  FragmentGeometry geo(source, s, lat, layers, stats);
+  return RenderRows(geo, s, lat, layers, stats, sink);
 }
 
 }  // namespace patchscan::raster

@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "raster/fragment.h"
 #include "raster/mesh.h"
 #include "raster/shading.h"
 
@@ -65,5 +66,12 @@ class RowSink {
 // read (the texture's Error() says why). Allocates only before the first row.
 std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSettings& settings,
                                       RowSink& sink);
+
+// Renders the fragments `source` produces row by row (exact renders). Shading mode flat
+// and Gouraud and hidden-line mode need triangles and are not applied: every shading call
+// uses the fragments' exact normals. A group of samples of one surface in a pixel is
+// shaded once with its fragments' attributes averaged.
+std::optional<RenderStats> RenderFragments(FragmentSource& source, const RenderSettings& settings,
+                                           RowSink& sink);
 
 }  // namespace patchscan::raster

@@ -1,0 +1,59 @@
+// The back end's second input (DESIGN.md): exact per-sample fragments, for renders whose
+// front end finds each visible sample's surface point itself (paper 001 §3.3, the exact
+// X scan) instead of handing over triangles.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "raster/mesh.h"
+
+namespace patchscan::raster {
+
+// One surface point seen at one sample.
+struct Fragment {
+  double w = 0.0;      // eye distance along the view axis (> 0 in front of the eye)
+  Vec3 position;       // world space
+  Vec3 normal;         // world space, unit
+  Vec2 uv;
+  Vec2 duvdx, duvdy;   // change of uv per pixel in screen x and y (texture footprint)
+  std::uint32_t surfaceId = 0;
+};
+
+// The sample columns of one sample row: x = x0 + i dx, i in [0, n).
+struct SampleColumns {
+  double x0 = 0.0, dx = 1.0;
+  int n = 0;
+  double At(int i) const { return x0 + i * dx; }
+  // First column at or right of x, clamped to [0, n]; last at or left of x, clamped to
+  // [-1, n - 1]. NaN gives an empty range.
+  int Ceil(double x) const {
+    const double k = std::ceil((x - x0) / dx);
+    return k >= 0.0 ? (k <= n ? static_cast<int>(k) : n) : (k < 0.0 ? 0 : n);
+  }
+  int Floor(double x) const {
+    const double k = std::floor((x - x0) / dx);
+    return k <= n - 1 ? (k >= -1.0 ? static_cast<int>(k) : -1) : (k > n - 1 ? n - 1 : -1);
+  }
+};
+
+// Receives the fragments of one sample row (implemented by the back end).
+class FragmentRow {
+ public:
+  virtual void Add(int column, const Fragment& f) = 0;
+
+ protected:
+  ~FragmentRow() = default;
+};
+
+// Produces, row by row from the top, every fragment of every surface at the samples of
+// a row, in any order and including hidden ones: the back end keeps the nearest.
+class FragmentSource {
+ public:
+  virtual ~FragmentSource() = default;
+  // Sample rows come in increasing y. Returns false to stop the render (an error the
+  // source reports itself).
+  virtual bool ScanRow(double y, const SampleColumns& columns, FragmentRow& out) = 0;
+};
+
+}  // namespace patchscan::raster
