@@ -14,6 +14,7 @@
 #include "raster/image_writer.h"
 #include "raster/scanline_renderer.h"
 #include "raster/texture.h"
+#include "xscan/exact_scan.h"
 #include "xscan/tess_feed.h"
 
 namespace patchscan::cli {
@@ -66,10 +67,15 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   cmd->add_option("FILE", o->file, "scene file (.bpt)")->required();
   cmd->add_option("-o,--output", o->output, "output image file")->required();
   cmd->add_option("--mode", o->mode,
-                  "how surfaces become samples: tess = tessellated with OpenSubdiv's "
-                  "Bfr::Tessellation pattern (the only mode so far)")
-      ->check(CLI::IsMember({"tess"}))
+                  "how surfaces become samples: exact = Blinn's scan-line algorithm, every "
+                  "visible sample's (u,v) found by Newton iteration (shading always uses the "
+                  "exact normal; --shading flat/gouraud and --hidden-line need triangles); "
+                  "tess = tessellated with OpenSubdiv's Bfr::Tessellation pattern")
+      ->check(CLI::IsMember({"exact", "tess"}))
       ->capture_default_str();
+  cmd->add_flag("--no-extrapolate", o->noExtrapolate,
+                "exact mode: start each tracker's Newton iteration from its last position "
+                "instead of extrapolating from its last two (to measure what extrapolation saves)");
   cmd->add_option("--tess-rate", o->tessRate, "tessellation segments per patch edge (uniform)")
       ->check(CLI::Range(1, kMaxTessRate))
       ->capture_default_str();
@@ -121,15 +127,30 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
   const auto tLoaded = Clock::now();
 
-  // Step 1: tessellate and feed the back end.
+  const bool exact = o.mode == "exact";
+  if (exact && (o.shading != "phong" || o.hiddenLine)) {
+    err << "patchscan: --mode exact shades every sample with its exact normal: --shading "
+           "flat/gouraud and --hidden-line need a triangle mode (--mode tess)\n";
+    return kExitUsage;
+  }
+
+  // Step 1: tessellate and feed the back end, or set up the exact scan.
   TessMesh tess;
-  for (size_t k = 0; k < scene.surfaces.size(); ++k)
-    if (o.tessPixels > 0)
-      TessellateToScreen(scene.surfaces[k], camera, o.tessPixels, static_cast<std::uint32_t>(k), &tess);
-    else
-      TessellateUniform(scene.surfaces[k], o.tessRate, static_cast<std::uint32_t>(k), &tess);
-  WeldBoundaryVertices(&tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
-  const raster::TriangleMesh mesh = ToRasterMesh(tess, camera);
+  raster::TriangleMesh mesh;
+  std::unique_ptr<ExactScan> scan;
+  if (exact) {
+    ExactScanOptions xo;
+    xo.extrapolate = !o.noExtrapolate;
+    scan = std::make_unique<ExactScan>(scene.surfaces, camera, xo);
+  } else {
+    for (size_t k = 0; k < scene.surfaces.size(); ++k)
+      if (o.tessPixels > 0)
+        TessellateToScreen(scene.surfaces[k], camera, o.tessPixels, static_cast<std::uint32_t>(k), &tess);
+      else
+        TessellateUniform(scene.surfaces[k], o.tessRate, static_cast<std::uint32_t>(k), &tess);
+    WeldBoundaryVertices(&tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
+    mesh = ToRasterMesh(tess, camera);
+  }
   const auto t1 = Clock::now();
 
   // Step 2: render, streaming rows to the image.
@@ -169,7 +190,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   }
   auto& writer = *std::get<std::unique_ptr<raster::ImageWriter>>(opened);
   ProgressSink progress(writer, camera.height, err);
-  const auto stats = raster::RenderMesh(mesh, s, progress);
+  const auto stats = exact ? raster::RenderFragments(*scan, s, progress) : raster::RenderMesh(mesh, s, progress);
   if (!stats) {
     if (texture && !texture->Error().empty()) {
       err << "patchscan: " << texture->Error() << '\n';
@@ -189,25 +210,69 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   const double tessSec = std::chrono::duration<double>(t1 - tLoaded).count();
   const double renderSec = std::chrono::duration<double>(t2 - t1).count();
   const long peakKiB = PeakResidentKiB();
-  if (o.stats)
-    err << "triangles n: " << stats->nTriangles << " (set up " << stats->nTrianglesSetUp
-        << ")\nmost active on one sample row m: " << stats->maxActive
-        << "\nsamples tested: " << stats->nSamplesTested << "\nsamples covered: "
+  const ExactScanStats xs = exact ? scan->Stats() : ExactScanStats{};
+  // Newton iterations per tracker per scan line (paper 001 §3.5 reports ~2.5 without
+  // extrapolation, under 1 with): edge and silhouette trackers together.
+  const double itersPerTracker =
+      xs.nTrackerSteps > 0 ? double(xs.edges.nNewtonIterations + xs.silhouettes.nNewtonIterations) / xs.nTrackerSteps : 0.0;
+  if (o.stats) {
+    if (exact)
+      err << "surfaces: " << xs.nSurfaces << " (set up " << xs.nSurfacesActivated
+          << ", most active at once " << xs.maxActiveSurfaces << "), maxima and saddles "
+          << xs.nStationary << "\nsample rows: " << xs.nRows << ", fragments " << xs.nFragments
+          << "\ntrackers: " << xs.nTrackerSteps << " tracker-rows, Newton iterations per tracker "
+          << "per row " << itersPerTracker << " (edges " << xs.edges.nNewtonIterations
+          << ", silhouettes " << xs.silhouettes.nNewtonIterations << ")\nevents: edge trackers "
+          << xs.edges.nCreated << " born, " << xs.edges.nDeleted << " died, " << xs.edges.nFolds
+          << " folds; silhouette trackers born at maxima " << xs.silhouettes.nCreatedAtMaxima
+          << ", folds " << xs.silhouettes.nCreatedAtFolds << ", saddles "
+          << xs.silhouettes.nCreatedAtSaddles << ", died " << xs.silhouettes.nDeletedFailed
+          << ", left " << xs.silhouettes.nDeletedLeft << "\nx scan: " << xs.walk.nWalks
+          << " walks (" << xs.walk.nClosedWalks << " closed), " << xs.walk.nColumnSteps
+          << " column steps, " << xs.walk.nArcSteps << " arc steps, " << xs.walk.nSilhouettes
+          << " silhouette points, Newton " << xs.walk.nNewtonCalls << " calls / "
+          << xs.walk.nNewtonIterations << " iterations\nrepairs: " << xs.edges.nRepairs
+          << " edge-tracker bisections, " << xs.walk.nUntrackedSilhouettes
+          << " silhouettes and " << xs.walk.nUntrackedExits
+          << " boundary exits found by the x scan without a tracker; failures "
+          << xs.walk.nFailures << '\n';
+    else
+      err << "triangles n: " << stats->nTriangles << " (set up " << stats->nTrianglesSetUp
+          << ")\nmost active on one sample row m: " << stats->maxActive << '\n';
+    err << "samples tested: " << stats->nSamplesTested << "\nsamples covered: "
         << stats->nSamplesCovered << "\nshading calls: " << stats->nShadingCalls << " (+"
         << stats->nExtraShadingCalls << " adaptive-stochastic, " << stats->nSuperSampledPixels
-        << " pixels super-sampled)\ntime: load " << loadSec << " s, tessellate " << tessSec
-        << " s, render " << renderSec << " s\npeak memory: " << peakKiB << " KiB\n"
+        << " pixels super-sampled)\ntime: load " << loadSec << " s, " << (exact ? "set up " : "tessellate ")
+        << tessSec << " s, render " << renderSec << " s\npeak memory: " << peakKiB << " KiB\n"
         << "texture: " << (texture ? (texture->Opened() ? "opened" : "never needed") : "none")
         << (texture ? ", " + std::to_string(texture->Lookups()) + " lookups" : std::string()) << '\n';
+  }
   if (!o.statsJson.empty()) {
     std::ofstream js(o.statsJson);
-    js << "{\"triangles\": " << stats->nTriangles << ", \"triangles_set_up\": "
+    js << "{\"mode\": \"" << o.mode << "\", \"triangles\": " << stats->nTriangles << ", \"triangles_set_up\": "
        << stats->nTrianglesSetUp << ", \"max_active\": " << stats->maxActive
        << ", \"samples_tested\": " << stats->nSamplesTested << ", \"samples_covered\": "
        << stats->nSamplesCovered << ", \"shading_calls\": " << stats->nShadingCalls
        << ", \"extra_shading_calls\": " << stats->nExtraShadingCalls
        << ", \"super_sampled_pixels\": " << stats->nSuperSampledPixels
-       << ", \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
+       << ", \"exact\": {\"surfaces_set_up\": " << xs.nSurfacesActivated
+       << ", \"max_active_surfaces\": " << xs.maxActiveSurfaces << ", \"stationary_points\": " << xs.nStationary
+       << ", \"sample_rows\": " << xs.nRows << ", \"fragments\": " << xs.nFragments
+       << ", \"tracker_rows\": " << xs.nTrackerSteps << ", \"newton_iterations_per_tracker_row\": " << itersPerTracker
+       << ", \"edge_newton_iterations\": " << xs.edges.nNewtonIterations
+       << ", \"silhouette_newton_iterations\": " << xs.silhouettes.nNewtonIterations
+       << ", \"edge_repairs\": " << xs.edges.nRepairs << ", \"folds\": " << xs.edges.nFolds
+       << ", \"silhouettes_born_at_maxima\": " << xs.silhouettes.nCreatedAtMaxima
+       << ", \"silhouettes_born_at_folds\": " << xs.silhouettes.nCreatedAtFolds
+       << ", \"silhouettes_born_at_saddles\": " << xs.silhouettes.nCreatedAtSaddles
+       << ", \"walks\": " << xs.walk.nWalks << ", \"closed_walks\": " << xs.walk.nClosedWalks
+       << ", \"column_steps\": " << xs.walk.nColumnSteps << ", \"arc_steps\": " << xs.walk.nArcSteps
+       << ", \"xscan_newton_calls\": " << xs.walk.nNewtonCalls
+       << ", \"xscan_newton_iterations\": " << xs.walk.nNewtonIterations
+       << ", \"silhouette_points\": " << xs.walk.nSilhouettes
+       << ", \"untracked_silhouettes\": " << xs.walk.nUntrackedSilhouettes
+       << ", \"untracked_exits\": " << xs.walk.nUntrackedExits << ", \"failures\": " << xs.walk.nFailures
+       << "}, \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
        << ", \"seconds_render\": " << renderSec << ", \"peak_rss_kib\": " << peakKiB << "}\n";
     if (!js) {
       err << "patchscan: " << o.statsJson << ": cannot write statistics\n";

@@ -13,6 +13,7 @@ namespace patchscan::cli {
 struct RenderOptions {
   std::string file, output;
   std::string mode = "tess";
+  bool noExtrapolate = false;
   int tessRate = 8;
   double tessPixels = 0.0;  // > 0: screen-adaptive tessellation instead of tessRate
   int aa = 3;

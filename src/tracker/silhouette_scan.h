@@ -33,6 +33,27 @@ struct SilhouetteScanStats {
 // Two trackers closer than this in (u,v) are the same crossing.
 constexpr double kSameTrackerUv = 1e-7;
 
+// F = (y - yScan, J / max(|s_u|, |s_v|)) and its Jacobian at uv.
+template <class ShapeT>
+inline void SilhouetteSystem(const ShapeT& shape, const ScreenMap& map, double yScan, const Vec2d& uv,
+                      Vec2d* f, Mat2d* jac) {
+  ScreenDerivs d;
+  EvaluateScreen(shape, map, uv.x(), uv.y(), DerivOrder::Second, &d);
+  const Vec2 su = d.dpdu.head<2>(), sv = d.dpdv.head<2>();
+  // J / max(|s_u|, |s_v|) is in pixels, like y - yScan, so one tolerance and the
+  // damping's residual compare like with like.
+  const double norm = std::max(std::max(su.norm(), sv.norm()), 1e-300);
+  const double j = su.x() * sv.y() - sv.x() * su.y();
+  // dJ/du = x_uu y_v + x_u y_uv - x_uv y_u - x_v y_uu; dJ/dv likewise. The normalization
+  // is treated as constant in the Jacobian: it changes only the step length, not the root.
+  const double ju = d.d2pdu2.x() * sv.y() + su.x() * d.d2pduv.y() - d.d2pduv.x() * su.y() -
+                    sv.x() * d.d2pdu2.y();
+  const double jv = d.d2pduv.x() * sv.y() + su.x() * d.d2pdv2.y() - d.d2pdv2.x() * su.y() -
+                    sv.x() * d.d2pduv.y();
+  *f = Vec2d(d.p.y() - yScan, j / norm);
+  *jac << su.y(), sv.y(), ju / norm, jv / norm;
+}
+
 class SilhouetteScan {
  public:
   // `stationary`: the surface's maxima and saddles (FindStationaryPoints).

@@ -1,0 +1,171 @@
+#include "xscan/exact_scan.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "patch/screen.h"
+#include "patch/tessellate.h"
+
+namespace patchscan {
+
+// A surface being scanned: its screen map and its trackers.
+struct ExactScan::Active {
+  std::size_t index;
+  double yMax;
+  ScreenMap map;
+  Eigen::Matrix3d normalFromObject;
+  std::unique_ptr<EdgeScan> edges;
+  std::unique_ptr<SilhouetteScan> silhouettes;
+};
+
+namespace {
+
+// When a surface is set up below its top (its top is above the image, or between two
+// rows), its trackers are first advanced from its topmost maximum in steps of at most a
+// pixel, so that they are born where the seeds of §3.2.2 are good; at most this many
+// pixels above the row.
+constexpr double kMaxPreAdvancePx = 1024.0;
+// A texture footprint longer than the whole domain per pixel says nothing more.
+constexpr double kMaxUvPerPixel = 1.0;
+
+Vec2 ClampLength(const Vec2& v, double len) {
+  const double n = v.norm();
+  return std::isfinite(n) ? (n > len ? Vec2(v * (len / n)) : v) : Vec2(len, 0.0);
+}
+
+}  // namespace
+
+ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options)
+    : surfaces_(surfaces), camera_(camera), options_(options) {
+  stats_.nSurfaces = static_cast<long>(surfaces.size());
+  pending_.reserve(surfaces.size());
+  for (std::size_t k = 0; k < surfaces.size(); ++k) {
+    const ScreenMap map(camera, surfaces[k].worldFromObject);
+    const auto box = ScreenBounds(surfaces[k], map);
+    // A surface reaching behind the eye has no finite screen box: active throughout.
+    if (box) pending_.push_back({box->lo.y(), box->hi.y(), k});
+    else pending_.push_back({-INFINITY, INFINITY, k});
+  }
+  std::stable_sort(pending_.begin(), pending_.end(),
+                   [](const Pending& a, const Pending& b) { return a.yMin < b.yMin; });
+}
+
+ExactScan::~ExactScan() = default;
+
+void ExactScan::Activate(std::size_t index, double y, double spacing) {
+  const Surface& s = surfaces_[index];
+  auto a = std::make_unique<Active>(Active{index, INFINITY, ScreenMap(camera_, s.worldFromObject),
+                                           s.worldFromObject.linear().inverse().transpose(), nullptr, nullptr});
+  for (const Pending& p : pending_)
+    if (p.index == index) a->yMax = p.yMax;
+  std::vector<Stationary> stationary = FindStationaryPoints(s, a->map);
+  stats_.nStationary += static_cast<long>(stationary.size());
+  double yTop = y;
+  for (const Stationary& p : stationary) yTop = std::min(yTop, p.y);
+  a->edges = std::make_unique<EdgeScan>(s, a->map, options_.extrapolate);
+  a->silhouettes = std::make_unique<SilhouetteScan>(s, a->map, std::move(stationary), options_.extrapolate);
+  const double step = std::max(spacing, 1.0);
+  for (double yp = std::max(yTop, y - kMaxPreAdvancePx); yp < y; yp += step) {
+    a->edges->Advance(yp);
+    a->silhouettes->Advance(yp, *a->edges);
+  }
+  ++stats_.nSurfacesActivated;
+  active_.push_back(std::move(a));
+  stats_.maxActiveSurfaces = std::max(stats_.maxActiveSurfaces, static_cast<long>(active_.size()));
+}
+
+namespace {
+
+void AddEdgeStats(EdgeScanStats* to, const EdgeScanStats& s) {
+  to->nNewtonCalls += s.nNewtonCalls;
+  to->nNewtonIterations += s.nNewtonIterations;
+  to->nRepairs += s.nRepairs;
+  to->nCreated += s.nCreated;
+  to->nDeleted += s.nDeleted;
+  to->nFolds += s.nFolds;
+}
+
+void AddSilhouetteStats(SilhouetteScanStats* to, const SilhouetteScanStats& s) {
+  to->nNewtonCalls += s.nNewtonCalls;
+  to->nNewtonIterations += s.nNewtonIterations;
+  to->nCreatedAtMaxima += s.nCreatedAtMaxima;
+  to->nCreatedAtFolds += s.nCreatedAtFolds;
+  to->nCreatedAtSaddles += s.nCreatedAtSaddles;
+  to->nDeletedFailed += s.nDeletedFailed;
+  to->nDeletedLeft += s.nDeletedLeft;
+  to->nMerged += s.nMerged;
+}
+
+}  // namespace
+
+void ExactScan::Retire(Active& a) {
+  AddEdgeStats(&stats_.edges, a.edges->Stats());
+  AddSilhouetteStats(&stats_.silhouettes, a.silhouettes->Stats());
+}
+
+ExactScanStats ExactScan::Stats() const {
+  ExactScanStats s = stats_;
+  for (const auto& a : active_) {
+    AddEdgeStats(&s.edges, a->edges->Stats());
+    AddSilhouetteStats(&s.silhouettes, a->silhouettes->Stats());
+  }
+  return s;
+}
+
+bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  ++stats_.nRows;
+  // Retire surfaces the scan has passed, set up those it has reached.
+  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) {
+    if (a->yMax >= y) return false;
+    Retire(*a);
+    return true;
+  });
+  for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= y; ++nextPending_)
+    if (pending_[nextPending_].yMax >= y) Activate(pending_[nextPending_].index, y, columns.dx);
+
+  for (const auto& ap : active_) {
+    Active& a = *ap;
+    const Surface& surface = surfaces_[a.index];
+    a.edges->Advance(y);
+    a.silhouettes->Advance(y, *a.edges);
+    rowTrackers_.Clear();
+    for (const EdgeTracker& t : a.edges->Trackers()) {
+      rowTrackers_.edgePoints.push_back(a.edges->Uv(t));
+      rowTrackers_.edgeOf.push_back(a.edges->Pieces()[t.piece].edge);
+    }
+    for (const SilhouetteTracker& t : a.silhouettes->Trackers()) rowTrackers_.silhouettePoints.push_back(t.uv);
+    stats_.nTrackerSteps += static_cast<long>(a.edges->Trackers().size() + a.silhouettes->Trackers().size());
+
+    VisitShape(surface, [&](const auto& shape) {
+      auto emit = [&](int column, const Vec2d& uv) {
+        SurfaceDerivs o;
+        shape.Evaluate(uv.x(), uv.y(), DerivOrder::First, &o);
+        ScreenDerivs sd;
+        a.map.FromObject(o, DerivOrder::First, &sd);
+        raster::Fragment f;
+        f.w = sd.w;
+        f.position = surface.worldFromObject * o.p;
+        const Vec3 n = o.dpdu.cross(o.dpdv);
+        // As WorldNormal: relative to the derivatives, below this the cross product is
+        // rounding (a collapsed edge), and the normal is its limit from inside.
+        constexpr double kDegenerateSine = 1e-10;
+        if (n.norm() > kDegenerateSine * o.dpdu.norm() * o.dpdv.norm() && n.norm() > 0.0)
+          f.normal = (a.normalFromObject * n).normalized();
+        else
+          f.normal = WorldNormal(surface, uv.x(), uv.y());
+        f.uv = uv;
+        const double j = sd.dpdu.x() * sd.dpdv.y() - sd.dpdv.x() * sd.dpdu.y();
+        f.duvdx = ClampLength(Vec2(sd.dpdv.y(), -sd.dpdu.y()) / j, kMaxUvPerPixel);
+        f.duvdy = ClampLength(Vec2(-sd.dpdv.x(), sd.dpdu.x()) / j, kMaxUvPerPixel);
+        f.surfaceId = static_cast<std::uint32_t>(a.index);
+        ++stats_.nFragments;
+        out.Add(column, f);
+      };
+      LevelWalker walker(shape, a.map, y, columns, &stats_.walk);
+      walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, emit);
+    });
+  }
+  return true;
+}
+
+}  // namespace patchscan

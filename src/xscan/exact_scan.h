@@ -1,0 +1,70 @@
+// The exact render's front end (paper 001 §3): per surface the maxima pre-pass, then
+// scan line by scan line the boundary-edge and silhouette trackers of the Y scan and the
+// exact X scan between them, handing the back end one fragment per sample of every
+// surface layer (depth, exact normal, uv, surface id). A surface is set up when the scan
+// reaches the top of its screen box and dropped below its bottom: memory follows the
+// active set, not the scene.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "patch/camera.h"
+#include "patch/surface.h"
+#include "raster/fragment.h"
+#include "tracker/edge_scan.h"
+#include "tracker/maxima.h"
+#include "tracker/silhouette_scan.h"
+#include "xscan/level_walk.h"
+
+namespace patchscan {
+
+struct ExactScanOptions {
+  bool extrapolate = true;  // start tracker Newton from the last two positions (§3.5)
+};
+
+// Counters of the whole render (DESIGN.md: count what the papers count).
+struct ExactScanStats {
+  long nSurfaces = 0, nSurfacesActivated = 0, maxActiveSurfaces = 0;
+  long nRows = 0, nFragments = 0;
+  long nStationary = 0;
+  long nTrackerSteps = 0;  // edge and silhouette trackers advanced, summed over rows
+  EdgeScanStats edges;
+  SilhouetteScanStats silhouettes;
+  WalkStats walk;
+};
+
+class ExactScan final : public raster::FragmentSource {
+ public:
+  // `surfaces` must outlive the scan; fragment surface ids are indices into it.
+  ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options = {});
+  ~ExactScan() override;
+
+  bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
+
+  // Totals so far, including the surfaces still active.
+  ExactScanStats Stats() const;
+
+ private:
+  struct Active;
+  void Activate(size_t index, double y, double spacing);
+  void Retire(Active& a);
+
+  std::span<const Surface> surfaces_;
+  Camera camera_;
+  ExactScanOptions options_;
+  struct Pending {
+    double yMin, yMax;
+    std::size_t index;
+  };
+  std::vector<Pending> pending_;  // by yMin
+  std::size_t nextPending_ = 0;
+  std::vector<std::unique_ptr<Active>> active_;
+  RowTrackers rowTrackers_;
+  std::vector<char> edgeUsed_, silUsed_;
+  ExactScanStats stats_;
+};
+
+}  // namespace patchscan

@@ -1,0 +1,466 @@
+// The exact X scan of one surface on one scan line (paper 001 §3.3). The scan line's
+// level curve y(u,v) = ys in the domain is a set of curves that end on the boundary
+// (where the edge trackers are) or close on themselves; the silhouette points on them
+// (J = 0, where the silhouette trackers are) cut them into x-monotone segments.
+//
+// Each curve is walked from one end (an edge tracker; for a closed curve, a silhouette
+// tracker) to the other, in order along it: this links the scan line's trackers (§3.2.3)
+// and finds every silhouette point between them by the sign of J. On each x-monotone
+// piece every sample column is solved by bivariate Newton on x = xs, y = ys from the
+// neighbouring sample (§3.3). A silhouette point found by the walk that no tracker holds,
+// or an exit through the boundary that no edge tracker holds, is a tracker miss: the walk
+// repairs it (the point is found by Newton from a bracket, never guessed) and counts it.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+#include "patch/screen.h"
+#include "raster/fragment.h"
+#include "tracker/edge_scan.h"
+#include "tracker/newton.h"
+#include "tracker/silhouette_scan.h"
+
+namespace patchscan {
+
+struct WalkStats {
+  long nWalks = 0, nClosedWalks = 0;
+  long nColumnSteps = 0;  // steps that landed on a sample column
+  long nArcSteps = 0;     // steps along the curve between columns (near silhouettes)
+  long nColumnsSolved = 0;
+  long nNewtonCalls = 0, nNewtonIterations = 0;  // the per-sample solves
+  long nSilhouettes = 0;           // silhouette points passed
+  long nUntrackedSilhouettes = 0;  // of those, held by no silhouette tracker (repaired)
+  long nUntrackedExits = 0;        // boundary exits held by no edge tracker (repaired)
+  long nFailures = 0;              // walks or samples given up
+};
+
+// A scan line's trackers of one surface, the walk's starting points.
+struct RowTrackers {
+  std::vector<Vec2d> edgePoints;        // on the boundary, y = ys
+  std::vector<PatchEdge> edgeOf;        // per edge point
+  std::vector<Vec2d> silhouettePoints;  // inside, y = ys and J = 0
+  void Clear() {
+    edgePoints.clear();
+    edgeOf.clear();
+    silhouettePoints.clear();
+  }
+};
+
+// A walk's step in the domain: first tries, largest, smallest before giving up.
+constexpr double kWalkStepStart = 1.0 / 64;
+constexpr double kWalkStepMax = 1.0 / 16;
+constexpr double kWalkStepMin = 1e-11;
+// Largest turn of the curve's tangent over one step (radians): beyond it the predictor
+// could land on a neighbouring branch.
+constexpr double kWalkMaxTurn = 0.5;
+// A sample column this close to a walk point in x (pixels) counts as passed: ten times
+// the solves' tolerance, far below the 1e-3 px within which coverage may differ.
+constexpr double kColumnEpsPx = 1e-6;
+// Two points of a curve this close in (u,v) are the same crossing.
+constexpr double kSameCrossingUv = 1e-6;
+// A walk longer than this many steps is lost (a curve has finitely many columns; at the
+// largest step the domain's diagonal takes 23 steps).
+constexpr long kWalkMaxStepsPerColumn = 4;
+constexpr long kWalkMaxStepsBase = 4096;
+
+// The point of a walk and what the walk needs there.
+struct WalkPoint {
+  Vec2d uv;
+  double x = 0.0, y = 0.0;
+  Vec2d gradX, gradY;
+  double j = 0.0;   // J = x_u y_v - x_v y_u
+  double jn = 0.0;  // J / (|grad x| |grad y|): the sine of the angle, scale-free
+  bool ok = false;
+};
+
+template <class ShapeT>
+class LevelWalker {
+ public:
+  // Emit(column, uv): the surface point at sample column `column` of the row.
+  LevelWalker(const ShapeT& shape, const ScreenMap& map, double ys,
+              const raster::SampleColumns& cols, WalkStats* stats)
+      : shape_(shape), map_(map), ys_(ys), cols_(cols), stats_(stats) {}
+
+  // Walks every curve of the row. `edgeUsed` and `silUsed` are scratch (resized here).
+  template <class Emit>
+  void WalkAll(const RowTrackers& t, std::vector<char>* edgeUsed, std::vector<char>* silUsed,
+               Emit&& emit) {
+    trackers_ = &t;
+    edgeUsed_ = edgeUsed;
+    silUsed_ = silUsed;
+    edgeUsed->assign(t.edgePoints.size(), 0);
+    silUsed->assign(t.silhouettePoints.size(), 0);
+    for (size_t k = 0; k < t.edgePoints.size(); ++k) {
+      if ((*edgeUsed)[k]) continue;
+      (*edgeUsed)[k] = 1;
+      WalkFromEdge(t.edgePoints[k], t.edgeOf[k], emit);
+    }
+    // Closed curves: no boundary end, so a silhouette tracker no walk has passed.
+    for (size_t k = 0; k < t.silhouettePoints.size(); ++k) {
+      if ((*silUsed)[k]) continue;
+      (*silUsed)[k] = 1;
+      WalkClosed(t.silhouettePoints[k], emit);
+    }
+  }
+
+  WalkPoint Eval(const Vec2d& uv) const {
+    WalkPoint p;
+    p.uv = uv;
+    ScreenDerivs d;
+    EvaluateScreen(shape_, map_, uv.x(), uv.y(), DerivOrder::First, &d);
+    p.x = d.p.x();
+    p.y = d.p.y();
+    p.gradX = Vec2d(d.dpdu.x(), d.dpdv.x());
+    p.gradY = Vec2d(d.dpdu.y(), d.dpdv.y());
+    p.j = p.gradX.x() * p.gradY.y() - p.gradX.y() * p.gradY.x();
+    const double scale = p.gradX.norm() * p.gradY.norm();
+    p.jn = scale > 0.0 ? p.j / scale : 0.0;
+    p.ok = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.j) && d.w > 0.0 &&
+           p.gradY.squaredNorm() > 0.0;
+    return p;
+  }
+
+ private:
+  // The unit tangent of the level curve, (-y_v, y_u) / |grad y|, times the walk's sense.
+  static Vec2d Tangent(const WalkPoint& p, double sense) {
+    return sense * Vec2d(-p.gradY.y(), p.gradY.x()) / p.gradY.norm();
+  }
+  static bool Inside(const Vec2d& uv) {
+    return uv.x() >= 0.0 && uv.x() <= 1.0 && uv.y() >= 0.0 && uv.y() <= 1.0;
+  }
+
+  // Back onto the level curve from q, moving along grad y (the shortest way to first
+  // order). Allowed to leave the domain slightly: the caller checks.
+  WalkPoint Correct(Vec2d q) const {
+    constexpr int kMaxCorrections = 12;
+    for (int k = 0; k < kMaxCorrections; ++k) {
+      const WalkPoint p = Eval(q);
+      if (!p.ok) return p;
+      const double f = p.y - ys_;
+      if (std::abs(f) <= kEdgeTolPx) return p;
+      q -= f * p.gradY / p.gradY.squaredNorm();
+    }
+    WalkPoint p = Eval(q);
+    p.ok = p.ok && std::abs(p.y - ys_) <= kEdgeTolPx;
+    return p;
+  }
+
+  // The point of the level curve at column c, by Newton from `seed`.
+  bool SolveColumn(int c, const Vec2d& seed, WalkPoint* out) const {
+    const double xs = cols_.At(c);
+    ++stats_->nNewtonCalls;
+    const auto r = SolveNewton2(
+        [&](const Vec2d& uv, Vec2d* f, Mat2d* jac) {
+          const WalkPoint p = Eval(uv);
+          *f = Vec2d(p.x - xs, p.y - ys_);
+          *jac << p.gradX.x(), p.gradX.y(), p.gradY.x(), p.gradY.y();
+          if (!p.ok) *f = Vec2d(NAN, NAN);
+        },
+        seed, Vec2d(kEdgeTolPx, kEdgeTolPx));
+    stats_->nNewtonIterations += r.iterations;
+    if (r.status != NewtonStatus::Converged) return false;
+    *out = Eval(r.uv);
+    return out->ok;
+  }
+
+  // The x direction in which the curve moves, going with `sense`: dx/ds = -J along
+  // (-y_v, y_u).
+  static int DirX(const WalkPoint& p, double sense) { return -sense * p.j > 0.0 ? 1 : -1; }
+
+  // The first column beyond x in direction dir, or -1 / n when there is none.
+  int NextColumn(double x, int dir) const {
+    if (dir > 0) return cols_.Ceil(x + kColumnEpsPx) < cols_.n ? cols_.Ceil(x + kColumnEpsPx) : cols_.n;
+    return cols_.Floor(x - kColumnEpsPx);
+  }
+
+  // Emits the columns passed going from a to b along an x-monotone arc of the curve:
+  // those in (x_a, x_b] (kColumnEpsPx beyond each). Seeds interpolate a and b by x; a
+  // failed solve splits the arc at its midpoint on the curve.
+  template <class Emit>
+  void EmitBetween(const WalkPoint& a, const WalkPoint& b, Emit& emit, int depth = 0) {
+    const int dir = b.x > a.x ? 1 : -1;
+    int c = NextColumn(a.x, dir);
+    for (; c >= 0 && c < cols_.n && dir * (cols_.At(c) - b.x) <= kColumnEpsPx; c += dir) {
+      const double t = (cols_.At(c) - a.x) / (b.x - a.x);
+      WalkPoint p;
+      const double reach = (b.uv - a.uv).norm();
+      if (SolveColumn(c, a.uv + std::clamp(t, 0.0, 1.0) * (b.uv - a.uv), &p) &&
+          (p.uv - a.uv).norm() <= 2.0 * reach + kSameCrossingUv) {
+        ++stats_->nColumnsSolved;
+        emit(c, p.uv);
+        continue;
+      }
+      // Split the arc at its midpoint and emit the rest of it in two halves.
+      const WalkPoint m = Correct(0.5 * (a.uv + b.uv));
+      if (depth < 16 && m.ok && dir * (m.x - a.x) >= 0 && dir * (b.x - m.x) >= 0) {
+        WalkPoint start = a;
+        if (c != NextColumn(a.x, dir)) {  // columns before c are done: start just before c
+          start.x = cols_.At(c - dir);
+        }
+        EmitBetween(start, m, emit, depth + 1);
+        EmitBetween(m, b, emit, depth + 1);
+      } else {
+        ++stats_->nFailures;
+      }
+      return;
+    }
+  }
+
+  // The silhouette point (J = 0) on the arc between a and b, whose J differ in sign:
+  // bisection on the chord projected onto the curve, then Newton on the silhouette
+  // trackers' system.
+  bool LocateSilhouette(WalkPoint a, WalkPoint b, WalkPoint* s) const {
+    constexpr double kBracketUv = 1e-5;  // Newton finishes from a bracket this small
+    constexpr int kMaxBisections = 60;
+    for (int k = 0; k < kMaxBisections && (b.uv - a.uv).norm() > kBracketUv; ++k) {
+      const WalkPoint m = Correct(0.5 * (a.uv + b.uv));
+      if (!m.ok) return false;
+      if ((m.j > 0) == (a.j > 0)) a = m;
+      else b = m;
+    }
+    const auto r = SolveNewton2(
+        [&](const Vec2d& uv, Vec2d* f, Mat2d* jac) { SilhouetteSystem(shape_, map_, ys_, uv, f, jac); },
+        0.5 * (a.uv + b.uv), Vec2d(kEdgeTolPx, kEdgeTolPx));
+    const double bracket = (b.uv - a.uv).norm();
+    if (r.status == NewtonStatus::Converged && (r.uv - 0.5 * (a.uv + b.uv)).norm() <= bracket + kSameCrossingUv) {
+      *s = Eval(r.uv);
+      if (s->ok) return true;
+    }
+    // Newton did not settle inside the bracket: keep bisecting to rounding.
+    for (int k = 0; k < kMaxBisections && (b.uv - a.uv).norm() > 1e-13; ++k) {
+      const WalkPoint m = Correct(0.5 * (a.uv + b.uv));
+      if (!m.ok) break;
+      if ((m.j > 0) == (a.j > 0)) a = m;
+      else b = m;
+    }
+    *s = std::abs(a.jn) < std::abs(b.jn) ? a : b;
+    return s->ok;
+  }
+
+  // Marks the silhouette tracker at s as passed; false if none holds it.
+  bool UseSilhouetteTracker(const Vec2d& uv) {
+    bool found = false;
+    for (size_t k = 0; k < trackers_->silhouettePoints.size(); ++k)
+      if ((trackers_->silhouettePoints[k] - uv).norm() <= kSameCrossingUv) {
+        (*silUsed_)[k] = 1;
+        found = true;
+      }
+    return found;
+  }
+  bool UseEdgeTracker(const Vec2d& uv) {
+    bool found = false;
+    for (size_t k = 0; k < trackers_->edgePoints.size(); ++k)
+      if ((trackers_->edgePoints[k] - uv).norm() <= kSameCrossingUv) {
+        (*edgeUsed_)[k] = 1;
+        found = true;
+      }
+    return found;
+  }
+
+  // Where the straight step from a to q (outside) crosses the boundary, the crossing of
+  // the level curve with that edge, by Newton along the edge.
+  bool ExitPoint(const WalkPoint& a, const Vec2d& q, WalkPoint* e) const {
+    double tHit = 1.0;
+    PatchEdge edge = PatchEdge::U0;
+    const Vec2d d = q - a.uv;
+    auto consider = [&](int axis, double bound, PatchEdge which) {
+      if (d[axis] == 0.0) return;
+      const double t = (bound - a.uv[axis]) / d[axis];
+      if (t >= 0.0 && t < tHit) {
+        tHit = t;
+        edge = which;
+      }
+    };
+    if (q.x() < 0.0) consider(0, 0.0, PatchEdge::U0);
+    if (q.x() > 1.0) consider(0, 1.0, PatchEdge::U1);
+    if (q.y() < 0.0) consider(1, 0.0, PatchEdge::V0);
+    if (q.y() > 1.0) consider(1, 1.0, PatchEdge::V1);
+    const Vec2d hit = a.uv + tHit * d;
+    const bool alongU = edge == PatchEdge::V0 || edge == PatchEdge::V1;  // t runs along u
+    const auto r = SolveNewton1(
+        [&](double t, double* f, double* df) {
+          const WalkPoint p = Eval(EdgePoint(edge, t));
+          *f = p.ok ? p.y - ys_ : NAN;
+          *df = alongU ? p.gradY.x() : p.gradY.y();
+        },
+        alongU ? hit.x() : hit.y(), 0.0, 1.0, kEdgeTolPx);
+    if (r.status != NewtonStatus::Converged) return false;
+    *e = Eval(EdgePoint(edge, r.t));
+    return e->ok;
+  }
+
+  // Passes from a to b, an arc of the curve: emits its columns, splitting it at a
+  // silhouette point where J changes sign. Returns the silhouette point when one was
+  // passed (for closed walks), via *passed.
+  template <class Emit>
+  bool Pass(const WalkPoint& a, const WalkPoint& b, Emit& emit, WalkPoint* passed) {
+    const bool aOnSil = std::abs(a.jn) <= kOnSilhouetteJn;
+    if (!aOnSil && (a.j > 0) != (b.j > 0) && std::abs(b.jn) > kOnSilhouetteJn) {
+      WalkPoint s;
+      if (!LocateSilhouette(a, b, &s)) {
+        ++stats_->nFailures;
+        EmitBetween(a, b, emit);
+        return false;
+      }
+      ++stats_->nSilhouettes;
+      if (!UseSilhouetteTracker(s.uv)) ++stats_->nUntrackedSilhouettes;
+      EmitBetween(a, s, emit);
+      EmitBetween(s, b, emit);
+      *passed = s;
+      return true;
+    }
+    EmitBetween(a, b, emit);
+    return false;
+  }
+
+  // A point with |J| / (|grad x| |grad y|) below this is on the silhouette (the start of a
+  // closed walk): its sign says nothing.
+  static constexpr double kOnSilhouetteJn = 1e-9;
+
+  // One step from p along the curve. Returns the next point; sets *exit when the curve
+  // left the domain (the returned point is then the exit on the boundary).
+  enum class Step { Ok, Exit, Lost };
+  template <class Emit>
+  Step Advance(WalkPoint* p, double sense, double* h, Emit& emit, WalkPoint* passed, bool* didPass) {
+    *didPass = false;
+    for (;;) {
+      if (*h < kWalkStepMin) return Step::Lost;
+      const Vec2d tan = Tangent(*p, sense);
+      // Aim at the next column when it is within the step (first order).
+      const bool onSil = std::abs(p->jn) <= kOnSilhouetteJn;
+      const int dir = DirX(*p, sense);
+      const int c = NextColumn(p->x, dir);
+      double hColumn = INFINITY;
+      if (!onSil && c >= 0 && c < cols_.n)
+        hColumn = std::abs(cols_.At(c) - p->x) * p->gradY.norm() / std::abs(p->j);
+      const bool aimed = hColumn <= *h;
+      const double step = aimed ? hColumn : *h;
+      const Vec2d q = p->uv + step * tan;
+      WalkPoint next;
+      bool ok;
+      if (aimed) {
+        ++stats_->nColumnSteps;
+        ok = Inside(q) && SolveColumn(c, q, &next);
+      } else {
+        ++stats_->nArcSteps;
+        next = Correct(q);
+        ok = next.ok;
+      }
+      if (!Inside(q) || (ok && !Inside(next.uv))) {
+        WalkPoint e;
+        if (ExitPoint(*p, Inside(q) ? next.uv : q, &e) && (e.uv - p->uv).norm() <= 2.0 * step + kSameCrossingUv &&
+            Tangent(e, sense).dot(tan) >= std::cos(kWalkMaxTurn)) {
+          *didPass = Pass(*p, e, emit, passed);
+          *p = e;
+          return Step::Exit;
+        }
+        *h = 0.5 * step;
+        continue;
+      }
+      if (!ok || (next.uv - p->uv).norm() > 2.0 * step + kSameCrossingUv ||
+          Tangent(next, sense).dot(tan) < std::cos(kWalkMaxTurn) ||
+          (aimed && (next.j > 0) != (p->j > 0))) {
+        *h = 0.5 * step;
+        continue;
+      }
+      if (aimed) {
+        ++stats_->nColumnsSolved;
+        emit(c, next.uv);
+        *p = next;
+        return Step::Ok;
+      }
+      *didPass = Pass(*p, next, emit, passed);
+      *p = next;
+      *h = std::min(2.0 * *h, kWalkStepMax);
+      return Step::Ok;
+    }
+  }
+
+  long MaxSteps() const { return kWalkMaxStepsBase + kWalkMaxStepsPerColumn * cols_.n; }
+
+  template <class Emit>
+  void WalkFromEdge(const Vec2d& uv, PatchEdge edge, Emit& emit) {
+    ++stats_->nWalks;
+    WalkPoint p = Eval(uv);
+    if (!p.ok) {
+      ++stats_->nFailures;
+      return;
+    }
+    // The sense whose tangent points into the domain.
+    const Vec2d t = Tangent(p, 1.0);
+    double inward = 0.0;
+    switch (edge) {
+      case PatchEdge::U0: inward = t.x(); break;
+      case PatchEdge::U1: inward = -t.x(); break;
+      case PatchEdge::V0: inward = t.y(); break;
+      case PatchEdge::V1: inward = -t.y(); break;
+    }
+    // The curve only touches the edge here (the scan line at an edge extremum).
+    constexpr double kTangentialInward = 1e-12;
+    if (std::abs(inward) <= kTangentialInward) return;
+    const double sense = inward > 0 ? 1.0 : -1.0;
+    // A column exactly at the start belongs to this curve.
+    const int c0 = cols_.Ceil(p.x - kColumnEpsPx);
+    if (c0 < cols_.n && std::abs(cols_.At(c0) - p.x) <= kColumnEpsPx) emit(c0, p.uv);
+    double h = kWalkStepStart;
+    WalkPoint passed;
+    bool didPass;
+    for (long k = 0; k < MaxSteps(); ++k) {
+      const Step st = Advance(&p, sense, &h, emit, &passed, &didPass);
+      if (st == Step::Lost) break;
+      if (st == Step::Exit) {
+        if (!UseEdgeTracker(p.uv)) ++stats_->nUntrackedExits;
+        return;
+      }
+    }
+    ++stats_->nFailures;
+  }
+
+  template <class Emit>
+  void WalkClosed(const Vec2d& uv, Emit& emit) {
+    WalkPoint start = Eval(uv);
+    if (!start.ok || std::abs(start.y - ys_) > 1e3 * kEdgeTolPx) return;  // not a crossing
+    ++stats_->nWalks;
+    ++stats_->nClosedWalks;
+    WalkPoint p = start;
+    p.jn = 0.0;  // the start is on the silhouette whatever rounding says
+    double h = kWalkStepStart;
+    WalkPoint passed;
+    bool didPass;
+    for (long k = 0; k < MaxSteps(); ++k) {
+      const Step st = Advance(&p, 1.0, &h, emit, &passed, &didPass);
+      if (st == Step::Lost) break;
+      if (didPass && (passed.uv - start.uv).norm() <= kSameCrossingUv) return;  // round
+      if (st == Step::Exit) {
+        // Not closed after all: it reached the boundary, whose edge walks did not reach
+        // this tracker. Walk the other way too, and count a miss.
+        if (!UseEdgeTracker(p.uv)) ++stats_->nUntrackedExits;
+        WalkPoint back = start;
+        back.jn = 0.0;
+        double hb = kWalkStepStart;
+        for (long kb = 0; kb < MaxSteps(); ++kb) {
+          const Step sb = Advance(&back, -1.0, &hb, emit, &passed, &didPass);
+          if (sb == Step::Lost) break;
+          if (sb == Step::Exit) {
+            if (!UseEdgeTracker(back.uv)) ++stats_->nUntrackedExits;
+            return;
+          }
+        }
+        ++stats_->nFailures;
+        return;
+      }
+    }
+    ++stats_->nFailures;
+  }
+
+  const ShapeT& shape_;
+  const ScreenMap& map_;
+  double ys_;
+  raster::SampleColumns cols_;
+  WalkStats* stats_;
+  const RowTrackers* trackers_ = nullptr;
+  std::vector<char>*edgeUsed_ = nullptr, *silUsed_ = nullptr;
+};
+
+}  // namespace patchscan
