@@ -15,6 +15,7 @@
 #include "raster/scanline_renderer.h"
 #include "raster/texture.h"
 #include "xscan/exact_scan.h"
+#include "xscan/overlay.h"
 #include "xscan/tess_feed.h"
 
 namespace patchscan::cli {
@@ -76,6 +77,14 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   cmd->add_flag("--no-extrapolate", o->noExtrapolate,
                 "exact mode: start each tracker's Newton iteration from its last position "
                 "instead of extrapolating from its last two (to measure what extrapolation saves)");
+  cmd->add_option("--overlay", o->overlay,
+                  "exact mode: trackers = draw what the scan did over the image: each tracker's "
+                  "path as dots (boundary-edge trackers blue, silhouette trackers red) and each "
+                  "event as a ring (maximum passed yellow, saddle magenta, fold green, "
+                  "silhouette tracker born pink, tracker died black, crossing repaired by the "
+                  "x scan orange, walk or sample given up cyan)")
+      ->check(CLI::IsMember({"none", "trackers"}))
+      ->capture_default_str();
   cmd->add_option("--tess-rate", o->tessRate, "tessellation segments per patch edge (uniform)")
       ->check(CLI::Range(1, kMaxTessRate))
       ->capture_default_str();
@@ -131,6 +140,10 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   if (exact && (o.shading != "phong" || o.hiddenLine)) {
     err << "patchscan: --mode exact shades every sample with its exact normal: --shading "
            "flat/gouraud and --hidden-line need a triangle mode (--mode tess)\n";
+    return kExitUsage;
+  }
+  if (!exact && o.overlay != "none") {
+    err << "patchscan: --overlay trackers draws the exact scan's trackers: it needs --mode exact\n";
     return kExitUsage;
   }
 
@@ -189,8 +202,16 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
     return kExitUsage;
   }
   auto& writer = *std::get<std::unique_ptr<raster::ImageWriter>>(opened);
-  ProgressSink progress(writer, camera.height, err);
-  const auto stats = exact ? raster::RenderFragments(*scan, s, progress) : raster::RenderMesh(mesh, s, progress);
+  std::unique_ptr<TrackerOverlay> overlay;
+  raster::RowSink* out = &writer;
+  if (o.overlay == "trackers") {
+    overlay = std::make_unique<TrackerOverlay>(writer, camera.width, camera.height);
+    scan->SetTrace(overlay.get());
+    out = overlay.get();
+  }
+  ProgressSink progress(*out, camera.height, err);
+  auto stats = exact ? raster::RenderFragments(*scan, s, progress) : raster::RenderMesh(mesh, s, progress);
+  if (stats && overlay && !overlay->Finish()) stats.reset();
   if (!stats) {
     if (texture && !texture->Error().empty()) {
       err << "patchscan: " << texture->Error() << '\n';

@@ -82,16 +82,19 @@ EdgeScan::EdgeScan(const Surface& s, const ScreenMap& map, bool extrapolate, dou
                    [](const EdgePiece& a, const EdgePiece& b) { return a.yTop < b.yTop; });
   trackers_.reserve(pieces_.size());
   folds_.reserve(2 * pieces_.size());
+  deaths_.reserve(pieces_.size());
 }
 
 void EdgeScan::Advance(double yScan) {
   VisitShape(surface_, [&](const auto& shape) {
     // Step 1: delete trackers whose piece the scan line has left (a minimum, §3.2.3).
     folds_.clear();
+    deaths_.clear();
     std::erase_if(trackers_, [&](const EdgeTracker& t) {
       const EdgePiece& p = pieces_[t.piece];
       if (p.yBottom >= yScan) return false;
       ++stats_.nDeleted;
+      deaths_.push_back(EdgePoint(p.edge, t.t));
       const double bottom = SampleEdge(shape, map_, p.edge, p.t0).y >= p.yBottom ? p.t0 : p.t1;
       const double j = SampleEdge(shape, map_, p.edge, bottom).j;
       if ((j > 0 && t.j < 0) || (j < 0 && t.j > 0)) {

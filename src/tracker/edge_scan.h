@@ -79,6 +79,8 @@ class EdgeScan {
   // a tracker whose J changed sign (its position), or a tracker deleted at the bottom of
   // its piece after J changed sign on the way there (that end). Refilled by Advance.
   const std::vector<Vec2d>& Folds() const { return folds_; }
+  // Where trackers died (their last position) at the latest Advance.
+  const std::vector<Vec2d>& Deaths() const { return deaths_; }
   Vec2d Uv(const EdgeTracker& t) const { return EdgePoint(pieces_[t.piece].edge, t.t); }
 
  private:
@@ -88,7 +90,7 @@ class EdgeScan {
   double tolerancePx_;
   std::vector<EdgePiece> pieces_;   // sorted by yTop
   std::vector<EdgeTracker> trackers_;
-  std::vector<Vec2d> folds_;
+  std::vector<Vec2d> folds_, deaths_;
   size_t nextPiece_ = 0;
   EdgeScanStats stats_;
 };

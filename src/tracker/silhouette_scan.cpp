@@ -39,6 +39,8 @@ bool SilhouetteScan::Solve(const ShapeT& shape, double yScan, const Vec2d& start
 template <class ShapeT>
 void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeScan& edges) {
   // Step 1: move the existing trackers; a failure is a minimum or an exit (§3.2.3).
+  deaths_.clear();
+  births_.clear();
   std::erase_if(trackers_, [&](SilhouetteTracker& t) {
     const Vec2d start = extrapolate_ && t.hasPrev ? Vec2d(2.0 * t.uv - t.uvPrev) : t.uv;
     Vec2d uv;
@@ -47,6 +49,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     // stalls on the boundary and fails.
     if (!Solve(shape, yScan, start, &uv, DomainRule::Clip)) {
       ++stats_.nDeletedFailed;
+      deaths_.push_back(t.uv);
       return true;
     }
     t.uvPrev = t.uv;
@@ -62,6 +65,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     for (const SilhouetteTracker& t : trackers_)
       if ((t.uv - uv).norm() < kSameTrackerUv) return true;  // already tracked
     trackers_.push_back({uv, uv, false});
+    births_.push_back(uv);
     ++*counter;
     return true;
   };

@@ -66,6 +66,10 @@ class SilhouetteScan {
 
   const std::vector<SilhouetteTracker>& Trackers() const { return trackers_; }
   const SilhouetteScanStats& Stats() const { return stats_; }
+  // Where trackers were born and where they died (their last position) at the latest
+  // Advance.
+  const std::vector<Vec2d>& Births() const { return births_; }
+  const std::vector<Vec2d>& Deaths() const { return deaths_; }
 
  private:
   template <class ShapeT>
@@ -79,6 +83,7 @@ class SilhouetteScan {
   size_t nextStationary_ = 0;
   bool extrapolate_;
   std::vector<SilhouetteTracker> trackers_;
+  std::vector<Vec2d> births_, deaths_;
   SilhouetteScanStats stats_;
 };
 

@@ -16,6 +16,9 @@ struct ExactScan::Active {
   Eigen::Matrix3d normalFromObject;
   std::unique_ptr<EdgeScan> edges;
   std::unique_ptr<SilhouetteScan> silhouettes;
+  // For the trace: the stationary points in screen space, by y, and the next to pass.
+  std::vector<std::pair<TraceKind, Vec2>> stationary;
+  std::size_t nextStationary = 0;
 };
 
 namespace {
@@ -60,6 +63,12 @@ void ExactScan::Activate(std::size_t index, double y, double spacing) {
     if (p.index == index) a->yMax = p.yMax;
   std::vector<Stationary> stationary = FindStationaryPoints(s, a->map);
   stats_.nStationary += static_cast<long>(stationary.size());
+  for (const Stationary& p : stationary) {
+    ScreenDerivs d;
+    EvaluateScreen(s, a->map, p.uv.x(), p.uv.y(), DerivOrder::Position, &d);
+    a->stationary.push_back({p.kind == StationaryKind::Saddle ? TraceKind::Saddle : TraceKind::Maximum,
+                             Vec2(d.p.x(), d.p.y())});
+  }  // FindStationaryPoints sorts by y
   double yTop = y;
   for (const Stationary& p : stationary) yTop = std::min(yTop, p.y);
   a->edges = std::make_unique<EdgeScan>(s, a->map, options_.extrapolate);
@@ -135,6 +144,7 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
     }
     for (const SilhouetteTracker& t : a.silhouettes->Trackers()) rowTrackers_.silhouettePoints.push_back(t.uv);
     stats_.nTrackerSteps += static_cast<long>(a.edges->Trackers().size() + a.silhouettes->Trackers().size());
+    walkEvents_.Clear();
 
     VisitShape(surface, [&](const auto& shape) {
       auto emit = [&](int column, const Vec2d& uv) {
@@ -161,11 +171,32 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
         ++stats_.nFragments;
         out.Add(column, f);
       };
-      LevelWalker walker(shape, a.map, y, columns, &stats_.walk);
+      LevelWalker walker(shape, a.map, y, columns, &stats_.walk, trace_ ? &walkEvents_ : nullptr);
       walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, emit);
     });
+    if (trace_) TraceRow(a, y);
   }
   return true;
+}
+
+void ExactScan::TraceRow(Active& a, double y) {
+  const Surface& s = surfaces_[a.index];
+  auto mark = [&](TraceKind kind, const Vec2d& uv) {
+    ScreenDerivs d;
+    EvaluateScreen(s, a.map, uv.x(), uv.y(), DerivOrder::Position, &d);
+    if (d.w > 0.0) trace_->Mark(kind, d.p.x(), d.p.y());
+  };
+  for (const Vec2d& uv : rowTrackers_.edgePoints) mark(TraceKind::EdgeTracker, uv);
+  for (const Vec2d& uv : rowTrackers_.silhouettePoints) mark(TraceKind::SilhouetteTracker, uv);
+  for (; a.nextStationary < a.stationary.size() && a.stationary[a.nextStationary].second.y() <= y; ++a.nextStationary)
+    trace_->Mark(a.stationary[a.nextStationary].first, a.stationary[a.nextStationary].second.x(),
+                 a.stationary[a.nextStationary].second.y());
+  for (const Vec2d& uv : a.edges->Folds()) mark(TraceKind::Fold, uv);
+  for (const Vec2d& uv : a.silhouettes->Births()) mark(TraceKind::Birth, uv);
+  for (const Vec2d& uv : a.edges->Deaths()) mark(TraceKind::Death, uv);
+  for (const Vec2d& uv : a.silhouettes->Deaths()) mark(TraceKind::Death, uv);
+  for (const Vec2d& uv : walkEvents_.repairs) mark(TraceKind::Repair, uv);
+  for (const Vec2d& uv : walkEvents_.failures) mark(TraceKind::Failure, uv);
 }
 
 }  // namespace patchscan

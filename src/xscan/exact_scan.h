@@ -18,6 +18,7 @@
 #include "tracker/maxima.h"
 #include "tracker/silhouette_scan.h"
 #include "xscan/level_walk.h"
+#include "xscan/trace.h"
 
 namespace patchscan {
 
@@ -44,6 +45,9 @@ class ExactScan final : public raster::FragmentSource {
 
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 
+  // Marks every tracker position and event on `trace` from the next row on (null: none).
+  void SetTrace(TraceSink* trace) { trace_ = trace; }
+
   // Totals so far, including the surfaces still active.
   ExactScanStats Stats() const;
 
@@ -51,6 +55,7 @@ class ExactScan final : public raster::FragmentSource {
   struct Active;
   void Activate(size_t index, double y, double spacing);
   void Retire(Active& a);
+  void TraceRow(Active& a, double y);
 
   std::span<const Surface> surfaces_;
   Camera camera_;
@@ -63,6 +68,8 @@ class ExactScan final : public raster::FragmentSource {
   std::size_t nextPending_ = 0;
   std::vector<std::unique_ptr<Active>> active_;
   RowTrackers rowTrackers_;
+  WalkEvents walkEvents_;
+  TraceSink* trace_ = nullptr;
   std::vector<char> edgeUsed_, silUsed_;
   ExactScanStats stats_;
 };

@@ -35,6 +35,15 @@ struct WalkStats {
   long nFailures = 0;              // walks or samples given up
 };
 
+// Where the walks repaired a tracker miss and where they gave up, for the trace.
+struct WalkEvents {
+  std::vector<Vec2d> repairs, failures;
+  void Clear() {
+    repairs.clear();
+    failures.clear();
+  }
+};
+
 // A scan line's trackers of one surface, the walk's starting points.
 struct RowTrackers {
   std::vector<Vec2d> edgePoints;        // on the boundary, y = ys
@@ -78,9 +87,10 @@ template <class ShapeT>
 class LevelWalker {
  public:
   // Emit(column, uv): the surface point at sample column `column` of the row.
+  // `events` may be null.
   LevelWalker(const ShapeT& shape, const ScreenMap& map, double ys,
-              const raster::SampleColumns& cols, WalkStats* stats)
-      : shape_(shape), map_(map), ys_(ys), cols_(cols), stats_(stats) {}
+              const raster::SampleColumns& cols, WalkStats* stats, WalkEvents* events = nullptr)
+      : shape_(shape), map_(map), ys_(ys), cols_(cols), stats_(stats), events_(events) {}
 
   // Walks every curve of the row. `edgeUsed` and `silUsed` are scratch (resized here).
   template <class Emit>
@@ -122,6 +132,15 @@ class LevelWalker {
   }
 
  private:
+  void Failed(const Vec2d& uv) {
+    ++stats_->nFailures;
+    if (events_) events_->failures.push_back(uv);
+  }
+  void Repaired(const Vec2d& uv, long WalkStats::*counter) {
+    ++(stats_->*counter);
+    if (events_) events_->repairs.push_back(uv);
+  }
+
   // The unit tangent of the level curve, (-y_v, y_u) / |grad y|, times the walk's sense.
   static Vec2d Tangent(const WalkPoint& p, double sense) {
     return sense * Vec2d(-p.gradY.y(), p.gradY.x()) / p.gradY.norm();
@@ -201,7 +220,7 @@ class LevelWalker {
         EmitBetween(start, m, emit, depth + 1);
         EmitBetween(m, b, emit, depth + 1);
       } else {
-        ++stats_->nFailures;
+        Failed(c >= 0 && c < cols_.n ? a.uv : b.uv);
       }
       return;
     }
@@ -299,12 +318,12 @@ class LevelWalker {
     if (!aOnSil && (a.j > 0) != (b.j > 0) && std::abs(b.jn) > kOnSilhouetteJn) {
       WalkPoint s;
       if (!LocateSilhouette(a, b, &s)) {
-        ++stats_->nFailures;
+        Failed(a.uv);
         EmitBetween(a, b, emit);
         return false;
       }
       ++stats_->nSilhouettes;
-      if (!UseSilhouetteTracker(s.uv)) ++stats_->nUntrackedSilhouettes;
+      if (!UseSilhouetteTracker(s.uv)) Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
       EmitBetween(a, s, emit);
       EmitBetween(s, b, emit);
       *passed = s;
@@ -384,7 +403,7 @@ class LevelWalker {
     ++stats_->nWalks;
     WalkPoint p = Eval(uv);
     if (!p.ok) {
-      ++stats_->nFailures;
+      Failed(uv);
       return;
     }
     // The sense whose tangent points into the domain.
@@ -410,11 +429,11 @@ class LevelWalker {
       const Step st = Advance(&p, sense, &h, emit, &passed, &didPass);
       if (st == Step::Lost) break;
       if (st == Step::Exit) {
-        if (!UseEdgeTracker(p.uv)) ++stats_->nUntrackedExits;
+        if (!UseEdgeTracker(p.uv)) Repaired(p.uv, &WalkStats::nUntrackedExits);
         return;
       }
     }
-    ++stats_->nFailures;
+    Failed(p.uv);
   }
 
   template <class Emit>
@@ -435,7 +454,7 @@ class LevelWalker {
       if (st == Step::Exit) {
         // Not closed after all: it reached the boundary, whose edge walks did not reach
         // this tracker. Walk the other way too, and count a miss.
-        if (!UseEdgeTracker(p.uv)) ++stats_->nUntrackedExits;
+        if (!UseEdgeTracker(p.uv)) Repaired(p.uv, &WalkStats::nUntrackedExits);
         WalkPoint back = start;
         back.jn = 0.0;
         double hb = kWalkStepStart;
@@ -443,15 +462,15 @@ class LevelWalker {
           const Step sb = Advance(&back, -1.0, &hb, emit, &passed, &didPass);
           if (sb == Step::Lost) break;
           if (sb == Step::Exit) {
-            if (!UseEdgeTracker(back.uv)) ++stats_->nUntrackedExits;
+            if (!UseEdgeTracker(back.uv)) Repaired(back.uv, &WalkStats::nUntrackedExits);
             return;
           }
         }
-        ++stats_->nFailures;
+        Failed(back.uv);
         return;
       }
     }
-    ++stats_->nFailures;
+    Failed(p.uv);
   }
 
   const ShapeT& shape_;
@@ -459,6 +478,7 @@ class LevelWalker {
   double ys_;
   raster::SampleColumns cols_;
   WalkStats* stats_;
+  WalkEvents* events_;
   const RowTrackers* trackers_ = nullptr;
   std::vector<char>*edgeUsed_ = nullptr, *silUsed_ = nullptr;
 };
