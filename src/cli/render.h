@@ -12,7 +12,7 @@ namespace patchscan::cli {
 
 struct RenderOptions {
   std::string file, output;
-  std::string mode = "tess";
+  std::string mode = "exact";
   bool noExtrapolate = false;
   std::string overlay = "none";
   int tessRate = 8;

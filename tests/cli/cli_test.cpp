@@ -110,6 +110,7 @@ TEST(Cli, HelpDocumentsEveryOptionWithDefaults) {
   EXPECT_EQ(r.code, 0);
   for (const char* word : {"info", "render", "--output", "--mode", "--tess-rate", "--aa",
                            "--shading", "--texture", "--cull-backfaces", "--stats", "--stats-json",
+                           "--overlay", "--no-extrapolate", "exact",
                            "--size", "640x480", "--eye", "--look-at", "--up", "--fov", "30",
                            "--hither", "--version", "Exit codes"})
     EXPECT_NE(r.out.find(word), std::string::npos) << "help lacks " << word << "\n" << r.out;
@@ -122,11 +123,38 @@ TEST(Cli, RenderWritesTheImage) {
   const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_render";
   std::filesystem::create_directories(dir);
   const std::string out = (dir / "teapot.png").string();
-  const Result r = Patchscan("render " + kTeapot + " -o " + out + " --size 96x72 --tess-rate 4 --stats");
+  const Result r = Patchscan("render " + kTeapot + " -o " + out + " --size 96x72 --mode tess --tess-rate 4 --stats");
   ASSERT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(out));
   EXPECT_NE(r.err.find("triangles n: 1024"), std::string::npos) << r.err;  // 32 x 4 x 4 x 2
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), {}), 1);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, ExactModeIsTheDefaultAndReportsItsTrackers) {
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_exact";
+  std::filesystem::create_directories(dir);
+  const std::string out = (dir / "teapot.png").string(), js = (dir / "stats.json").string();
+  Result r = Patchscan("render " + kTeapot + " -o " + out + " --size 96x72 --stats --stats-json " + js +
+                       " --overlay trackers");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(out));
+  for (const char* line : {"surfaces: 32", "Newton iterations per tracker per row", "x scan: ",
+                           "repairs: ", "samples covered: "})
+    EXPECT_NE(r.err.find(line), std::string::npos) << "missing '" << line << "' in\n" << r.err;
+  const std::string json = Slurp(js);
+  for (const char* key : {"\"mode\": \"exact\"", "\"newton_iterations_per_tracker_row\": ",
+                          "\"untracked_silhouettes\": ", "\"failures\": 0"})
+    EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
+  // What needs triangles is refused in exact mode, and the overlay outside it.
+  for (const char* args : {" --shading flat", " --shading gouraud", " --hidden-line",
+                           " --mode tess --overlay trackers"}) {
+    std::filesystem::remove(out);
+    r = Patchscan("render " + kTeapot + " -o " + out + " --size 32x24" + args);
+    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_NE(r.err.find("--mode"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+  }
   std::filesystem::remove_all(dir);
 }
 
