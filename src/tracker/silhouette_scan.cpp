@@ -119,6 +119,13 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
       }
 }
 
+void SilhouetteScan::Adopt(const Vec2d& uv) {
+  for (const SilhouetteTracker& t : trackers_)
+    if ((t.uv - uv).norm() < kSameTrackerUv) return;
+  trackers_.push_back({uv, uv, false});
+  ++stats_.nAdopted;
+}
+
 void SilhouetteScan::Advance(double yScan, const EdgeScan& edges) {
   VisitShape(surface_, [&](const auto& shape) { AdvanceImpl(shape, yScan, edges); });
 }

@@ -26,6 +26,7 @@ struct SilhouetteScanStats {
   long nNewtonCalls = 0, nNewtonIterations = 0;
   long nCreatedAtMaxima = 0, nCreatedAtFolds = 0, nCreatedAtSaddles = 0;
   long nDeletedFailed = 0, nDeletedLeft = 0, nMerged = 0;
+  long nAdopted = 0;  // repairs: crossings found by the X scan and tracked from then on
 };
 
 // Both equations are solved in pixels: y - yScan, and J / max(|s_u|, |s_v|), to the edge
@@ -63,6 +64,11 @@ class SilhouetteScan {
   // Moves to scan line yScan (non-decreasing); `edges` must already be at yScan (its
   // folds create trackers here).
   void Advance(double yScan, const EdgeScan& edges);
+
+  // Takes up a crossing of the current scan line found by other means (the X scan's walk
+  // along the level curve passed a silhouette no tracker held): a repair, tracked from
+  // the next scan line on. Ignored if a tracker is already there.
+  void Adopt(const Vec2d& uv);
 
   const std::vector<SilhouetteTracker>& Trackers() const { return trackers_; }
   const SilhouetteScanStats& Stats() const { return stats_; }

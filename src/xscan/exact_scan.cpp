@@ -103,6 +103,7 @@ void AddSilhouetteStats(SilhouetteScanStats* to, const SilhouetteScanStats& s) {
   to->nDeletedFailed += s.nDeletedFailed;
   to->nDeletedLeft += s.nDeletedLeft;
   to->nMerged += s.nMerged;
+  to->nAdopted += s.nAdopted;
 }
 
 }  // namespace
@@ -171,9 +172,11 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
         ++stats_.nFragments;
         out.Add(column, f);
       };
-      LevelWalker walker(shape, a.map, y, columns, &stats_.walk, trace_ ? &walkEvents_ : nullptr);
+      LevelWalker walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_);
       walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, emit);
     });
+    // Silhouettes the walk found without a tracker are tracked from the next row on.
+    for (const Vec2d& uv : walkEvents_.untrackedSilhouettes) a.silhouettes->Adopt(uv);
     if (trace_) TraceRow(a, y);
   }
   return true;

@@ -38,9 +38,11 @@ struct WalkStats {
 // Where the walks repaired a tracker miss and where they gave up, for the trace.
 struct WalkEvents {
   std::vector<Vec2d> repairs, failures;
+  std::vector<Vec2d> untrackedSilhouettes;  // also in repairs: for the Y scan to adopt
   void Clear() {
     repairs.clear();
     failures.clear();
+    untrackedSilhouettes.clear();
   }
 };
 
@@ -323,7 +325,10 @@ class LevelWalker {
         return false;
       }
       ++stats_->nSilhouettes;
-      if (!UseSilhouetteTracker(s.uv)) Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
+      if (!UseSilhouetteTracker(s.uv)) {
+        Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
+        if (events_) events_->untrackedSilhouettes.push_back(s.uv);
+      }
       EmitBetween(a, s, emit);
       EmitBetween(s, b, emit);
       *passed = s;
