@@ -148,13 +148,11 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
     walkEvents_.Clear();
 
     VisitShape(surface, [&](const auto& shape) {
-      auto emit = [&](int column, const Vec2d& uv) {
-        SurfaceDerivs o;
-        shape.Evaluate(uv.x(), uv.y(), DerivOrder::First, &o);
-        ScreenDerivs sd;
-        a.map.FromObject(o, DerivOrder::First, &sd);
+      auto emit = [&](int column, const WalkPoint& p) {
+        const SurfaceDerivs& o = p.object;
+        const Vec2d& uv = p.uv;
         raster::Fragment f;
-        f.w = sd.w;
+        f.w = p.w;
         f.position = surface.worldFromObject * o.p;
         const Vec3 n = o.dpdu.cross(o.dpdv);
         // As WorldNormal: relative to the derivatives, below this the cross product is
@@ -165,9 +163,9 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
         else
           f.normal = WorldNormal(surface, uv.x(), uv.y());
         f.uv = uv;
-        const double j = sd.dpdu.x() * sd.dpdv.y() - sd.dpdv.x() * sd.dpdu.y();
-        f.duvdx = ClampLength(Vec2(sd.dpdv.y(), -sd.dpdu.y()) / j, kMaxUvPerPixel);
-        f.duvdy = ClampLength(Vec2(-sd.dpdv.x(), sd.dpdu.x()) / j, kMaxUvPerPixel);
+        // The inverse of the screen Jacobian [x_u x_v; y_u y_v]: uv per pixel in x and y.
+        f.duvdx = ClampLength(Vec2(p.gradY.y(), -p.gradY.x()) / p.j, kMaxUvPerPixel);
+        f.duvdy = ClampLength(Vec2(-p.gradX.y(), p.gradX.x()) / p.j, kMaxUvPerPixel);
         f.surfaceId = static_cast<std::uint32_t>(a.index);
         ++stats_.nFragments;
         out.Add(column, f);

@@ -82,13 +82,15 @@ struct WalkPoint {
   Vec2d gradX, gradY;
   double j = 0.0;   // J = x_u y_v - x_v y_u
   double jn = 0.0;  // J / (|grad x| |grad y|): the sine of the angle, scale-free
+  double w = 0.0;   // eye distance
+  SurfaceDerivs object;  // position and first derivatives in object space
   bool ok = false;
 };
 
 template <class ShapeT>
 class LevelWalker {
  public:
-  // Emit(column, uv): the surface point at sample column `column` of the row.
+  // Emit(column, const WalkPoint&): the surface point at sample column `column` of the row.
   // `events` may be null.
   LevelWalker(const ShapeT& shape, const ScreenMap& map, double ys,
               const raster::SampleColumns& cols, WalkStats* stats, WalkEvents* events = nullptr)
@@ -120,7 +122,9 @@ class LevelWalker {
     WalkPoint p;
     p.uv = uv;
     ScreenDerivs d;
-    EvaluateScreen(shape_, map_, uv.x(), uv.y(), DerivOrder::First, &d);
+    shape_.Evaluate(uv.x(), uv.y(), DerivOrder::First, &p.object);
+    map_.FromObject(p.object, DerivOrder::First, &d);
+    p.w = d.w;
     p.x = d.p.x();
     p.y = d.p.y();
     p.gradX = Vec2d(d.dpdu.x(), d.dpdv.x());
@@ -171,9 +175,11 @@ class LevelWalker {
   bool SolveColumn(int c, const Vec2d& seed, WalkPoint* out) const {
     const double xs = cols_.At(c);
     ++stats_->nNewtonCalls;
+    // The solver's last evaluation is at the point it returns: kept, not repeated.
     const auto r = SolveNewton2(
         [&](const Vec2d& uv, Vec2d* f, Mat2d* jac) {
-          const WalkPoint p = Eval(uv);
+          *out = Eval(uv);
+          const WalkPoint& p = *out;
           *f = Vec2d(p.x - xs, p.y - ys_);
           *jac << p.gradX.x(), p.gradX.y(), p.gradY.x(), p.gradY.y();
           if (!p.ok) *f = Vec2d(NAN, NAN);
@@ -181,7 +187,7 @@ class LevelWalker {
         seed, Vec2d(kEdgeTolPx, kEdgeTolPx));
     stats_->nNewtonIterations += r.iterations;
     if (r.status != NewtonStatus::Converged) return false;
-    *out = Eval(r.uv);
+    if (out->uv != r.uv) *out = Eval(r.uv);
     return out->ok;
   }
 
@@ -209,7 +215,7 @@ class LevelWalker {
       if (SolveColumn(c, a.uv + std::clamp(t, 0.0, 1.0) * (b.uv - a.uv), &p) &&
           (p.uv - a.uv).norm() <= 2.0 * reach + kSameCrossingUv) {
         ++stats_->nColumnsSolved;
-        emit(c, p.uv);
+        emit(c, p);
         continue;
       }
       // Split the arc at its midpoint and emit the rest of it in two halves.
@@ -390,7 +396,7 @@ class LevelWalker {
       }
       if (aimed) {
         ++stats_->nColumnsSolved;
-        emit(c, next.uv);
+        emit(c, next);
         *p = next;
         return Step::Ok;
       }
@@ -426,7 +432,7 @@ class LevelWalker {
     const double sense = inward > 0 ? 1.0 : -1.0;
     // A column exactly at the start belongs to this curve.
     const int c0 = cols_.Ceil(p.x - kColumnEpsPx);
-    if (c0 < cols_.n && std::abs(cols_.At(c0) - p.x) <= kColumnEpsPx) emit(c0, p.uv);
+    if (c0 < cols_.n && std::abs(cols_.At(c0) - p.x) <= kColumnEpsPx) emit(c0, p);
     double h = kWalkStepStart;
     WalkPoint passed;
     bool didPass;
