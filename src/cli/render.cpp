@@ -255,7 +255,9 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
           << xs.walk.nNewtonIterations << " iterations\nrepairs: " << xs.edges.nRepairs
           << " edge-tracker bisections, " << xs.walk.nUntrackedSilhouettes
           << " silhouettes and " << xs.walk.nUntrackedExits
-          << " boundary exits found by the x scan without a tracker; failures "
+          << " boundary exits found by the x scan without a tracker; " << xs.silhouettes.nRepairSearches
+          << " subdivision searches after unexplained events, finding " << xs.silhouettes.nRepaired
+          << " lost crossings; failures "
           << xs.walk.nFailures << '\n';
     else
       err << "triangles n: " << stats->nTriangles << " (set up " << stats->nTrianglesSetUp
@@ -292,7 +294,9 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
        << ", \"xscan_newton_iterations\": " << xs.walk.nNewtonIterations
        << ", \"silhouette_points\": " << xs.walk.nSilhouettes
        << ", \"untracked_silhouettes\": " << xs.walk.nUntrackedSilhouettes
-       << ", \"untracked_exits\": " << xs.walk.nUntrackedExits << ", \"failures\": " << xs.walk.nFailures
+       << ", \"untracked_exits\": " << xs.walk.nUntrackedExits
+       << ", \"repair_searches\": " << xs.silhouettes.nRepairSearches
+       << ", \"repaired_by_search\": " << xs.silhouettes.nRepaired << ", \"failures\": " << xs.walk.nFailures
        << "}, \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
        << ", \"seconds_render\": " << renderSec << ", \"peak_rss_kib\": " << peakKiB << "}\n";
     if (!js) {

@@ -6,6 +6,57 @@
 namespace patchscan {
 namespace {
 
+bool OnBoundary(const Vec2d& uv) {
+  return uv.x() <= 0.0 || uv.x() >= 1.0 || uv.y() <= 0.0 || uv.y() >= 1.0;
+}
+
+// The repair search: cells of the domain are split while the scan line can cross them
+// (the cell's y range, from its corners grown by the second-order deviation of y from
+// their interpolation, h^2/8 max|y''| doubled for safety, holds yScan); a cell under
+// kSearchLeafPx on the screen is solved by Newton from its centre, and a solution inside
+// it (grown by half its side) is a crossing. Every answer is a verified root.
+constexpr double kSearchLeafPx = 2.0;
+constexpr int kSearchMaxDepth = 12;
+
+template <class ShapeT>
+void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, double yScan, double u0,
+                                double v0, double h, int depth, std::vector<Vec2d>* found) {
+  double lo = INFINITY, hi = -INFINITY, second = 0.0, size = 0.0;
+  for (const auto& [a, b] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}, {1.0, 1.0}, {0.5, 0.5}}) {
+    ScreenDerivs d;
+    EvaluateScreen(shape, map, u0 + a * h, v0 + b * h, DerivOrder::Second, &d);
+    if (!(d.w > 0.0)) return;  // behind the eye: no screen y
+    if (a != 0.5) lo = std::min(lo, d.p.y()), hi = std::max(hi, d.p.y());
+    second = std::max(second, std::abs(d.d2pdu2.y()) + 2.0 * std::abs(d.d2pduv.y()) + std::abs(d.d2pdv2.y()));
+    size = std::max(size, h * std::max(d.dpdu.head<2>().norm(), d.dpdv.head<2>().norm()));
+  }
+  const double margin = 2.0 * h * h / 8.0 * second;
+  if (!std::isfinite(lo) || yScan < lo - margin || yScan > hi + margin) return;
+  if (size > kSearchLeafPx && depth < kSearchMaxDepth) {
+    const double g = 0.5 * h;
+    for (const auto& [a, b] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}, {1.0, 1.0}})
+      FindCrossingsBySubdivision(shape, map, yScan, u0 + a * g, v0 + b * g, g, depth + 1, found);
+    return;
+  }
+  const auto r = SolveNewton2(
+      [&](const Vec2d& p, Vec2d* f, Mat2d* j) { SilhouetteSystem(shape, map, yScan, p, f, j); },
+      Vec2d(u0 + 0.5 * h, v0 + 0.5 * h), Vec2d(kEdgeTolPx, kEdgeTolPx));
+  if (r.status != NewtonStatus::Converged) return;
+  const double grow = 0.5 * h;
+  if (r.uv.x() < u0 - grow || r.uv.x() > u0 + h + grow || r.uv.y() < v0 - grow || r.uv.y() > v0 + h + grow)
+    return;
+  // A collapsed edge (a pole, the lid apex) solves J = 0 everywhere along it: no silhouette.
+  ScreenDerivs d;
+  EvaluateScreen(shape, map, r.uv.x(), r.uv.y(), DerivOrder::First, &d);
+  constexpr double kCollapsedRatio = 1e-6;
+  if (d.dpdu.head<2>().norm() < kCollapsedRatio * d.dpdv.head<2>().norm() ||
+      d.dpdv.head<2>().norm() < kCollapsedRatio * d.dpdu.head<2>().norm())
+    return;
+  for (const Vec2d& q : *found)
+    if ((q - r.uv).norm() < kSameTrackerUv) return;
+  found->push_back(r.uv);
+}
+
 // Convergence in y: as for the edge trackers.
 const Vec2d kTolerance(kEdgeTolPx, kEdgeTolPx);
 
@@ -41,6 +92,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   // Step 1: move the existing trackers; a failure is a minimum or an exit (§3.2.3).
   deaths_.clear();
   births_.clear();
+  bool search = false;  // an event no tracker explains: look for the crossings again
   std::erase_if(trackers_, [&](SilhouetteTracker& t) {
     const Vec2d start = extrapolate_ && t.hasPrev ? Vec2d(2.0 * t.uv - t.uvPrev) : t.uv;
     Vec2d uv;
@@ -50,6 +102,9 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     if (!Solve(shape, yScan, start, &uv, DomainRule::Clip)) {
       ++stats_.nDeletedFailed;
       deaths_.push_back(t.uv);
+      // A death inside the domain is a minimum of the curve, or a lost tracker: only a
+      // search can tell.
+      if (!OnBoundary(uv)) search = true;
       return true;
     }
     t.uvPrev = t.uv;
@@ -83,11 +138,13 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
       const Mat2d negH = -p.hessH;
       const Vec2d w = negH.inverse() * gx;
       const double q = gx.dot(w);
+      bool born = false;
       if (q > 0 && drop >= 0) {
         const Vec2d delta = std::sqrt(2.0 * drop / q) * w;
-        add(p.uv + delta, &stats_.nCreatedAtMaxima);
-        add(p.uv - delta, &stats_.nCreatedAtMaxima);
+        born |= add(p.uv + delta, &stats_.nCreatedAtMaxima);
+        born |= add(p.uv - delta, &stats_.nCreatedAtMaxima);
       }
+      if (!born) search = true;  // a closed curve appeared and the seeds missed it
     } else {
       // Below a saddle the level curve is a hyperbola whose vertices lie along the
       // Hessian's negative eigenvector: seeds there, and along the positive one for the
@@ -105,9 +162,26 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   // Step 3: folds: J changed sign at a boundary-edge tracker (§3.2.2.3).
   // The crossing may have run well inside since it crossed the edge: when Newton from
   // the edge point fails, start again a quarter and half way towards the domain's centre.
-  for (const Vec2d& uv : edges.Folds())
+  for (const Vec2d& uv : edges.Folds()) {
+    bool born = false;
     for (double towards : {0.0, 0.25, 0.5})
-      if (add(uv + towards * (Vec2d(0.5, 0.5) - uv), &stats_.nCreatedAtFolds)) break;
+      if ((born = add(uv + towards * (Vec2d(0.5, 0.5) - uv), &stats_.nCreatedAtFolds))) break;
+    if (!born) search = true;
+  }
+  // Step 3b: repair by subdivision (when an event is not explained by the trackers).
+  if (search) {
+    ++stats_.nRepairSearches;
+    searchFound_.clear();
+    FindCrossingsBySubdivision(shape, map_, yScan, 0.0, 0.0, 1.0, 0, &searchFound_);
+    for (const Vec2d& uv : searchFound_) {
+      bool tracked = false;
+      for (const SilhouetteTracker& t : trackers_) tracked = tracked || (t.uv - uv).norm() < kSameTrackerUv;
+      if (tracked) continue;
+      trackers_.push_back({uv, uv, false});
+      births_.push_back(uv);
+      ++stats_.nRepaired;
+    }
+  }
   // Step 4: trackers that converged onto one crossing are one tracker.
   for (size_t a = 0; a < trackers_.size(); ++a)
     for (size_t b = a + 1; b < trackers_.size();)
@@ -128,6 +202,12 @@ void SilhouetteScan::Adopt(const Vec2d& uv) {
 
 void SilhouetteScan::Advance(double yScan, const EdgeScan& edges) {
   VisitShape(surface_, [&](const auto& shape) { AdvanceImpl(shape, yScan, edges); });
+}
+
+std::vector<Vec2d> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan) {
+  std::vector<Vec2d> found;
+  VisitShape(s, [&](const auto& shape) { FindCrossingsBySubdivision(shape, map, yScan, 0.0, 0.0, 1.0, 0, &found); });
+  return found;
 }
 
 std::vector<Vec2d> SilhouetteCrossingsBruteForce(const Surface& s, const ScreenMap& map,

@@ -26,7 +26,9 @@ struct SilhouetteScanStats {
   long nNewtonCalls = 0, nNewtonIterations = 0;
   long nCreatedAtMaxima = 0, nCreatedAtFolds = 0, nCreatedAtSaddles = 0;
   long nDeletedFailed = 0, nDeletedLeft = 0, nMerged = 0;
-  long nAdopted = 0;  // repairs: crossings found by the X scan and tracked from then on
+  long nAdopted = 0;
+  long nRepairSearches = 0;  // subdivision searches after an unexplained event
+  long nRepaired = 0;        // crossings they found that no tracker held  // repairs: crossings found by the X scan and tracked from then on
 };
 
 // Both equations are solved in pixels: y - yScan, and J / max(|s_u|, |s_v|), to the edge
@@ -89,9 +91,14 @@ class SilhouetteScan {
   size_t nextStationary_ = 0;
   bool extrapolate_;
   std::vector<SilhouetteTracker> trackers_;
-  std::vector<Vec2d> births_, deaths_;
+  std::vector<Vec2d> births_, deaths_, searchFound_;
   SilhouetteScanStats stats_;
 };
+
+// The crossings of scan line yScan with the silhouette found by the trackers' repair
+// search: the domain subdivided while a cell's conservative y range holds yScan, Newton
+// from cells under two pixels on the screen. Collapsed edges are not silhouettes.
+std::vector<Vec2d> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan);
 
 // All solutions of y = yScan, J = 0 in [0,1]^2 found by Newton from a grid of starts and
 // merged: slow and independent of any tracking, for tests and repairs.

@@ -104,6 +104,8 @@ void AddSilhouetteStats(SilhouetteScanStats* to, const SilhouetteScanStats& s) {
   to->nDeletedLeft += s.nDeletedLeft;
   to->nMerged += s.nMerged;
   to->nAdopted += s.nAdopted;
+  to->nRepairSearches += s.nRepairSearches;
+  to->nRepaired += s.nRepaired;
 }
 
 }  // namespace
