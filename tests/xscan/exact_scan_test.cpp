@@ -66,13 +66,17 @@ struct Agreement {
   std::string firstMismatches;
 };
 
-// Samples at pixel centres, one per pixel.
-Agreement Compare(std::span<const Surface> surfaces, const Camera& camera) {
+// Samples at pixel centres, one per pixel; or with `spacing` below 1, on the lattice of
+// the back end's supersampling (sample rows and columns `spacing` apart from 0).
+Agreement Compare(std::span<const Surface> surfaces, const Camera& camera, double spacing = 1.0) {
   Agreement a;
   ExactScan scan(surfaces, camera);
   const test::RayCaster caster(surfaces, camera);
-  const raster::SampleColumns cols{0.5, 1.0, camera.width};
-  std::vector<Nearest> row(camera.width);
+  const double offset = spacing == 1.0 ? 0.5 : 0.0;
+  const int nx = spacing == 1.0 ? camera.width : static_cast<int>(std::lround(camera.width / spacing)) + 1;
+  const int ny = spacing == 1.0 ? camera.height : static_cast<int>(std::lround(camera.height / spacing)) + 1;
+  const raster::SampleColumns cols{offset, spacing, nx};
+  std::vector<Nearest> row(nx);
   auto reference = [&](double x, double y) {
     const auto hit = caster.Nearest(x, y);
     return hit ? Nearest{hit->w, static_cast<std::uint32_t>(hit->surface)} : Nearest{};
@@ -86,12 +90,12 @@ Agreement Compare(std::span<const Surface> surfaces, const Camera& camera) {
     }
     return false;
   };
-  for (int j = 0; j < camera.height; ++j) {
-    const double y = j + 0.5;
+  for (int j = 0; j < ny; ++j) {
+    const double y = offset + j * spacing;
     std::fill(row.begin(), row.end(), Nearest{});
     NearestRow out(&row);
     EXPECT_TRUE(scan.ScanRow(y, cols, out));
-    for (int i = 0; i < camera.width; ++i) {
+    for (int i = 0; i < nx; ++i) {
       const double x = cols.At(i);
       const Nearest want = reference(x, y);
       const Nearest& got = row[i];
@@ -234,6 +238,21 @@ TEST(ExactScan, TeapotLidApexFromAbove) {
   cam.lookAt = Vec3(0, 0, 3.1);
   cam.fovDeg = 25;
   ExpectAgree(s.surfaces, cam, "teapot lid apex", 3000);
+}
+
+TEST(ExactScan, TeapotOnTheSupersamplingLattice) {
+  // Sample rows and columns a third of a pixel apart, pixel edges included (--aa 4).
+  const Scene s = Load("teapot.bpt");
+  Camera cam = Framed(s, Vec3(0, 0, 1));
+  cam.width = 96;
+  cam.height = 72;
+  cam = FrameBounds(s.WorldBounds(), cam, DefaultViewDirection(Vec3(0, 0, 1)));
+  const Agreement a = Compare(s.surfaces, cam, 1.0 / 3.0);
+  std::cout << "teapot 96x72 at aa 4: " << a.samples << " samples, " << a.covered << " covered, "
+            << a.nearEdge << " near an edge\n";
+  EXPECT_EQ(a.mismatches, 0) << a.firstMismatches;
+  EXPECT_GT(a.covered, 5000);
+  EXPECT_EQ(a.stats.walk.nFailures, 0);
 }
 
 TEST(ExactScan, TeacupMatchesRayCaster) {
