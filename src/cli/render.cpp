@@ -71,8 +71,15 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
                   "how surfaces become samples: exact = Blinn's scan-line algorithm, every "
                   "visible sample's (u,v) found by Newton iteration (shading always uses the "
                   "exact normal; --shading flat/gouraud and --hidden-line need triangles); "
-                  "tess = tessellated with OpenSubdiv's Bfr::Tessellation pattern")
-      ->check(CLI::IsMember({"exact", "tess"}))
+                  "theta = the same Y scan, with each cross-section sampled at --theta-steps "
+                  "angles of its normal per turn and the samples between interpolated along the "
+                  "chords; tess = tessellated with OpenSubdiv's Bfr::Tessellation pattern")
+      ->check(CLI::IsMember({"exact", "theta", "tess"}))
+      ->capture_default_str();
+  cmd->add_option("--theta-steps", o->thetaSteps,
+                  "theta mode: tabulated normal angles per turn of a cross-section (chord error "
+                  "R (1 - cos(pi/N)) pixels for a section of radius R pixels)")
+      ->check(CLI::Range(1, 4096))
       ->capture_default_str();
   cmd->add_flag("--no-extrapolate", o->noExtrapolate,
                 "exact mode: start each tracker's Newton iteration from its last position "
@@ -136,14 +143,15 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
   const auto tLoaded = Clock::now();
 
-  const bool exact = o.mode == "exact";
+  // Both direct modes run Blinn's Y scan; they differ in the X scan.
+  const bool exact = o.mode == "exact" || o.mode == "theta";
   if (exact && (o.shading != "phong" || o.hiddenLine)) {
-    err << "patchscan: --mode exact shades every sample with its exact normal: --shading "
+    err << "patchscan: --mode " << o.mode << " shades every sample with its own normal: --shading "
            "flat/gouraud and --hidden-line need a triangle mode (--mode tess)\n";
     return kExitUsage;
   }
   if (!exact && o.overlay != "none") {
-    err << "patchscan: --overlay trackers draws the exact scan's trackers: it needs --mode exact\n";
+    err << "patchscan: --overlay trackers draws the Y scan's trackers: it needs --mode exact or theta\n";
     return kExitUsage;
   }
 
@@ -154,6 +162,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   if (exact) {
     ExactScanOptions xo;
     xo.extrapolate = !o.noExtrapolate;
+    if (o.mode == "theta") xo.thetaSteps = o.thetaSteps;
     scan = std::make_unique<ExactScan>(scene.surfaces, camera, xo);
   } else {
     for (size_t k = 0; k < scene.surfaces.size(); ++k)
@@ -259,6 +268,9 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
           << " subdivision searches after unexplained events, finding " << xs.silhouettes.nRepaired
           << " lost crossings; failures "
           << xs.walk.nFailures << '\n';
+    if (o.mode == "theta")
+      err << "theta chains: " << xs.theta.nChains << ", vertices " << xs.theta.nVertices << ", crawl steps "
+          << xs.theta.nSteps << '\n';
     else
       err << "triangles n: " << stats->nTriangles << " (set up " << stats->nTrianglesSetUp
           << ")\nmost active on one sample row m: " << stats->maxActive << '\n';
@@ -297,6 +309,8 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
        << ", \"untracked_exits\": " << xs.walk.nUntrackedExits
        << ", \"repair_searches\": " << xs.silhouettes.nRepairSearches
        << ", \"repaired_by_search\": " << xs.silhouettes.nRepaired << ", \"failures\": " << xs.walk.nFailures
+       << ", \"theta_chains\": " << xs.theta.nChains << ", \"theta_vertices\": " << xs.theta.nVertices
+       << ", \"theta_steps\": " << xs.theta.nSteps
        << "}, \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
        << ", \"seconds_render\": " << renderSec << ", \"peak_rss_kib\": " << peakKiB << "}\n";
     if (!js) {

@@ -14,6 +14,7 @@ struct RenderOptions {
   std::string file, output;
   std::string mode = "exact";
   bool noExtrapolate = false;
+  int thetaSteps = 16;
   std::string overlay = "none";
   int tessRate = 8;
   double tessPixels = 0.0;  // > 0: screen-adaptive tessellation instead of tessRate

@@ -38,6 +38,28 @@ Vec2 ClampLength(const Vec2& v, double len) {
 
 }  // namespace
 
+raster::Fragment FragmentAt(const WalkPoint& p, const Surface& surface,
+                            const Eigen::Matrix3d& normalFromObject, std::uint32_t surfaceId) {
+  const SurfaceDerivs& o = p.object;
+  raster::Fragment f;
+  f.w = p.w;
+  f.position = surface.worldFromObject * o.p;
+  const Vec3 n = o.dpdu.cross(o.dpdv);
+  // As WorldNormal: relative to the derivatives, below this the cross product is
+  // rounding (a collapsed edge), and the normal is its limit from inside.
+  constexpr double kDegenerateSine = 1e-10;
+  if (n.norm() > kDegenerateSine * o.dpdu.norm() * o.dpdv.norm() && n.norm() > 0.0)
+    f.normal = (normalFromObject * n).normalized();
+  else
+    f.normal = WorldNormal(surface, p.uv.x(), p.uv.y());
+  f.uv = p.uv;
+  // The inverse of the screen Jacobian [x_u x_v; y_u y_v]: uv per pixel in x and y.
+  f.duvdx = ClampLength(Vec2(p.gradY.y(), -p.gradY.x()) / p.j, kMaxUvPerPixel);
+  f.duvdy = ClampLength(Vec2(-p.gradX.y(), p.gradX.x()) / p.j, kMaxUvPerPixel);
+  f.surfaceId = surfaceId;
+  return f;
+}
+
 ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options)
     : surfaces_(surfaces), camera_(camera), options_(options) {
   stats_.nSurfaces = static_cast<long>(surfaces.size());
@@ -151,27 +173,23 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
 
     VisitShape(surface, [&](const auto& shape) {
       auto emit = [&](int column, const WalkPoint& p) {
-        const SurfaceDerivs& o = p.object;
-        const Vec2d& uv = p.uv;
-        raster::Fragment f;
-        f.w = p.w;
-        f.position = surface.worldFromObject * o.p;
-        const Vec3 n = o.dpdu.cross(o.dpdv);
-        // As WorldNormal: relative to the derivatives, below this the cross product is
-        // rounding (a collapsed edge), and the normal is its limit from inside.
-        constexpr double kDegenerateSine = 1e-10;
-        if (n.norm() > kDegenerateSine * o.dpdu.norm() * o.dpdv.norm() && n.norm() > 0.0)
-          f.normal = (a.normalFromObject * n).normalized();
-        else
-          f.normal = WorldNormal(surface, uv.x(), uv.y());
-        f.uv = uv;
-        // The inverse of the screen Jacobian [x_u x_v; y_u y_v]: uv per pixel in x and y.
-        f.duvdx = ClampLength(Vec2(p.gradY.y(), -p.gradY.x()) / p.j, kMaxUvPerPixel);
-        f.duvdy = ClampLength(Vec2(-p.gradX.y(), p.gradX.x()) / p.j, kMaxUvPerPixel);
-        f.surfaceId = static_cast<std::uint32_t>(a.index);
         ++stats_.nFragments;
-        out.Add(column, f);
+        out.Add(column, FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)));
       };
+      using ShapeT = std::decay_t<decltype(shape)>;
+      if (options_.thetaSteps > 0) {
+        const ThetaFrame frame{camera_.eye, (camera_.lookAt - camera_.eye).cross(camera_.up).normalized()};
+        ThetaWalker<ShapeT> walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_, &stats_.theta,
+                                   options_.thetaSteps, frame);
+        walker.WalkAll(
+            rowTrackers_, &edgeUsed_, &silUsed_, &chain_,
+            [&](const WalkPoint& p) { return FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)); },
+            [&](int column, const raster::Fragment& f) {
+              ++stats_.nFragments;
+              out.Add(column, f);
+            });
+        return;
+      }
       LevelWalker walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_);
       walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, emit);
     });

@@ -18,12 +18,20 @@
 #include "tracker/maxima.h"
 #include "tracker/silhouette_scan.h"
 #include "xscan/level_walk.h"
+#include "xscan/theta_walk.h"
 #include "xscan/trace.h"
 
 namespace patchscan {
 
+// The fragment of the surface point a walk found: world position, unit world normal (its
+// limit from inside at a collapsed edge), eye distance, uv and uv per pixel.
+raster::Fragment FragmentAt(const WalkPoint& p, const Surface& surface,
+                            const Eigen::Matrix3d& normalFromObject, std::uint32_t surfaceId);
+
 struct ExactScanOptions {
   bool extrapolate = true;  // start tracker Newton from the last two positions (§3.5)
+  // 0: the exact X scan. N > 0: the θ-sampled X scan (§4) with N angles per turn.
+  int thetaSteps = 0;
 };
 
 // Counters of the whole render (DESIGN.md: count what the papers count).
@@ -35,6 +43,7 @@ struct ExactScanStats {
   EdgeScanStats edges;
   SilhouetteScanStats silhouettes;
   WalkStats walk;
+  ThetaStats theta;
 };
 
 class ExactScan final : public raster::FragmentSource {
@@ -69,6 +78,7 @@ class ExactScan final : public raster::FragmentSource {
   std::vector<std::unique_ptr<Active>> active_;
   RowTrackers rowTrackers_;
   WalkEvents walkEvents_;
+  std::vector<ThetaVertex> chain_;
   TraceSink* trace_ = nullptr;
   std::vector<char> edgeUsed_, silUsed_;
   ExactScanStats stats_;

@@ -137,7 +137,7 @@ class LevelWalker {
     return p;
   }
 
- private:
+ protected:
   void Failed(const Vec2d& uv) {
     ++stats_->nFailures;
     if (events_) events_->failures.push_back(uv);
@@ -407,6 +407,22 @@ class LevelWalker {
     }
   }
 
+  // The walk's sense whose tangent at p, on boundary edge `edge`, points into the domain;
+  // 0 when the curve only touches the edge there (the scan line at an edge extremum).
+  static double InwardSense(const WalkPoint& p, PatchEdge edge) {
+    const Vec2d t = Tangent(p, 1.0);
+    double inward = 0.0;
+    switch (edge) {
+      case PatchEdge::U0: inward = t.x(); break;
+      case PatchEdge::U1: inward = -t.x(); break;
+      case PatchEdge::V0: inward = t.y(); break;
+      case PatchEdge::V1: inward = -t.y(); break;
+    }
+    constexpr double kTangentialInward = 1e-12;
+    if (std::abs(inward) <= kTangentialInward) return 0.0;
+    return inward > 0 ? 1.0 : -1.0;
+  }
+
   long MaxSteps() const { return kWalkMaxStepsBase + kWalkMaxStepsPerColumn * cols_.n; }
 
   template <class Emit>
@@ -417,19 +433,8 @@ class LevelWalker {
       Failed(uv);
       return;
     }
-    // The sense whose tangent points into the domain.
-    const Vec2d t = Tangent(p, 1.0);
-    double inward = 0.0;
-    switch (edge) {
-      case PatchEdge::U0: inward = t.x(); break;
-      case PatchEdge::U1: inward = -t.x(); break;
-      case PatchEdge::V0: inward = t.y(); break;
-      case PatchEdge::V1: inward = -t.y(); break;
-    }
-    // The curve only touches the edge here (the scan line at an edge extremum).
-    constexpr double kTangentialInward = 1e-12;
-    if (std::abs(inward) <= kTangentialInward) return;
-    const double sense = inward > 0 ? 1.0 : -1.0;
+    const double sense = InwardSense(p, edge);
+    if (sense == 0.0) return;
     // A column exactly at the start belongs to this curve.
     const int c0 = cols_.Ceil(p.x - kColumnEpsPx);
     if (c0 < cols_.n && std::abs(cols_.At(c0) - p.x) <= kColumnEpsPx) emit(c0, p);

@@ -267,3 +267,127 @@ TEST(ExactScan, TeaspoonMatchesRayCaster) {
 
 }  // namespace
 }  // namespace patchscan
+
+namespace patchscan {
+namespace {
+
+// The nearest fragment of every sample (pixel centres) of a scan of `surfaces`.
+std::vector<Nearest> NearestImage(std::span<const Surface> surfaces, const Camera& camera,
+                                  ExactScanOptions options, ExactScanStats* stats = nullptr) {
+  ExactScan scan(surfaces, camera, options);
+  const raster::SampleColumns cols{0.5, 1.0, camera.width};
+  std::vector<Nearest> image(static_cast<size_t>(camera.width) * camera.height), row(camera.width);
+  for (int j = 0; j < camera.height; ++j) {
+    std::fill(row.begin(), row.end(), Nearest{});
+    NearestRow out(&row);
+    EXPECT_TRUE(scan.ScanRow(j + 0.5, cols, out));
+    std::copy(row.begin(), row.end(), image.begin() + static_cast<long>(j) * camera.width);
+  }
+  if (stats) *stats = scan.Stats();
+  return image;
+}
+
+struct ThetaAgreement {
+  long covered = 0, coverageDiffers = 0, nearEdge = 0;
+  double maxDepth = 0.0, sumSqDepth = 0.0;  // |w_theta - w_exact| over samples of one surface
+  long depthSamples = 0;
+};
+
+// θ mode against exact mode: the silhouette and boundary points are vertices of the θ
+// chains, so each row's coverage is the exact one; only depth and normals are
+// approximated. A differing sample is allowed only within kEdgePx of an edge (ray caster).
+ThetaAgreement CompareTheta(std::span<const Surface> surfaces, const Camera& camera, int steps) {
+  ThetaAgreement a;
+  ExactScanOptions theta;
+  theta.thetaSteps = steps;
+  ExactScanStats st;
+  const auto exact = NearestImage(surfaces, camera, {});
+  const auto sampled = NearestImage(surfaces, camera, theta, &st);
+  EXPECT_EQ(st.walk.nFailures, 0);
+  EXPECT_GT(st.theta.nVertices, 0);
+  const test::RayCaster caster(surfaces, camera);
+  for (int j = 0; j < camera.height; ++j)
+    for (int i = 0; i < camera.width; ++i) {
+      const Nearest &e = exact[size_t(j) * camera.width + i], &t = sampled[size_t(j) * camera.width + i];
+      a.covered += e.covered();
+      if (e.covered() != t.covered()) {
+        // Near an edge, the ray caster's coverage changes within kEdgePx.
+        const double x = i + 0.5, y = j + 0.5;
+        bool near = false;
+        for (const auto& [dx, dy] : {std::pair{kEdgePx, 0.0}, {-kEdgePx, 0.0}, {0.0, kEdgePx}, {0.0, -kEdgePx}})
+          near = near || caster.Nearest(x + dx, y + dy).has_value() != e.covered();
+        ++(near ? a.nearEdge : a.coverageDiffers);
+        continue;
+      }
+      if (e.covered() && e.surface == t.surface) {
+        const double d = std::abs(t.w - e.w);
+        a.maxDepth = std::max(a.maxDepth, d);
+        a.sumSqDepth += d * d;
+        ++a.depthSamples;
+      }
+    }
+  return a;
+}
+
+TEST(ThetaScan, CoverageIsExactAndDepthErrorFallsAsOneOverNSquared) {
+  // A unit sphere 4 units away: every section is a circle of radius at most 1, so the
+  // chords are within 1 - cos(π/N) of the arcs, and no chord is longer than 2 sin(π/N).
+  const Surface sphere{Sphere(1.0, -1.0, 1.0, 360), Affine3::Identity()};
+  const Camera cam = View(Vec3(3, -2, 1.5), 128);
+  const std::span<const Surface> one(&sphere, 1);
+  const ThetaAgreement a16 = CompareTheta(one, cam, 16), a32 = CompareTheta(one, cam, 32);
+  for (const auto* a : {&a16, &a32}) {
+    EXPECT_EQ(a->coverageDiffers, 0);
+    EXPECT_GT(a->covered, 3000);
+  }
+  EXPECT_LE(a16.maxDepth, 2.0 * std::sin(M_PI / 16));
+  EXPECT_LE(a32.maxDepth, 2.0 * std::sin(M_PI / 32));
+  const double rms16 = std::sqrt(a16.sumSqDepth / a16.depthSamples), rms32 = std::sqrt(a32.sumSqDepth / a32.depthSamples);
+  std::cout << "sphere depth error (world units): N=16 rms " << rms16 << " max " << a16.maxDepth
+            << "; N=32 rms " << rms32 << " max " << a32.maxDepth << "; bound 1-cos(pi/N): "
+            << 1 - std::cos(M_PI / 16) << ", " << 1 - std::cos(M_PI / 32) << '\n';
+  // Chord error is second order in the step: halving it quarters the error.
+  EXPECT_GT(rms16 / rms32, 2.5);
+  EXPECT_LT(rms16 / rms32, 6.0);
+}
+
+TEST(ThetaScan, FlatPatchIsExact) {
+  // A flat patch's sections are straight: whatever vertices a chain has, its chords lie on
+  // the section, so depth is exact up to rounding.
+  // Planar: the fourth corner is p01 + p10 - p00.
+  const Surface planar{BilinearPatch({Vec3(-1, -1, 0.2), Vec3(1, -1, -0.1), Vec3(-1, 1, 0.3), Vec3(1, 1, 0.0)}),
+                       Affine3::Identity()};
+  const ThetaAgreement a = CompareTheta(std::span<const Surface>(&planar, 1), View(Vec3(1.5, -3.0, 2.5)), 16);
+  EXPECT_EQ(a.coverageDiffers, 0);
+  EXPECT_GT(a.covered, 2000);
+  // Both ends of each chord are solved to 1e-7 px, which moves w (about 4 here) by ~1e-9.
+  EXPECT_LT(a.maxDepth, 1e-8);
+}
+
+TEST(ThetaScan, CoverageMatchesExactOnTheTestSurfaces) {
+  std::vector<std::pair<std::string, std::vector<Surface>>> cases;
+  cases.push_back({"torus", {Surface{Torus(1.0, 0.35, 0, 360, 360), Affine3::Identity()}}});
+  cases.push_back({"saddle", {Surface{Saddle(1.0), Affine3::Identity()}}});
+  cases.push_back({"monkey saddle", {Surface{MonkeySaddle(0.9), Affine3::Identity()}}});
+  for (const auto& [name, surfaces] : cases) {
+    const ThetaAgreement a = CompareTheta(surfaces, View(Vec3(2.5, -3.0, 2.0)), 16);
+    EXPECT_EQ(a.coverageDiffers, 0) << name;
+    EXPECT_GT(a.covered, 1000) << name;
+  }
+}
+
+TEST(ThetaScan, WatertightOnTeapotTeacupTeaspoon) {
+  // No background inside the exact coverage: shared patch boundaries give both patches the
+  // same end points (the edge trackers' crossings), so no sample falls between them.
+  for (const auto& [file, up] : {std::pair{"teapot.bpt", Vec3(0, 0, 1)}, {"teacup.bpt", Vec3(0, 1, 0)},
+                                 {"teaspoon.bpt", Vec3(0, 1, 0)}}) {
+    const Scene s = Load(file);
+    const ThetaAgreement a = CompareTheta(s.surfaces, Framed(s, up), 16);
+    std::cout << file << " theta 16: " << a.covered << " covered by exact, " << a.coverageDiffers
+              << " differ away from edges, " << a.nearEdge << " near edges\n";
+    EXPECT_EQ(a.coverageDiffers, 0) << file;
+  }
+}
+
+}  // namespace
+}  // namespace patchscan
