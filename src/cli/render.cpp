@@ -270,7 +270,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
           << xs.walk.nFailures << '\n';
     if (o.mode == "theta")
       err << "theta chains: " << xs.theta.nChains << ", vertices " << xs.theta.nVertices << ", crawl steps "
-          << xs.theta.nSteps << '\n';
+          << xs.theta.nSteps << ", turn points " << xs.theta.nTurnPoints << '\n';
     else
       err << "triangles n: " << stats->nTriangles << " (set up " << stats->nTrianglesSetUp
           << ")\nmost active on one sample row m: " << stats->maxActive << '\n';
@@ -310,7 +310,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
        << ", \"repair_searches\": " << xs.silhouettes.nRepairSearches
        << ", \"repaired_by_search\": " << xs.silhouettes.nRepaired << ", \"failures\": " << xs.walk.nFailures
        << ", \"theta_chains\": " << xs.theta.nChains << ", \"theta_vertices\": " << xs.theta.nVertices
-       << ", \"theta_steps\": " << xs.theta.nSteps
+       << ", \"theta_steps\": " << xs.theta.nSteps << ", \"theta_turn_points\": " << xs.theta.nTurnPoints
        << "}, \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
        << ", \"seconds_render\": " << renderSec << ", \"peak_rss_kib\": " << peakKiB << "}\n";
     if (!js) {

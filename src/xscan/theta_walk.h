@@ -30,6 +30,7 @@ namespace patchscan {
 // Counters of the θ chains.
 struct ThetaStats {
   long nChains = 0, nVertices = 0, nSteps = 0;
+  long nTurnPoints = 0;  // vertices where θ turned back (§4.3)
 };
 
 // A vertex of a θ chain: its screen x and its surface point.
@@ -142,6 +143,7 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
   chain->push_back(MakeVertex(start, make));
   WalkPoint p = start;
   double th = ThetaOf(chain->back().f);
+  double lastTurn = 0.0;  // the sign θ last moved with (0: not yet)
   double h = kWalkStepStart;
   const double cosTurn = std::cos(kWalkMaxTurn);
   // The tabulated angles passed going from θ = a by d (|d| < π), silhouettes aside
@@ -215,6 +217,17 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       }
       chain->push_back(MakeVertex(s, make));
     } else {
+      // A turn point (§4.3: T = 0, the derivative of θ along the curve vanishes) between
+      // two steps: the crawl point there is a vertex, within one step of it, so the chain
+      // follows the crinkle even when no tabulated angle is passed.
+      constexpr double kTurnRad = 1e-9;  // below this θ did not move
+      if (std::abs(d) > kTurnRad) {
+        if (lastTurn != 0.0 && (d > 0) != (lastTurn > 0) && !onSil) {
+          chain->push_back(MakeVertex(p, make));
+          ++theta_->nTurnPoints;
+        }
+        lastTurn = d;
+      }
       passTable(p, th, next, d);
     }
     p = next;
