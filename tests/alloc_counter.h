@@ -10,6 +10,10 @@ namespace patchscan::test {
 inline std::atomic<long> gAllocations{0};
 }
 
+// The replacement new below takes its memory from malloc, so free is the matching release
+// (GCC cannot see through the replacement and warns at some optimization levels).
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
+
 void* operator new(std::size_t n) {
   ++patchscan::test::gAllocations;
   if (void* p = std::malloc(n ? n : 1)) return p;

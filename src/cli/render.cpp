@@ -244,7 +244,9 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   // Newton iterations per tracker per scan line (paper 001 §3.5 reports ~2.5 without
   // extrapolation, under 1 with): edge and silhouette trackers together.
   const double itersPerTracker =
-      xs.nTrackerSteps > 0 ? double(xs.edges.nNewtonIterations + xs.silhouettes.nNewtonIterations) / xs.nTrackerSteps : 0.0;
+      xs.nTrackerSteps > 0 ? static_cast<double>(xs.edges.nNewtonIterations + xs.silhouettes.nNewtonIterations) /
+                                   static_cast<double>(xs.nTrackerSteps)
+                             : 0.0;
   if (o.stats) {
     if (exact)
       err << "surfaces: " << xs.nSurfaces << " (set up " << xs.nSurfacesActivated

@@ -80,7 +80,7 @@ ExactScan::~ExactScan() = default;
 void ExactScan::Activate(std::size_t index, double y, double spacing) {
   const Surface& s = surfaces_[index];
   auto a = std::make_unique<Active>(Active{index, INFINITY, ScreenMap(camera_, s.worldFromObject),
-                                           s.worldFromObject.linear().inverse().transpose(), nullptr, nullptr});
+                                           s.worldFromObject.linear().inverse().transpose(), nullptr, nullptr, {}, 0});
   for (const Pending& p : pending_)
     if (p.index == index) a->yMax = p.yMax;
   std::vector<Stationary> stationary = FindStationaryPoints(s, a->map);

@@ -150,7 +150,7 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
   // (they are found by the sign of J), each as a vertex on the arc from p to q.
   auto passTable = [&](const WalkPoint& from, double a, const WalkPoint& to, double d) {
     const double lo = std::min(a, a + d), hi = std::max(a, a + d);
-    for (long i = static_cast<long>(std::floor(lo / table_)) + 1; i * table_ <= hi; ++i) {
+    for (double i = std::floor(lo / table_) + 1.0; i * table_ <= hi; i += 1.0) {
       const double angle = Wrap(i * table_);
       if (std::abs(std::sin(angle)) < 1e-12) continue;  // 0 or π: a silhouette
       const double t = (i * table_ - a) / d;

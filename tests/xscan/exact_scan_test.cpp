@@ -342,7 +342,8 @@ TEST(ThetaScan, CoverageIsExactAndDepthErrorFallsAsOneOverNSquared) {
   }
   EXPECT_LE(a16.maxDepth, 2.0 * std::sin(M_PI / 16));
   EXPECT_LE(a32.maxDepth, 2.0 * std::sin(M_PI / 32));
-  const double rms16 = std::sqrt(a16.sumSqDepth / a16.depthSamples), rms32 = std::sqrt(a32.sumSqDepth / a32.depthSamples);
+  const double rms16 = std::sqrt(a16.sumSqDepth / static_cast<double>(a16.depthSamples)),
+               rms32 = std::sqrt(a32.sumSqDepth / static_cast<double>(a32.depthSamples));
   std::cout << "sphere depth error (world units): N=16 rms " << rms16 << " max " << a16.maxDepth
             << "; N=32 rms " << rms32 << " max " << a32.maxDepth << "; bound 1-cos(pi/N): "
             << 1 - std::cos(M_PI / 16) << ", " << 1 - std::cos(M_PI / 32) << '\n';
