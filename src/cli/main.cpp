@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "cli/compare.h"
 #include "cli/exit_codes.h"
 #include "cli/info.h"
 #include "cli/render.h"
@@ -22,19 +23,24 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.footer(
       "Exit codes: 0 success, 1 unreadable or malformed input file, 2 bad command line,\n"
-      "3 the output could not be written.\n"
+      "3 the output could not be written ('compare' has its own: see its help).\n"
       "Run 'patchscan COMMAND --help' for one command's options.");
 
   InfoOptions info;
   CLI::App* infoCmd = AddInfoCommand(&app, &info);
   RenderOptions render;
   CLI::App* renderCmd = AddRenderCommand(&app, &render);
+  CompareOptions compare;
+  CLI::App* compareCmd = AddCompareCommand(&app, &compare);
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {
     // Top-level --help documents every command and option; a command's --help, its own.
-    const CLI::App* shown = infoCmd->parsed() ? infoCmd : renderCmd->parsed() ? renderCmd : &app;
+    const CLI::App* shown = infoCmd->parsed()      ? infoCmd
+                            : renderCmd->parsed()  ? renderCmd
+                            : compareCmd->parsed() ? compareCmd
+                                                   : &app;
     std::cout << (shown == &app ? app.help("", CLI::AppFormatMode::All) : shown->help());
     return kExitOk;
   } catch (const CLI::CallForVersion&) {
@@ -42,10 +48,12 @@ int main(int argc, char** argv) {
     return kExitOk;
   } catch (const CLI::ParseError& e) {
     std::cerr << "patchscan: " << e.what() << "\nRun 'patchscan --help' for usage.\n";
-    return kExitUsage;
+    // compare's codes follow idiff, where 2 means the images differ.
+    return compareCmd->parsed() ? kCompareFileError : kExitUsage;
   }
 
   if (infoCmd->parsed()) return RunInfo(info, std::cout, std::cerr);
   if (renderCmd->parsed()) return RunRender(render, std::cerr);
+  if (compareCmd->parsed()) return RunCompare(compare, std::cout, std::cerr);
   return kExitUsage;
 }

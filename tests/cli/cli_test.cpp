@@ -201,6 +201,51 @@ TEST(Cli, TextureIsOpenedOnlyWhenVisible) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Cli, CompareMeasuresAndAnswersInTheMannerOfIdiff) {
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_compare";
+  std::filesystem::create_directories(dir);
+  const std::string exact = (dir / "exact.exr").string(), theta = (dir / "theta.exr").string(),
+                    small = (dir / "small.exr").string(), diff = (dir / "diff.png").string(),
+                    js = (dir / "c.json").string();
+  const std::string scene = "render " + kTeapot + " --aov --aa 2 --size 96x72 -o ";
+  ASSERT_EQ(Patchscan(scene + exact).code, 0);
+  ASSERT_EQ(Patchscan(scene + theta + " --mode theta --theta-steps 4").code, 0);
+  ASSERT_EQ(Patchscan("render " + kTeapot + " --aov --size 48x36 -o " + small).code, 0);
+
+  // An image against itself: no error at all.
+  Result r = Patchscan("compare " + exact + " " + exact);
+  EXPECT_EQ(r.code, 0) << r.out << r.err;
+  for (const char* line : {"coverage edges: max 0 px", "depth (relative): max 0,", "colour: RMSE 0,", "PASS"})
+    EXPECT_NE(r.out.find(line), std::string::npos) << "missing '" << line << "' in\n" << r.out;
+  // Theta with 4 steps against exact: the depth and normals differ between the chords' ends.
+  r = Patchscan("compare " + theta + " " + exact + " --json " + js + " --diff " + diff +
+                " --fail-normal 0 --warn-normal 0");
+  EXPECT_EQ(r.code, 2) << r.out << r.err;
+  EXPECT_NE(r.out.find("FAIL: p99 normal angle"), std::string::npos) << r.out;
+  EXPECT_TRUE(std::filesystem::exists(diff));
+  const std::string json = Slurp(js);
+  for (const char* key : {"\"silhouette_px\": {\"max\": ", "\"normal_degrees\": {\"max\": ", "\"verdict\": 2"})
+    EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
+  // The same measures against thresholds that only warn, and against lax ones.
+  const std::string lax = " --fail-silhouette 100 --fail-rmse 1 --fail-depth 1 --fail-normal 180";
+  r = Patchscan("compare " + theta + " " + exact + lax + " --warn-normal 0");
+  EXPECT_EQ(r.code, 1) << r.out;
+  EXPECT_NE(r.out.find("WARNING: p99 normal angle"), std::string::npos) << r.out;
+  r = Patchscan("compare " + theta + " " + exact + lax +
+                " --warn-silhouette 100 --warn-rmse 1 --warn-depth 1 --warn-normal 180");
+  EXPECT_EQ(r.code, 0) << r.out;
+  // Different sizes 3; unreadable files and bad command lines 4; the diff image not left
+  // behind when it cannot be written.
+  EXPECT_EQ(Patchscan("compare " + small + " " + exact).code, 3);
+  r = Patchscan("compare " + exact + " " + (dir / "missing.exr").string());
+  EXPECT_EQ(r.code, 4);
+  EXPECT_NE(r.err.find("missing.exr"), std::string::npos) << r.err;
+  EXPECT_EQ(Patchscan("compare " + exact).code, 4);
+  EXPECT_EQ(Patchscan("compare " + exact + " " + exact + " --fail-rmse -1").code, 4);
+  EXPECT_EQ(Patchscan("compare " + exact + " " + exact + " --diff /nonexistent/d.png").code, 4);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Cli, Version) {
   const Result r = Patchscan("--version");
   EXPECT_EQ(r.code, 0);
