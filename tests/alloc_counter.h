@@ -1,4 +1,4 @@
-// Counts every call of the global operator new in the test binary that includes this
+// Counts every call of the global operator new (plain and nothrow) in the test binary that includes this
 // header (include it in exactly one source file of that binary).
 #pragma once
 
@@ -21,3 +21,10 @@ void* operator new(std::size_t n) {
 }
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+// The nothrow forms (std::stable_sort's buffer uses them) must come from the same malloc,
+// or a sanitizer's own nothrow new would meet the free above.
+void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
+  ++patchscan::test::gAllocations;
+  return std::malloc(n ? n : 1);
+}
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }

@@ -1,0 +1,246 @@
+#!/usr/bin/env python3
+"""The speed/accuracy sweep: every mode of patchscan against its exact render, measured in
+one run on one machine.
+
+For each scene and supersampling level, the exact render is the reference; each θ-step
+count and tessellation setting is rendered with the same camera, timed, and measured
+against it with `patchscan compare`. Writes accuracy.csv, report.md (tables, the fastest
+setting per accuracy, the targets) and, when gnuplot is installed, accuracy.png.
+
+Run through bench/accuracy, which installs what is missing and builds first.
+"""
+import argparse
+import csv
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+SCENES = [  # name, file, extra camera options
+    ("teapot", "surfaces/teapot.bpt", []),
+    ("teacup", "surfaces/teacup.bpt", ["--up", "0,1,0"]),
+    ("teaspoon", "surfaces/teaspoon.bpt", ["--up", "0,1,0"]),
+    ("sphere", "surfaces/sphere.bpt", []),
+]
+THETA_STEPS = [4, 8, 16, 32, 64]
+TESS_RATES = [2, 4, 8, 16, 32]
+TESS_PIXELS = [16, 8, 4, 2, 1]
+AAS = [1, 4]
+# The accuracy levels the report asks about: maximum coverage-edge distance, pixels.
+LEVELS = [0.5, 0.25, 0.1]
+
+FIELDS = ["scene", "aa", "mode", "setting", "seconds", "seconds_wall", "peak_rss_mib", "triangles",
+          "silhouette_max_px", "silhouette_p99_px", "pixels_coverage_differs", "depth_rel_p99",
+          "depth_rel_max", "normal_deg_p99", "normal_deg_max", "rmse", "psnr_db"]
+
+
+def settings():
+    yield "exact", "", []
+    for n in THETA_STEPS:
+        yield "theta", f"steps {n}", ["--mode", "theta", "--theta-steps", str(n)]
+    for r in TESS_RATES:
+        yield "tess", f"rate {r}", ["--mode", "tess", "--tess-rate", str(r)]
+    for p in TESS_PIXELS:
+        yield "tess-pixels", f"{p} px", ["--mode", "tess", "--tess-pixels", str(p)]
+
+
+def run(cmd):
+    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return r.returncode, r.stdout, r.stderr
+
+
+def render(binary, scene, extra, aa, mode_args, size, out_exr, stats_json, repeat):
+    """Renders `repeat` times; returns the fastest (setup + render) seconds, the fastest
+    process wall time, and the stats of the fastest run."""
+    best = None
+    for _ in range(repeat):
+        cmd = [binary, "render", scene, "-o", out_exr, "--aov", "--aa", str(aa), "--size", size,
+               "--stats-json", stats_json] + extra + mode_args
+        t0 = time.perf_counter()
+        code, _, err = run(cmd)
+        wall = time.perf_counter() - t0
+        if code != 0:
+            sys.exit(f"accuracy: {' '.join(cmd)} failed ({code}):\n{err}")
+        with open(stats_json) as f:
+            stats = json.load(f)
+        secs = stats["seconds_tessellate"] + stats["seconds_render"]
+        if best is None or secs < best[0]:
+            best = (secs, min(wall, best[1]) if best else wall, stats)
+    return best
+
+
+def compare(binary, a, b, js):
+    code, out, err = run([binary, "compare", a, b, "--json", js])
+    if code > 2:
+        sys.exit(f"accuracy: compare {a} {b} failed ({code}):\n{err}")
+    with open(js) as f:
+        return json.load(f)
+
+
+def stat(c, key, field):
+    return c[key][field] if c.get(key) else float("nan")
+
+
+def fmt(x, digits=3):
+    if isinstance(x, float):
+        if math.isnan(x):
+            return "–"
+        return f"{x:.{digits}g}"
+    return str(x)
+
+
+def write_report(rows, path, size, povray_line):
+    lines = [f"# Speed and accuracy at {size}", "",
+             "Every error is measured against the exact render of the same scene, camera and "
+             "supersampling (`patchscan compare`). Silhouette: distance between the alpha = 1/2 "
+             "coverage contours (max and 99th percentile, pixels); depth: relative, and normal "
+             "angle: degrees, both on pixels fully covered by the same surface in both renders "
+             "(99th percentile); colour RMSE over all pixels. Seconds: set-up (tessellation) "
+             "plus render, the fastest of the repeats; memory: peak resident set of the process.",
+             ""]
+    for scene in dict.fromkeys(r["scene"] for r in rows):
+        for aa in AAS:
+            sub = [r for r in rows if r["scene"] == scene and r["aa"] == aa]
+            if not sub:
+                continue
+            lines += [f"## {scene}, aa {aa}", "",
+                      "| mode | setting | seconds | MiB | triangles | silhouette max / p99 px | "
+                      "depth p99 | normal p99° | RMSE |", "|---|---|---|---|---|---|---|---|---|"]
+            for r in sub:
+                lines.append(f"| {r['mode']} | {r['setting']} | {fmt(r['seconds'])} | "
+                             f"{fmt(r['peak_rss_mib'], 4)} | {r['triangles']} | "
+                             f"{fmt(r['silhouette_max_px'])} / {fmt(r['silhouette_p99_px'])} | "
+                             f"{fmt(r['depth_rel_p99'])} | {fmt(r['normal_deg_p99'])} | {fmt(r['rmse'])} |")
+            lines += ["", "Fastest setting per mode reaching each silhouette accuracy "
+                      "(max coverage-edge distance):", "",
+                      "| max silhouette error | " + " | ".join(m for m in ["theta", "tess", "tess-pixels"]) +
+                      " | fastest |", "|---|---|---|---|---|"]
+            for level in LEVELS:
+                cells, winner = [], None
+                for mode in ["theta", "tess", "tess-pixels"]:
+                    ok = [r for r in sub if r["mode"] == mode and r["silhouette_max_px"] <= level]
+                    if ok:
+                        b = min(ok, key=lambda r: r["seconds"])
+                        cells.append(f"{b['setting']}: {fmt(b['seconds'])} s")
+                        if winner is None or b["seconds"] < winner[1]:
+                            winner = (mode, b["seconds"])
+                    else:
+                        cells.append("not reached")
+                lines.append(f"| ≤ {level} px | " + " | ".join(cells) + f" | {winner[0] if winner else '–'} |")
+            # Target of the measure-the-trade issue: θ (16 steps) at least twice as fast as the
+            # best tessellated setting whose silhouette error is at most 0.25 px.
+            theta16 = [r for r in sub if r["mode"] == "theta" and r["setting"] == "steps 16"]
+            tess = [r for r in sub if r["mode"].startswith("tess") and r["silhouette_max_px"] <= 0.25]
+            if theta16 and tess:
+                b = min(tess, key=lambda r: r["seconds"])
+                ratio = b["seconds"] / theta16[0]["seconds"]
+                lines += ["", f"θ 16 steps against the fastest tessellation with silhouette ≤ 0.25 px "
+                          f"({b['mode']} {b['setting']}): {fmt(ratio)}× "
+                          f"({'meets' if ratio >= 2 else 'misses'} the 2× target)."]
+            lines.append("")
+    if povray_line:
+        lines += ["## POV-Ray", "", povray_line, ""]
+    with open(path, "w") as f:
+        f.write("\n".join(lines))
+
+
+def plot(rows, csv_path, png_path):
+    if not shutil.which("gnuplot"):
+        print("accuracy: gnuplot not installed: no plot (apt-get install gnuplot-nox)", file=sys.stderr)
+        return
+    # One data block per scene, mode and aa, for gnuplot's index.
+    data = png_path + ".dat"
+    blocks = []
+    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    with open(data, "w") as f:
+        for scene in scenes:
+            for mode in ["theta", "tess", "tess-pixels"]:
+                for aa in AAS:
+                    sub = [r for r in rows if r["scene"] == scene and r["mode"] == mode and r["aa"] == aa]
+                    if not sub:
+                        continue
+                    for r in sub:
+                        # Zero silhouette error (θ mode's edges are exact) is drawn at 0.01 px.
+                        f.write(f"{r['seconds']} {max(r['silhouette_max_px'], 0.01)} {max(r['rmse'], 1e-5)}\n")
+                    f.write("\n\n")
+                    blocks.append((scene, mode, aa))
+    has_cairo = run(["gnuplot", "-e", "set terminal pngcairo"])[0] == 0
+    script = [
+        f"set terminal {'pngcairo' if has_cairo else 'png'} size {400 * len(scenes)},800",
+        f"set output '{png_path}'", "set logscale xy", "set grid", "set key top right font ',8'",
+        f"set multiplot layout 2,{len(scenes)} title 'error against time, per mode (aa 1 open, aa 4 filled)'"]
+    colours = {"theta": "#d62728", "tess": "#1f77b4", "tess-pixels": "#2ca02c"}
+    for col, label in [(2, "max silhouette error, px (0 drawn at 0.01)"), (3, "colour RMSE")]:
+        for scene in scenes:
+            plots = []
+            for k, (s, mode, aa) in enumerate(blocks):
+                if s != scene:
+                    continue
+                pt = 6 if aa == 1 else 7
+                plots.append(f"'{data}' index {k} using 1:{col} with linespoints pt {pt} "
+                             f"lc rgb '{colours[mode]}' title '{mode} aa {aa}'")
+            script += [f"set title '{scene}'", "set xlabel 'seconds'", f"set ylabel '{label}'",
+                       "plot " + ", ".join(plots)]
+    script.append("unset multiplot")
+    code, _, err = run(["gnuplot", "-e", "; ".join(script)])
+    if code != 0:
+        print(f"accuracy: gnuplot failed: {err}", file=sys.stderr)
+    os.remove(data)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--binary", default="build/patchscan")
+    ap.add_argument("--out", default="build/accuracy", help="directory for the CSV, report and plot")
+    ap.add_argument("--size", default="1024x768")
+    ap.add_argument("--repeat", type=int, default=1, help="renders per setting; the fastest counts")
+    ap.add_argument("--scenes", default=",".join(s[0] for s in SCENES))
+    args = ap.parse_args()
+    os.makedirs(args.out, exist_ok=True)
+    work = os.path.join(args.out, "work")
+    os.makedirs(work, exist_ok=True)
+
+    rows = []
+    wanted = args.scenes.split(",")
+    for name, path, extra in SCENES:
+        if name not in wanted:
+            continue
+        for aa in AAS:
+            ref = os.path.join(work, f"{name}_aa{aa}_exact.exr")
+            for mode, setting, margs in settings():
+                exr = ref if mode == "exact" else os.path.join(work, "candidate.exr")
+                secs, wall, st = render(args.binary, path, extra, aa, margs, args.size, exr,
+                                        os.path.join(work, "stats.json"), args.repeat)
+                c = compare(args.binary, exr, ref, os.path.join(work, "compare.json"))
+                row = {"scene": name, "aa": aa, "mode": mode, "setting": setting, "seconds": secs,
+                       "seconds_wall": wall, "peak_rss_mib": st["peak_rss_kib"] / 1024.0,
+                       "triangles": st["triangles"] if mode.startswith("tess") else 0,
+                       "silhouette_max_px": stat(c, "silhouette_px", "max"),
+                       "silhouette_p99_px": stat(c, "silhouette_px", "p99"),
+                       "pixels_coverage_differs": c["pixels_coverage_differs"],
+                       "depth_rel_p99": stat(c, "depth_relative", "p99"),
+                       "depth_rel_max": stat(c, "depth_relative", "max"),
+                       "normal_deg_p99": stat(c, "normal_degrees", "p99"),
+                       "normal_deg_max": stat(c, "normal_degrees", "max"),
+                       "rmse": c["rmse"], "psnr_db": c["psnr"] if c["psnr"] is not None else float("inf")}
+                rows.append(row)
+                print(f"{name} aa {aa} {mode} {setting}: {secs:.3f} s, silhouette "
+                      f"{fmt(row['silhouette_max_px'])} px, RMSE {fmt(row['rmse'])}", file=sys.stderr)
+
+    csv_path = os.path.join(args.out, "accuracy.csv")
+    with open(csv_path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=FIELDS)
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    write_report(rows, os.path.join(args.out, "report.md"), args.size, None)
+    plot(rows, csv_path, os.path.join(args.out, "accuracy.png"))
+    shutil.rmtree(work)
+    print(f"accuracy: wrote {csv_path}, report.md and accuracy.png in {args.out}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
