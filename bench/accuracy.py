@@ -19,6 +19,9 @@ import subprocess
 import sys
 import time
 
+import povray
+from common import camera_args, framed_camera, run
+
 SCENES = [  # name, file, extra camera options
     ("teapot", "surfaces/teapot.bpt", []),
     ("teacup", "surfaces/teacup.bpt", ["--up", "0,1,0"]),
@@ -31,6 +34,7 @@ TESS_PIXELS = [16, 8, 4, 2, 1]
 AAS = [1, 4]
 # The accuracy levels the report asks about: maximum coverage-edge distance, pixels.
 LEVELS = [0.5, 0.25, 0.1]
+MODES = ["theta", "tess", "tess-pixels", "povray"]
 
 FIELDS = ["scene", "aa", "mode", "setting", "seconds", "seconds_wall", "peak_rss_mib", "triangles",
           "silhouette_max_px", "silhouette_p99_px", "pixels_coverage_differs", "depth_rel_p99",
@@ -45,11 +49,6 @@ def settings():
         yield "tess", f"rate {r}", ["--mode", "tess", "--tess-rate", str(r)]
     for p in TESS_PIXELS:
         yield "tess-pixels", f"{p} px", ["--mode", "tess", "--tess-pixels", str(p)]
-
-
-def run(cmd):
-    r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    return r.returncode, r.stdout, r.stderr
 
 
 def render(binary, scene, extra, aa, mode_args, size, out_exr, stats_json, repeat):
@@ -116,19 +115,21 @@ def write_report(rows, path, size, povray_line):
                              f"{fmt(r['depth_rel_p99'])} | {fmt(r['normal_deg_p99'])} | {fmt(r['rmse'])} |")
             lines += ["", "Fastest setting per mode reaching each silhouette accuracy "
                       "(max coverage-edge distance):", "",
-                      "| max silhouette error | " + " | ".join(m for m in ["theta", "tess", "tess-pixels"]) +
-                      " | fastest |", "|---|---|---|---|---|"]
+                      "| max silhouette error | " + " | ".join(MODES) + " | fastest |",
+                      "|---" * (len(MODES) + 2) + "|"]
             for level in LEVELS:
                 cells, winner = [], None
-                for mode in ["theta", "tess", "tess-pixels"]:
+                for mode in MODES:
                     ok = [r for r in sub if r["mode"] == mode and r["silhouette_max_px"] <= level]
                     if ok:
                         b = min(ok, key=lambda r: r["seconds"])
                         cells.append(f"{b['setting']}: {fmt(b['seconds'])} s")
                         if winner is None or b["seconds"] < winner[1]:
                             winner = (mode, b["seconds"])
-                    else:
+                    elif any(r["mode"] == mode for r in sub):
                         cells.append("not reached")
+                    else:
+                        cells.append("–")
                 lines.append(f"| ≤ {level} px | " + " | ".join(cells) + f" | {winner[0] if winner else '–'} |")
             # Target of the measure-the-trade issue: θ (16 steps) at least twice as fast as the
             # best tessellated setting whose silhouette error is at most 0.25 px.
@@ -157,14 +158,14 @@ def plot(rows, csv_path, png_path):
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     with open(data, "w") as f:
         for scene in scenes:
-            for mode in ["theta", "tess", "tess-pixels"]:
+            for mode in ["theta", "tess", "tess-pixels", "povray"]:
                 for aa in AAS:
                     sub = [r for r in rows if r["scene"] == scene and r["mode"] == mode and r["aa"] == aa]
                     if not sub:
                         continue
                     for r in sub:
                         # Zero silhouette error (θ mode's edges are exact) is drawn at 0.01 px.
-                        f.write(f"{r['seconds']} {max(r['silhouette_max_px'], 0.01)} {max(r['rmse'], 1e-5)}\n")
+                        f.write(f"{r['seconds']} {max(r['silhouette_max_px'], 0.01)} {max(r['rmse'], 1e-5) if not math.isnan(r['rmse']) else 'NaN'}\n")
                     f.write("\n\n")
                     blocks.append((scene, mode, aa))
     has_cairo = run(["gnuplot", "-e", "set terminal pngcairo"])[0] == 0
@@ -172,7 +173,7 @@ def plot(rows, csv_path, png_path):
         f"set terminal {'pngcairo' if has_cairo else 'png'} size {400 * len(scenes)},800",
         f"set output '{png_path}'", "set logscale xy", "set grid", "set key top right font ',8'",
         f"set multiplot layout 2,{len(scenes)} title 'error against time, per mode (aa 1 open, aa 4 filled)'"]
-    colours = {"theta": "#d62728", "tess": "#1f77b4", "tess-pixels": "#2ca02c"}
+    colours = {"theta": "#d62728", "tess": "#1f77b4", "tess-pixels": "#2ca02c", "povray": "#9467bd"}
     for col, label in [(2, "max silhouette error, px (0 drawn at 0.01)"), (3, "colour RMSE")]:
         for scene in scenes:
             plots = []
@@ -198,16 +199,21 @@ def main():
     ap.add_argument("--size", default="1024x768")
     ap.add_argument("--repeat", type=int, default=1, help="renders per setting; the fastest counts")
     ap.add_argument("--scenes", default=",".join(s[0] for s in SCENES))
+    ap.add_argument("--povray-steps", type=int, default=4,
+                    help="POV-Ray's u_steps/v_steps (2^n pieces per patch side); 0: no POV-Ray")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
     work = os.path.join(args.out, "work")
     os.makedirs(work, exist_ok=True)
 
     rows = []
+    povray_missing = False
     wanted = args.scenes.split(",")
     for name, path, extra in SCENES:
         if name not in wanted:
             continue
+        cam = framed_camera(args.binary, path, extra, args.size)
+        extra = camera_args(cam)
         for aa in AAS:
             ref = os.path.join(work, f"{name}_aa{aa}_exact.exr")
             for mode, setting, margs in settings():
@@ -229,6 +235,27 @@ def main():
                 rows.append(row)
                 print(f"{name} aa {aa} {mode} {setting}: {secs:.3f} s, silhouette "
                       f"{fmt(row['silhouette_max_px'])} px, RMSE {fmt(row['rmse'])}", file=sys.stderr)
+            # POV-Ray's bicubic_patch on the same patches, camera, size and supersampling.
+            if args.povray_steps > 0 and shutil.which("povray"):
+                w, h = (int(x) for x in args.size.split("x"))
+                pov_scene, pov_png = os.path.join(work, "scene.pov"), os.path.join(work, "pov.png")
+                povray.write_scene(path, pov_scene, cam["eye"], cam["look-at"], cam["up"], cam["fov"], w, h,
+                                   args.povray_steps)
+                secs = min(povray.render(pov_scene, pov_png, w, h, aa) for _ in range(args.repeat))
+                c = compare(args.binary, pov_png, ref, os.path.join(work, "compare.json"))
+                rows.append({"scene": name, "aa": aa, "mode": "povray",
+                             "setting": f"bicubic_patch, {2 ** args.povray_steps}² pieces", "seconds": secs,
+                             "seconds_wall": secs, "peak_rss_mib": float("nan"), "triangles": 0,
+                             "silhouette_max_px": stat(c, "silhouette_px", "max"),
+                             "silhouette_p99_px": stat(c, "silhouette_px", "p99"),
+                             "pixels_coverage_differs": c["pixels_coverage_differs"],
+                             "depth_rel_p99": float("nan"), "depth_rel_max": float("nan"),
+                             "normal_deg_p99": float("nan"), "normal_deg_max": float("nan"),
+                             "rmse": float("nan"), "psnr_db": float("nan")})
+                print(f"{name} aa {aa} povray: {secs:.3f} s, silhouette {fmt(rows[-1]['silhouette_max_px'])} px",
+                      file=sys.stderr)
+            elif args.povray_steps > 0:
+                povray_missing = True
 
     csv_path = os.path.join(args.out, "accuracy.csv")
     with open(csv_path, "w", newline="") as f:
@@ -236,7 +263,14 @@ def main():
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
-    write_report(rows, os.path.join(args.out, "report.md"), args.size, None)
+    pov_note = ("POV-Ray was not found (apt-get install povray): its comparison was skipped."
+                if povray_missing else
+                "POV-Ray 3.7 renders the same Bézier patches as `bicubic_patch` (type 1, flatness 0) with "
+                "one thread (+WT1), the same camera, size and supersampling (aa 1: none; aa L: +AM1 +R L, "
+                "threshold 0); its time is the process's wall time, parsing included. Its colour is not "
+                "comparable (its own lights and material): only its coverage edges are measured."
+                if args.povray_steps > 0 else None)
+    write_report(rows, os.path.join(args.out, "report.md"), args.size, pov_note)
     plot(rows, csv_path, os.path.join(args.out, "accuracy.png"))
     shutil.rmtree(work)
     print(f"accuracy: wrote {csv_path}, report.md and accuracy.png in {args.out}", file=sys.stderr)
