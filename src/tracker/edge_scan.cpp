@@ -117,7 +117,8 @@ void EdgeScan::Advance(double yScan) {
     // Step 3: Newton from the extrapolated start (§3.5), bisection on the piece if it fails.
     for (EdgeTracker& tr : trackers_) {
       const EdgePiece& p = pieces_[tr.piece];
-      const double start = extrapolate_ && tr.hasPrev ? 2.0 * tr.t - tr.tPrev : tr.t;
+      const double start = extrapolate_ ? ExtrapolatedStart(tr.t, tr.tPrev, tr.tPrev2, tr.nSolved,
+                                                              tolerancePx_ <= kQuadraticExtrapolationTolPx) : tr.t;
       auto f = [&](double t, double* v, double* d) {
         const EdgeSample s = SampleEdge(shape, map_, p.edge, t);
         *v = s.y - yScan;
@@ -156,7 +157,9 @@ void EdgeScan::Advance(double yScan) {
       stats_.nFolds += tr.folded;
       if (tr.folded) folds_.push_back(EdgePoint(p.edge, t));
       tr.j = j;
+      tr.tPrev2 = tr.tPrev;
       tr.tPrev = tr.hasPrev ? tr.t : t;
+      ++tr.nSolved;
       tr.t = t;
       tr.hasPrev = true;
     }

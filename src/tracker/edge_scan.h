@@ -53,6 +53,8 @@ struct EdgeTracker {
   double j = 0.0;       // Blinn's Zn (the silhouette function J) here; a sign change is a fold
   bool folded = false;  // J changed sign since the previous scan line, or since the
                         // piece's top for a new tracker (§3.2.2.3)
+  double tPrev2 = 0.0;  // on the scan line before the previous one (when nSolved >= 3)
+  int nSolved = 0;      // scan lines on which this tracker has been solved
 };
 
 struct EdgeScanStats {

@@ -33,6 +33,26 @@ struct NewtonOptions {
   DomainRule domain = DomainRule::Clip;
 };
 
+// The start of a tracker's Newton iteration on the next scan line from its solutions on the
+// last ones: p0 on the latest, p1 and p2 before it, `nSolved` of them known. Paper 001 §3.5
+// extrapolates linearly from two; with three and `quadratic`, the parabola through them
+// (3 p0 − 3 p1 + p2) errs by O(h³) instead of O(h²) but multiplies the solutions' own
+// errors by 7 instead of 3: better at tight tolerances, worse at loose ones (see
+// kQuadraticExtrapolationTolPx). Assumes equally spaced scan lines; any start converges,
+// a worse one takes longer.
+template <class T>
+T ExtrapolatedStart(const T& p0, const T& p1, const T& p2, int nSolved, bool quadratic) {
+  if (quadratic && nSolved >= 3) return T(3.0 * p0 - 3.0 * p1 + p2);
+  if (nSolved >= 2) return T(2.0 * p0 - p1);
+  return p0;
+}
+
+// Trackers solved to this tolerance or tighter extrapolate quadratically. Measured on the
+// teapot's edge trackers at 1024×768 (EdgeScan.ExtrapolationCutsNewtonIterations): at 1e-7 px
+// 1.66 iterations per tracker per line linear, 1.33 quadratic; at 0.1 px 0.46 linear, 0.62
+// quadratic (the solutions' errors, amplified, dominate).
+constexpr double kQuadraticExtrapolationTolPx = 1e-3;
+
 struct Newton1Result {
   double t = 0.0;
   double f = 0.0;  // residual at t

@@ -94,7 +94,8 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   births_.clear();
   bool search = false;  // an event no tracker explains: look for the crossings again
   std::erase_if(trackers_, [&](SilhouetteTracker& t) {
-    const Vec2d start = extrapolate_ && t.hasPrev ? Vec2d(2.0 * t.uv - t.uvPrev) : t.uv;
+    const Vec2d start = extrapolate_ ? ExtrapolatedStart(t.uv, t.uvPrev, t.uvPrev2, t.nSolved,
+                                                           kEdgeTolPx <= kQuadraticExtrapolationTolPx) : t.uv;
     Vec2d uv;
     // Steps are clipped at the boundary, not refused: a path that grazes an edge on its
     // way to a crossing inside still arrives; one whose crossing has left the domain
@@ -107,9 +108,11 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
       if (!OnBoundary(uv)) search = true;
       return true;
     }
+    t.uvPrev2 = t.uvPrev;
     t.uvPrev = t.uv;
     t.uv = uv;
     t.hasPrev = true;
+    ++t.nSolved;
     return false;
   });
   // A new tracker's seed may sit on the boundary (a fold) with the first step pointing

@@ -20,6 +20,8 @@ namespace patchscan {
 struct SilhouetteTracker {
   Vec2d uv, uvPrev;
   bool hasPrev = false;
+  Vec2d uvPrev2 = Vec2d::Zero();  // the scan line before the previous one (when nSolved >= 3)
+  int nSolved = 1;                // scan lines on which this tracker has been solved
 };
 
 struct SilhouetteScanStats {
