@@ -5,7 +5,7 @@ peak memory above the program's baseline.
 
 Memory is the peak resident set reported by `render --stats-json`; the baseline is the same
 figure for a 1×1 render of the teapot (the mapped libraries and the scene). Seconds are set-up
-plus render (which includes streaming the rows to the PNG encoder), the fastest of the repeats.
+plus render without encoding and writing the PNG, the fastest of the repeats.
 Writes scaling.csv and scaling.md.
 """
 import argparse
@@ -34,9 +34,9 @@ def render(binary, scene, size, args, work, repeat, extra=()):
             sys.exit(f"scaling: {' '.join(cmd)} failed ({r.returncode}):\n{r.stderr}")
         with open(js) as f:
             st = json.load(f)
-        secs = st["seconds_tessellate"] + st["seconds_render"]
+        secs = st["seconds_tessellate"] + st["seconds_render"] - st["seconds_output"]
         if best is None or secs < best[0]:
-            best = (secs, st["peak_rss_kib"] / 1024.0)
+            best = (secs, st["peak_rss_kib"] / 1024.0, secs + st["seconds_output"] + st["seconds_load"])
     return best
 
 
@@ -71,13 +71,13 @@ def main():
     teapot = "surfaces/teapot.bpt"
     rows = []
 
-    _, baseline = render(args.binary, teapot, "1x1", MODES[1][1], work, 1)
+    _, baseline, _ = render(args.binary, teapot, "1x1", MODES[1][1], work, 1)
     print(f"baseline (1x1 render): {baseline:.1f} MiB", file=sys.stderr)
 
     size = 512
     while size <= args.max_size:
         for name, margs in MODES:
-            secs, mib = render(args.binary, teapot, f"{size}x{size}", margs, work, args.repeat)
+            secs, mib, _ = render(args.binary, teapot, f"{size}x{size}", margs, work, args.repeat)
             rows.append({"sweep": "image", "n": size, "mode": name, "seconds": secs, "peak_mib": mib,
                          "above_baseline_mib": mib - baseline})
             print(f"image {size}² {name}: {secs:.3f} s, {mib:.1f} MiB", file=sys.stderr)
@@ -88,7 +88,7 @@ def main():
         scene = os.path.join(work, f"teapots{n}.bpt")
         teapots(teapot, n, scene)
         for name, margs in MODES:
-            secs, mib = render(args.binary, scene, "1024x768", margs, work, args.repeat)
+            secs, mib, _ = render(args.binary, scene, "1024x768", margs, work, args.repeat)
             rows.append({"sweep": "teapots", "n": n, "mode": name, "seconds": secs, "peak_mib": mib,
                          "above_baseline_mib": mib - baseline})
             print(f"{n} teapots {name}: {secs:.3f} s, {mib:.1f} MiB", file=sys.stderr)
@@ -98,20 +98,22 @@ def main():
     if not args.no_targets:
         # The 4096×3072 teapot against POV-Ray's bicubic_patch, same camera, one thread each.
         cam = framed_camera(args.binary, teapot, [], "4096x3072")
-        secs, mib = render(args.binary, teapot, "4096x3072", MODES[0][1], work, args.repeat, camera_args(cam))
-        line = f"- 4096×3072 teapot, θ 16 steps, aa 1, one thread: {secs:.2f} s ({mib:.1f} MiB peak)"
+        secs, mib, total = render(args.binary, teapot, "4096x3072", MODES[0][1], work, args.repeat,
+                                  camera_args(cam))
+        line = (f"- 4096×3072 teapot, θ 16 steps, aa 1, one thread: {secs:.2f} s to render, {total:.2f} s with "
+                f"loading and writing the PNG ({mib:.1f} MiB peak)")
         pov_scene, pov_png = os.path.join(work, "teapot.pov"), os.path.join(work, "pov.png")
         povray.write_scene(teapot, pov_scene, cam["eye"], cam["look-at"], cam["up"], cam["fov"], 4096, 3072, 4)
         pov = povray.render(pov_scene, pov_png, 4096, 3072, 1)
         if pov is None:
             line += "; POV-Ray not installed (apt-get install povray): no comparison."
         else:
-            ratio = secs / pov
+            ratio = total / pov
             line += (f"; POV-Ray 3.7 bicubic_patch (16² pieces per patch, +WT1, no AA) {pov:.2f} s wall: "
-                     f"patchscan takes {ratio:.3f} of its time (target ≤ 0.05: "
+                     f"patchscan, writing its PNG too, takes {ratio:.3f} of its time (target ≤ 0.05: "
                      f"{'met' if ratio <= 0.05 else f'missed by {ratio / 0.05:.1f}×'}).")
         targets.append(line)
-        secs, mib = render(args.binary, teapot, "16384x16384", MODES[0][1], work, 1)
+        secs, mib, _ = render(args.binary, teapot, "16384x16384", MODES[0][1], work, 1)
         targets.append(f"- 16384×16384 teapot, θ 16 steps, aa 1: {secs:.1f} s, peak {mib:.1f} MiB, "
                        f"{mib - baseline:.1f} MiB above the baseline ({'within' if mib - baseline <= 64 else 'over'} "
                        f"the 64 MiB target).")

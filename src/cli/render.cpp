@@ -28,8 +28,8 @@ long PeakResidentKiB() {
   return u.ru_maxrss;
 }
 
-// Passes rows on, and when stderr is a terminal shows the percentage done, at most a few
-// times a second.
+// Passes rows on, timing how long the next sink (the image writer) takes, and when stderr
+// is a terminal shows the percentage done, at most a few times a second.
 class ProgressSink final : public raster::RowSink {
  public:
   ProgressSink(raster::RowSink& next, int height, std::ostream& err)
@@ -46,14 +46,19 @@ class ProgressSink final : public raster::RowSink {
         err_ << "\rrender: " << (100 * (y + 1)) / height_ << "%" << std::flush;
       }
     }
-    return next_.WriteRow(y, pixels);
+    const auto t0 = std::chrono::steady_clock::now();
+    const bool ok = next_.WriteRow(y, pixels);
+    outputSeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return ok;
   }
+  double OutputSeconds() const { return outputSeconds_; }
 
  private:
   raster::RowSink& next_;
   int height_;
   std::ostream& err_;
   bool show_, shown_ = false;
+  double outputSeconds_ = 0.0;
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
@@ -229,11 +234,14 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
     err << "patchscan: " << o.output << ": writing the image failed\n";
     return kExitOutputError;
   }
+  const auto tCommit = Clock::now();
   if (auto committed = writer.Commit(); auto* why = std::get_if<std::string>(&committed)) {
     err << "patchscan: " << *why << '\n';
     return kExitOutputError;
   }
   const auto t2 = Clock::now();
+  // Encoding and writing the image, inside the render's time.
+  const double outputSec = progress.OutputSeconds() + std::chrono::duration<double>(t2 - tCommit).count();
 
   // Step 3: statistics.
   const double loadSec = std::chrono::duration<double>(tLoaded - t0).count();
@@ -280,7 +288,8 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
         << stats->nSamplesCovered << "\nshading calls: " << stats->nShadingCalls << " (+"
         << stats->nExtraShadingCalls << " adaptive-stochastic, " << stats->nSuperSampledPixels
         << " pixels super-sampled)\ntime: load " << loadSec << " s, " << (exact ? "set up " : "tessellate ")
-        << tessSec << " s, render " << renderSec << " s\npeak memory: " << peakKiB << " KiB\n"
+        << tessSec << " s, render " << renderSec << " s (of which writing the image " << outputSec
+        << " s)\npeak memory: " << peakKiB << " KiB\n"
         << "texture: " << (texture ? (texture->Opened() ? "opened" : "never needed") : "none")
         << (texture ? ", " + std::to_string(texture->Lookups()) + " lookups" : std::string()) << '\n';
   }
@@ -314,7 +323,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
        << ", \"theta_chains\": " << xs.theta.nChains << ", \"theta_vertices\": " << xs.theta.nVertices
        << ", \"theta_steps\": " << xs.theta.nSteps << ", \"theta_turn_points\": " << xs.theta.nTurnPoints
        << "}, \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
-       << ", \"seconds_render\": " << renderSec << ", \"peak_rss_kib\": " << peakKiB << "}\n";
+       << ", \"seconds_render\": " << renderSec << ", \"seconds_output\": " << outputSec << ", \"peak_rss_kib\": " << peakKiB << "}\n";
     if (!js) {
       err << "patchscan: " << o.statsJson << ": cannot write statistics\n";
       return kExitOutputError;

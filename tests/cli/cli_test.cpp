@@ -144,7 +144,7 @@ TEST(Cli, ExactModeIsTheDefaultAndReportsItsTrackers) {
     EXPECT_NE(r.err.find(line), std::string::npos) << "missing '" << line << "' in\n" << r.err;
   const std::string json = Slurp(js);
   for (const char* key : {"\"mode\": \"exact\"", "\"newton_iterations_per_tracker_row\": ",
-                          "\"untracked_silhouettes\": ", "\"failures\": 0"})
+                          "\"untracked_silhouettes\": ", "\"failures\": 0", "\"seconds_output\": "})
     EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
   // What needs triangles is refused in exact mode, and the overlay outside it.
   for (const char* args : {" --shading flat", " --shading gouraud", " --hidden-line",
