@@ -40,12 +40,13 @@ const cli::LoadedScene& Teapot() {
 void BM_TrackerStep(benchmark::State& state) {
   const auto& t = Teapot();
   const bool extrapolate = state.range(0) != 0;
-  long steps = 0, iterations = 0;
+  long steps = 0, iterations = 0, bisections = 0, searches = 0;
   for (auto _ : state) {
     state.PauseTiming();
     std::vector<std::unique_ptr<EdgeScan>> edges;
     std::vector<std::unique_ptr<SilhouetteScan>> silhouettes;
     std::vector<ScreenMap> maps;
+    maps.reserve(t.scene.surfaces.size());  // the scans keep references to their maps
     for (const Surface& s : t.scene.surfaces) {
       maps.emplace_back(t.view.camera, s.worldFromObject);
       edges.push_back(std::make_unique<EdgeScan>(s, maps.back(), extrapolate));
@@ -61,10 +62,17 @@ void BM_TrackerStep(benchmark::State& state) {
       }
     }
     for (std::size_t k = 0; k < edges.size(); ++k)
+    {
       iterations += edges[k]->Stats().nNewtonIterations + silhouettes[k]->Stats().nNewtonIterations;
+      bisections += edges[k]->Stats().nRepairs;
+      searches += silhouettes[k]->Stats().nRepairSearches;
+    }
   }
   state.SetItemsProcessed(steps);
+  const double runs = static_cast<double>(state.iterations());
   state.counters["iterations_per_step"] = static_cast<double>(iterations) / static_cast<double>(steps);
+  state.counters["edge_bisections"] = static_cast<double>(bisections) / runs;
+  state.counters["repair_searches"] = static_cast<double>(searches) / runs;
 }
 BENCHMARK(BM_TrackerStep)->Arg(1)->Arg(0)->ArgName("extrapolate")->Unit(benchmark::kMillisecond);
 
