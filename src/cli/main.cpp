@@ -23,7 +23,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.footer(
       "Exit codes: 0 success, 1 unreadable or malformed input file, 2 bad command line,\n"
-      "3 the output could not be written ('compare' has its own: see its help).\n"
+      "3 the output could not be written, 130 interrupted (Ctrl-C or SIGTERM: no output is\n"
+      "left behind); 'compare' has its own: see its help.\n"
       "Run 'patchscan COMMAND --help' for one command's options.");
 
   InfoOptions info;

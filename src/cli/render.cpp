@@ -4,6 +4,8 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <csignal>
+
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -28,7 +30,20 @@ long PeakResidentKiB() {
   return u.ru_maxrss;
 }
 
-// Passes rows on, timing how long the next sink (the image writer) takes, and when stderr
+// Set by SIGINT and SIGTERM during a render; the row sink below stops the render at the
+// next row, and the unfinished image's temporary file is removed.
+volatile std::sig_atomic_t gInterrupted = 0;
+extern "C" void OnInterrupt(int) { gInterrupted = 1; }
+
+void CatchInterrupts() {
+  struct sigaction action {};
+  action.sa_handler = OnInterrupt;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+// Passes rows on (none once interrupted), timing how long the next sink (the image writer) takes, and when stderr
 // is a terminal shows the percentage done, at most a few times a second.
 class ProgressSink final : public raster::RowSink {
  public:
@@ -38,6 +53,7 @@ class ProgressSink final : public raster::RowSink {
     if (shown_) err_ << "\r              \r" << std::flush;
   }
   bool WriteRow(int y, const float* pixels) override {
+    if (gInterrupted) return false;
     if (show_) {
       const auto now = std::chrono::steady_clock::now();
       if (now - last_ > std::chrono::milliseconds(250)) {
@@ -142,6 +158,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
 int RunRender(const RenderOptions& o, std::ostream& err) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
+  CatchInterrupts();
   auto loaded = LoadSceneAndCamera(o.file, o.camera, err);
   if (const int* code = std::get_if<int>(&loaded)) return *code;
   const Scene& scene = std::get<LoadedScene>(loaded).scene;
@@ -170,11 +187,16 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
     if (o.mode == "theta") xo.thetaSteps = o.thetaSteps;
     scan = std::make_unique<ExactScan>(scene.surfaces, camera, xo);
   } else {
-    for (size_t k = 0; k < scene.surfaces.size(); ++k)
+    for (size_t k = 0; k < scene.surfaces.size(); ++k) {
+      if (gInterrupted) {
+        err << "patchscan: interrupted; no image written\n";
+        return kExitInterrupted;
+      }
       if (o.tessPixels > 0)
         TessellateToScreen(scene.surfaces[k], camera, o.tessPixels, static_cast<std::uint32_t>(k), &tess);
       else
         TessellateUniform(scene.surfaces[k], o.tessRate, static_cast<std::uint32_t>(k), &tess);
+    }
     WeldBoundaryVertices(&tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
     mesh = ToRasterMesh(tess, camera);
   }
@@ -227,6 +249,10 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   auto stats = exact ? raster::RenderFragments(*scan, s, progress) : raster::RenderMesh(mesh, s, progress);
   if (stats && overlay && !overlay->Finish()) stats.reset();
   if (!stats) {
+    if (gInterrupted) {
+      err << "\npatchscan: interrupted; no image written\n";
+      return kExitInterrupted;
+    }
     if (texture && !texture->Error().empty()) {
       err << "patchscan: " << texture->Error() << '\n';
       return kExitInputError;

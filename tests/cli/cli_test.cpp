@@ -1,6 +1,8 @@
 // The patchscan program end to end: exit codes, messages naming file:line, help, version.
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -243,6 +245,37 @@ TEST(Cli, CompareMeasuresAndAnswersInTheMannerOfIdiff) {
   EXPECT_EQ(Patchscan("compare " + exact).code, 4);
   EXPECT_EQ(Patchscan("compare " + exact + " " + exact + " --fail-rmse -1").code, 4);
   EXPECT_EQ(Patchscan("compare " + exact + " " + exact + " --diff /nonexistent/d.png").code, 4);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, InterruptStopsTheRenderAndLeavesNoFile) {
+  // A render far too long to finish, interrupted once its temporary file exists (so the
+  // signal arrives mid-render, not before the handler is installed).
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_interrupt";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string out = (dir / "big.png").string();
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    std::freopen("/dev/null", "w", stderr);
+    execl(PATCHSCAN_BINARY, PATCHSCAN_BINARY, "render", kTeapot.c_str(), "-o", out.c_str(), "--size",
+          "16384x16384", "--aa", "8", static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  bool started = false;
+  for (int i = 0; i < 6000 && !started; ++i) {  // up to a minute for the render to start
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+      started |= e.path().filename().string().find(".partial-") != std::string::npos;
+    if (!started) usleep(10000);
+  }
+  EXPECT_TRUE(started);
+  kill(pid, SIGINT);
+  int status = 0;
+  ASSERT_EQ(waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  EXPECT_EQ(WEXITSTATUS(status), 130);
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), {}), 0) << "files left in " << dir;
   std::filesystem::remove_all(dir);
 }
 
