@@ -1,0 +1,144 @@
+// The exact X scan against the ray caster, sample by sample: the agreement test shared by
+// the exact-scan tests and the extremes suite.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <iostream>
+#include <span>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "xscan/exact_scan.h"
+#include "xscan/ray_caster.h"
+
+namespace patchscan::test {
+
+// Depths (eye distance w) of the two methods agree to this, relative: both solve to
+// 1e-7 px or better, which moves w by far less.
+constexpr double kDepthRel = 1e-6;
+// A sample may differ only within this distance of a true edge (a boundary, silhouette or
+// occlusion edge): there the answer depends on the last bits of the solves.
+constexpr double kEdgePx = 1e-3;
+// Across an occlusion edge the nearest depth jumps; within a surface it changes by far
+// less than this (relative) over kEdgePx.
+constexpr double kDepthJumpRel = 1e-4;
+
+struct Nearest {
+  double w = INFINITY;
+  std::uint32_t surface = 0;
+  bool covered() const { return std::isfinite(w); }
+};
+
+// Collects the nearest fragment of each sample of a row.
+class NearestRow final : public raster::FragmentRow {
+ public:
+  explicit NearestRow(std::vector<Nearest>* row) : row_(row) {}
+  void Add(int column, const raster::Fragment& f) override {
+    ASSERT_GE(column, 0);
+    ASSERT_LT(column, static_cast<int>(row_->size()));
+    EXPECT_TRUE(f.normal.allFinite() && f.position.allFinite() && std::isfinite(f.w));
+    Nearest& n = (*row_)[column];
+    if (f.w < n.w) n = {f.w, f.surfaceId};
+  }
+
+ private:
+  std::vector<Nearest>* row_;
+};
+
+Camera View(const Vec3& eye, int size = 96, const Vec3& up = Vec3(0, 0, 1)) {
+  Camera c;
+  c.width = c.height = size;
+  c.eye = eye;
+  c.lookAt = Vec3::Zero();
+  c.up = up;
+  c.fovDeg = 40;
+  c.hither = 0.01;
+  return c;
+}
+
+struct Agreement {
+  long samples = 0, covered = 0, nearEdge = 0, mismatches = 0;
+  double worstDepthRel = 0.0;
+  ExactScanStats stats;
+  std::string firstMismatches;
+};
+
+// Samples at pixel centres, one per pixel; or with `spacing` below 1, on the lattice of
+// the back end's supersampling (sample rows and columns `spacing` apart from 0).
+Agreement Compare(std::span<const Surface> surfaces, const Camera& camera, double spacing = 1.0) {
+  Agreement a;
+  ExactScan scan(surfaces, camera);
+  const test::RayCaster caster(surfaces, camera);
+  const double offset = spacing == 1.0 ? 0.5 : 0.0;
+  const int nx = spacing == 1.0 ? camera.width : static_cast<int>(std::lround(camera.width / spacing)) + 1;
+  const int ny = spacing == 1.0 ? camera.height : static_cast<int>(std::lround(camera.height / spacing)) + 1;
+  const raster::SampleColumns cols{offset, spacing, nx};
+  std::vector<Nearest> row(nx);
+  auto reference = [&](double x, double y) {
+    const auto hit = caster.Nearest(x, y);
+    return hit ? Nearest{hit->w, static_cast<std::uint32_t>(hit->surface)} : Nearest{};
+  };
+  auto nearEdge = [&](double x, double y, const Nearest& at) {
+    for (const auto& [dx, dy] : {std::pair{kEdgePx, 0.0}, {-kEdgePx, 0.0}, {0.0, kEdgePx}, {0.0, -kEdgePx}}) {
+      const Nearest q = reference(x + dx, y + dy);
+      if (q.covered() != at.covered() ||
+          (q.covered() && std::abs(q.w - at.w) > kDepthJumpRel * at.w))
+        return true;
+    }
+    return false;
+  };
+  for (int j = 0; j < ny; ++j) {
+    const double y = offset + j * spacing;
+    std::fill(row.begin(), row.end(), Nearest{});
+    NearestRow out(&row);
+    EXPECT_TRUE(scan.ScanRow(y, cols, out));
+    for (int i = 0; i < nx; ++i) {
+      const double x = cols.At(i);
+      const Nearest want = reference(x, y);
+      const Nearest& got = row[i];
+      ++a.samples;
+      a.covered += want.covered();
+      bool differ = got.covered() != want.covered();
+      if (!differ && got.covered()) {
+        const double rel = std::abs(got.w - want.w) / want.w;
+        differ = rel > kDepthRel;
+        if (!differ) a.worstDepthRel = std::max(a.worstDepthRel, rel);
+      }
+      if (!differ) continue;
+      if (nearEdge(x, y, want)) {
+        ++a.nearEdge;
+        continue;
+      }
+      if (++a.mismatches <= 5) {
+        std::ostringstream m;
+        m << " (" << x << ", " << y << "): exact " << (got.covered() ? std::to_string(got.w) : "-")
+          << " s" << got.surface << ", reference " << (want.covered() ? std::to_string(want.w) : "-")
+          << " s" << want.surface << ";";
+        a.firstMismatches += m.str();
+      }
+    }
+  }
+  a.stats = scan.Stats();
+  return a;
+}
+
+void ExpectAgree(std::span<const Surface> surfaces, const Camera& camera, const std::string& name,
+                 long minCovered = 50) {
+  const Agreement a = Compare(surfaces, camera);
+  std::cout << name << ": " << a.samples << " samples, " << a.covered << " covered, "
+            << a.nearEdge << " differ within " << kEdgePx << " px of an edge, worst depth "
+            << a.worstDepthRel << " relative; walks " << a.stats.walk.nWalks << ", silhouette points "
+            << a.stats.walk.nSilhouettes << ", repairs " << a.stats.walk.nUntrackedSilhouettes << "+"
+            << a.stats.walk.nUntrackedExits << ", failures " << a.stats.walk.nFailures << '\n';
+  EXPECT_EQ(a.mismatches, 0) << name << a.firstMismatches;
+  EXPECT_GE(a.covered, minCovered) << name << ": the view misses the surface";
+  EXPECT_EQ(a.stats.walk.nFailures, 0) << name;
+}
+
+void ExpectAgree(const Surface& s, const Camera& camera, const std::string& name, long minCovered = 50) {
+  ExpectAgree(std::span<const Surface>(&s, 1), camera, name, minCovered);
+}
+
+}  // namespace patchscan::test
