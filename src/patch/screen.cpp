@@ -14,4 +14,10 @@ std::optional<Bounds3> ScreenBounds(const Surface& s, const ScreenMap& map) {
   return box;
 }
 
+bool WhollyBeforeHither(const Surface& s, const ScreenMap& map, double hither) {
+  for (const Vec3& p : ObjectHull(s))
+    if (map.Homogeneous(p).w() >= hither) return false;
+  return true;
+}
+
 }  // namespace patchscan

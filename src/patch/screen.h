@@ -70,6 +70,10 @@ inline Vec3 ScreenNormal(const SurfaceDerivs& s) { return s.dpdu.cross(s.dpdv); 
 // projection of the hull is unbounded.
 std::optional<Bounds3> ScreenBounds(const Surface& s, const ScreenMap& map);
 
+// True when every hull point is nearer to the eye than `hither` along the view axis (or
+// behind the eye): nothing of the surface can be seen.
+bool WhollyBeforeHither(const Surface& s, const ScreenMap& map, double hither);
+
 // ---- inline ----
 
 inline void ScreenMap::FromObject(const SurfaceDerivs& o, DerivOrder order,

@@ -66,6 +66,8 @@ ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, Ex
   pending_.reserve(surfaces.size());
   for (std::size_t k = 0; k < surfaces.size(); ++k) {
     const ScreenMap map(camera, surfaces[k].worldFromObject);
+    // Wholly nearer than the hither plane (or behind the eye): never set up.
+    if (WhollyBeforeHither(surfaces[k], map, camera.hither)) continue;
     const auto box = ScreenBounds(surfaces[k], map);
     // A surface reaching behind the eye has no finite screen box: active throughout.
     if (box) pending_.push_back({box->lo.y(), box->hi.y(), k});

@@ -47,7 +47,7 @@ class NearestRow final : public raster::FragmentRow {
   std::vector<Nearest>* row_;
 };
 
-Camera View(const Vec3& eye, int size = 96, const Vec3& up = Vec3(0, 0, 1)) {
+inline Camera View(const Vec3& eye, int size = 96, const Vec3& up = Vec3(0, 0, 1)) {
   Camera c;
   c.width = c.height = size;
   c.eye = eye;
@@ -67,7 +67,7 @@ struct Agreement {
 
 // Samples at pixel centres, one per pixel; or with `spacing` below 1, on the lattice of
 // the back end's supersampling (sample rows and columns `spacing` apart from 0).
-Agreement Compare(std::span<const Surface> surfaces, const Camera& camera, double spacing = 1.0) {
+inline Agreement Compare(std::span<const Surface> surfaces, const Camera& camera, double spacing = 1.0) {
   Agreement a;
   ExactScan scan(surfaces, camera);
   const test::RayCaster caster(surfaces, camera);
@@ -124,7 +124,7 @@ Agreement Compare(std::span<const Surface> surfaces, const Camera& camera, doubl
   return a;
 }
 
-void ExpectAgree(std::span<const Surface> surfaces, const Camera& camera, const std::string& name,
+inline void ExpectAgree(std::span<const Surface> surfaces, const Camera& camera, const std::string& name,
                  long minCovered = 50) {
   const Agreement a = Compare(surfaces, camera);
   std::cout << name << ": " << a.samples << " samples, " << a.covered << " covered, "
@@ -137,7 +137,7 @@ void ExpectAgree(std::span<const Surface> surfaces, const Camera& camera, const 
   EXPECT_EQ(a.stats.walk.nFailures, 0) << name;
 }
 
-void ExpectAgree(const Surface& s, const Camera& camera, const std::string& name, long minCovered = 50) {
+inline void ExpectAgree(const Surface& s, const Camera& camera, const std::string& name, long minCovered = 50) {
   ExpectAgree(std::span<const Surface>(&s, 1), camera, name, minCovered);
 }
 

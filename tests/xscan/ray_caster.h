@@ -30,6 +30,11 @@ class RayCaster {
   // quadratically from a cell's centre; near a fold it slows to linear, hence the cap).
   static constexpr double kTolPx = 1e-10;
   static constexpr int kMaxIterations = 60;
+  // Newton that stops converging (the residual no longer halves) with a residual within
+  // kStallTolPx has reached the rounding floor of the screen position, and is accepted.
+  // Far from the origin that floor is high: at 1e6 world units the projection subtracts
+  // numbers near 5e7 px, whose rounding is ~1e-8 px.
+  static constexpr double kStallTolPx = 1e-6;
   // Cells are subdivided until their screen box is this small before Newton starts, and
   // at most this deep.
   static constexpr double kLeafPx = 0.5;
@@ -135,11 +140,16 @@ class RayCaster {
   bool Solve(std::size_t k, double u0, double v0, double h, double x, double y,
              std::vector<RayHit>* hits) const {
     Vec2 uv(u0 + 0.5 * h, v0 + 0.5 * h);
+    double previous = INFINITY;
     for (int it = 0; it < kMaxIterations; ++it) {
       ScreenDerivs d;
       EvaluateScreen(surfaces_[k], maps_[k], uv.x(), uv.y(), DerivOrder::First, &d);
       const Vec2 f(d.p.x() - x, d.p.y() - y);
-      if (f.cwiseAbs().maxCoeff() <= kTolPx) {
+      // Converged; or stalled at the rounding floor (kStallTolPx).
+      const double residual = f.cwiseAbs().maxCoeff();
+      const bool stalled = residual > 0.5 * previous;
+      previous = residual;
+      if (residual <= kTolPx || (stalled && residual <= kStallTolPx)) {
         const double grow = 0.25 * h;
         if (uv.x() < u0 - grow || uv.x() > u0 + h + grow || uv.y() < v0 - grow || uv.y() > v0 + h + grow)
           return false;
