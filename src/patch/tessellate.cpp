@@ -136,22 +136,24 @@ void TessellateToScreen(const Surface& s, const Camera& camera, double pixels,
 namespace patchscan {
 
 std::size_t WeldBoundaryVertices(TessMesh* mesh, double tolerance) {
-  // A hash grid of cell size `tolerance`: a match lies in one of the 27 cells around.
+  // A hash grid of cell size `tolerance`: a match lies in one of the 27 cells around. Cells
+  // are indexed by the floored quotients kept as doubles, which hold any magnitude (far
+  // beyond 2^63 / tolerance, where an integer index would overflow); the hash mixes their
+  // bits in unsigned arithmetic.
   struct Key {
-    long long x, y, z;
+    double x, y, z;
     bool operator==(const Key&) const = default;
   };
   struct KeyHash {
     size_t operator()(const Key& k) const {
-      return std::hash<long long>()(k.x * 73856093LL ^ k.y * 19349663LL ^ k.z * 83492791LL);
+      const std::hash<double> h;
+      return h(k.x) * 73856093u ^ h(k.y) * 19349663u ^ h(k.z) * 83492791u;
     }
   };
   if (!(tolerance > 0.0)) return 0;
   std::unordered_map<Key, std::vector<std::uint32_t>, KeyHash> grid;
   auto cell = [&](const Vec3& p) {
-    return Key{static_cast<long long>(std::floor(p.x() / tolerance)),
-               static_cast<long long>(std::floor(p.y() / tolerance)),
-               static_cast<long long>(std::floor(p.z() / tolerance))};
+    return Key{std::floor(p.x() / tolerance), std::floor(p.y() / tolerance), std::floor(p.z() / tolerance)};
   };
   std::size_t moved = 0;
   for (std::uint32_t i = 0; i < mesh->vertices.size(); ++i) {
@@ -159,9 +161,9 @@ std::size_t WeldBoundaryVertices(TessMesh* mesh, double tolerance) {
     if (!(v.uv.x() == 0 || v.uv.x() == 1 || v.uv.y() == 0 || v.uv.y() == 1)) continue;
     const Key c = cell(v.position);
     const TessVertex* match = nullptr;
-    for (long long dz = -1; dz <= 1 && !match; ++dz)
-      for (long long dy = -1; dy <= 1 && !match; ++dy)
-        for (long long dx = -1; dx <= 1 && !match; ++dx) {
+    for (double dz = -1; dz <= 1 && !match; ++dz)
+      for (double dy = -1; dy <= 1 && !match; ++dy)
+        for (double dx = -1; dx <= 1 && !match; ++dx) {
           auto it = grid.find({c.x + dx, c.y + dy, c.z + dz});
           if (it == grid.end()) continue;
           for (std::uint32_t j : it->second)

@@ -114,6 +114,18 @@ std::vector<Case> Cases() {
                {FromPoints([](int i, int j) { const double t = (i + j) / 6.0; return Vec3(t, 2 * t, 0.0); })}, Oblique(),
                true, 0, ""});
   c.push_back({"two coincident patches", {Lifted(), Lifted()}, Oblique(), true, 100, ""});
+  // A sphere whose screen-space top (a maximum of y) lies on a sample row: y = 10.5 is a
+  // row of aa 1, y = 10 one of aa 8's lattice. Radius 1 at distance 4 on the view axis: the
+  // top is f·r/√(d² − r²) above the centre row, so f = (18 − y)·√15 sets it.
+  for (double yTop : {10.5, 10.0}) {
+    Camera cam = Oblique(1.0, Vec3::Zero(), 48, 36);
+    cam.eye = Vec3(0, -4, 0);
+    cam.fovDeg = 2.0 * std::atan(18.0 / ((18.0 - yTop) * std::sqrt(15.0))) * 180.0 / M_PI;
+    c.push_back({"sphere top on sample row " + std::to_string(yTop), {Surface{Sphere(1.0, -1.0, 1.0, 360), Affine3::Identity()}},
+                 cam, true, 100,
+                 "on the row through the top the level curve is a single point, a sample exactly on the "
+                 "silhouette where covered and uncovered are both right; the walks started there give up"});
+  }
   c.push_back({"1x1 image", {Lifted()}, Oblique(1.0, Vec3::Zero(), 1, 1), true, 1, ""});
   c.push_back({"4096x3 image", {Lifted()}, Oblique(1.0, Vec3::Zero(), 4096, 3), true, 0, ""});
   return c;
@@ -122,22 +134,28 @@ std::vector<Case> Cases() {
 // Checks every value of every row and counts covered pixels (alpha).
 class CheckingSink final : public raster::RowSink {
  public:
-  CheckingSink(int width, std::string what) : width_(width), what_(std::move(what)) {}
+  CheckingSink(int width, std::string what, bool keepAlpha = true)
+      : width_(width), what_(std::move(what)), keepAlpha_(keepAlpha) {}
   bool WriteRow(int y, const float* pixels) override {
     for (int k = 0; k < width_ * raster::kChannels; ++k)
       if (!std::isfinite(pixels[k]) && nonFinite_++ == 0)
         ADD_FAILURE() << what_ << ": channel " << k % raster::kChannels << " of pixel (" << k / raster::kChannels
                       << ", " << y << ") is " << pixels[k];
-    alpha_.reserve(alpha_.size() + static_cast<std::size_t>(width_));
-    for (int x = 0; x < width_; ++x) alpha_.push_back(pixels[x * raster::kChannels + 3]);
+    for (int x = 0; x < width_; ++x) {
+      coverage_ += pixels[x * raster::kChannels + 3];
+      if (keepAlpha_) alpha_.push_back(pixels[x * raster::kChannels + 3]);
+    }
     return true;
   }
   const std::vector<float>& Alpha() const { return alpha_; }
+  double Coverage() const { return coverage_; }  // the sum of alpha, in pixels
 
  private:
   int width_;
   std::string what_;
+  bool keepAlpha_;
   long nonFinite_ = 0;
+  double coverage_ = 0.0;
   std::vector<float> alpha_;
 };
 
@@ -153,11 +171,12 @@ raster::RenderSettings Settings(const Camera& camera, int aa) {
 
 // Renders in a direct mode (thetaSteps 0: exact); the alpha of every pixel. Walks that
 // give up are failures unless the case explains them.
-std::vector<float> RenderDirect(const Case& c, int aa, int thetaSteps, const std::string& what) {
+std::vector<float> RenderDirect(const Case& c, int aa, int thetaSteps, const std::string& what,
+                                double* coverage = nullptr) {
   ExactScanOptions o;
   o.thetaSteps = thetaSteps;
   ExactScan scan(c.surfaces, c.camera, o);
-  CheckingSink sink(c.camera.width, what);
+  CheckingSink sink(c.camera.width, what, coverage == nullptr);
   EXPECT_TRUE(raster::RenderFragments(scan, Settings(c.camera, aa), sink).has_value()) << what;
   const ExactScanStats st = scan.Stats();
   std::cout << what << ": walks " << st.walk.nWalks << ", x-scan Newton " << st.walk.nNewtonCalls << " calls / "
@@ -165,6 +184,7 @@ std::vector<float> RenderDirect(const Case& c, int aa, int thetaSteps, const std
   if (c.knownGap.empty()) {
     EXPECT_EQ(st.walk.nFailures, 0) << what;
   }
+  if (coverage) *coverage = sink.Coverage();
   return sink.Alpha();
 }
 
@@ -177,7 +197,7 @@ void RenderTessellated(const Case& c, int aa, const std::string& what) {
   }
   WeldBoundaryVertices(&tess, kWeldRelTol * box.Diagonal().norm());
   const raster::TriangleMesh mesh = ToRasterMesh(tess, c.camera);
-  CheckingSink sink(c.camera.width, what);
+  CheckingSink sink(c.camera.width, what, false);
   EXPECT_TRUE(raster::RenderMesh(mesh, Settings(c.camera, aa), sink).has_value()) << what;
 }
 
@@ -212,6 +232,24 @@ TEST(Extremes, EveryCaseInEveryModeIsFiniteAndAgrees) {
       EXPECT_EQ(a.mismatches, 0) << c.name << a.firstMismatches;
       EXPECT_GE(a.covered, c.minCovered) << c.name << ": the view misses the surface";
     }
+  }
+}
+
+// The largest images: 16384×16384 in θ and tessellated modes, 4096×4096 in exact mode (whose
+// per-sample Newton would make the largest size a minute's test). Release builds only: the
+// sanitizers make these several minutes, and the smaller cases above run under them.
+TEST(Extremes, LargestImages) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "16384x16384 renders are left to the release build";
+#endif
+  for (int side : {4096, 16384}) {
+    Case c{std::to_string(side) + " square image", {Lifted()}, Oblique(1.0, Vec3::Zero(), side, side), false, 0, ""};
+    double covered = 0;
+    if (side <= 4096) RenderDirect(c, 1, 0, c.name + ", exact", &covered);
+    RenderDirect(c, 1, 16, c.name + ", theta 16", &covered);
+    // The patch fills about a fifth of the frame.
+    EXPECT_GT(covered, 0.05 * side * side) << c.name;
+    RenderTessellated(c, 1, c.name + ", tess");
   }
 }
 
