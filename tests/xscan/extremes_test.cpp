@@ -15,6 +15,7 @@
 #include "raster/scanline_renderer.h"
 #include "xscan/agreement.h"
 #include "xscan/exact_scan.h"
+#include "tracker/maxima.h"
 #include "xscan/tess_feed.h"
 
 namespace patchscan {
@@ -50,6 +51,21 @@ Camera Oblique(double scale = 1.0, const Vec3& offset = Vec3::Zero(), int width 
   c.fovDeg = 40;
   c.hither = 0.01 * scale;
   return c;
+}
+
+// `s` moved along world z until its first stationary point of `kind` (as the pre-pass finds
+// it) lies on screen row `want` to 1e-9 px: secant steps, since the point slides over the
+// surface as it moves. nullopt if the pre-pass finds no such point.
+std::optional<Surface> WithStationaryOnRow(Surface s, const Camera& cam, StationaryKind kind, double want) {
+  const double pixelsPerUnit = FocalPixels(cam) / (cam.eye - cam.lookAt).norm();
+  for (int it = 0; it < 30; ++it) {
+    const std::vector<Stationary> st = FindStationaryPoints(s, ScreenMap(cam, s.worldFromObject));
+    const auto p = std::find_if(st.begin(), st.end(), [&](const Stationary& q) { return q.kind == kind; });
+    if (p == st.end()) return std::nullopt;
+    if (std::abs(p->y - want) <= 1e-9) return s;
+    s.worldFromObject.pretranslate(Vec3(0, 0, (p->y - want) / pixelsPerUnit));
+  }
+  return std::nullopt;
 }
 
 struct Case {
@@ -125,6 +141,15 @@ std::vector<Case> Cases() {
                  cam, true, 100,
                  "on the row through the top the level curve is a single point, a sample exactly on the "
                  "silhouette where covered and uncovered are both right; the walks started there give up"});
+  }
+  // A torus's saddle (inner silhouette) on a sample row of aa 1 and of aa 8.
+  for (double row : {14.5, 14.0}) {
+    const Camera cam = test::View(Vec3(2.5, -2.0, 2.2), 48);
+    const auto torus = WithStationaryOnRow(Surface{Torus(1.0, 0.35, 0, 360, 360), Affine3::Identity()}, cam,
+                                           StationaryKind::Saddle, row);
+    EXPECT_TRUE(torus.has_value()) << "no saddle brought onto row " << row;
+    if (torus)
+      c.push_back({"torus saddle on sample row " + std::to_string(row), {*torus}, cam, true, 100, ""});
   }
   c.push_back({"1x1 image", {Lifted()}, Oblique(1.0, Vec3::Zero(), 1, 1), true, 1, ""});
   c.push_back({"4096x3 image", {Lifted()}, Oblique(1.0, Vec3::Zero(), 4096, 3), true, 0, ""});
