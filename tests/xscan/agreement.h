@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <iostream>
 #include <span>
 #include <sstream>
@@ -139,6 +141,22 @@ inline void ExpectAgree(std::span<const Surface> surfaces, const Camera& camera,
 
 inline void ExpectAgree(const Surface& s, const Camera& camera, const std::string& name, long minCovered = 50) {
   ExpectAgree(std::span<const Surface>(&s, 1), camera, name, minCovered);
+}
+
+// A Bézier patch folded over itself, its silhouette running into its boundary: an arch
+// about the x axis seen across it from above (the silhouette, where the view grazes the
+// arch, runs from edge v = 0 to edge v = 1), turned so that the arch's axis and its fold
+// run slantwise across the scan lines. Seen well from View(Vec3(0.8, -4.0, 2.5)).
+inline Surface FoldedArch() {
+  std::array<Vec3, 16> cv;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) {
+      const double u = i / 3.0, v = j / 3.0;
+      cv[4 * j + i] = Vec3(1.6 * (v - 0.5) + 0.3 * u, 2.4 * std::sin(3.0 * (u - 0.5)), 1.2 * std::cos(3.0 * (u - 0.5)));
+    }
+  Affine3 m = Affine3::Identity();
+  m.rotate(Eigen::AngleAxisd(1.0, Vec3::UnitY()));
+  return Surface{BicubicPatch(cv), m};
 }
 
 }  // namespace patchscan::test

@@ -82,19 +82,7 @@ TEST(ExactScan, EdgeOnPatchMatchesRayCaster) {
 }
 
 TEST(ExactScan, FoldedPatchMatchesRayCaster) {
-  // A Bézier patch folded over itself: its silhouette runs into its boundary.
-  std::array<Vec3, 16> cv;
-  for (int j = 0; j < 4; ++j)
-    for (int i = 0; i < 4; ++i) {
-      const double u = i / 3.0, v = j / 3.0;
-      // An arch about the x axis seen across it from above: the silhouette, where the
-      // view grazes the arch, runs from edge v = 0 to edge v = 1.
-      cv[4 * j + i] = Vec3(1.6 * (v - 0.5) + 0.3 * u, 2.4 * std::sin(3.0 * (u - 0.5)), 1.2 * std::cos(3.0 * (u - 0.5)));
-    }
-  // Turned so that the arch's axis, and its fold, run slantwise across the scan lines.
-  Affine3 m = Affine3::Identity();
-  m.rotate(Eigen::AngleAxisd(1.0, Vec3::UnitY()));
-  ExpectAgree(Surface{BicubicPatch(cv), m}, View(Vec3(0.8, -4.0, 2.5)), "folded patch");
+  ExpectAgree(test::FoldedArch(), View(Vec3(0.8, -4.0, 2.5)), "folded patch");
 }
 
 Scene Load(const char* file) {

@@ -68,6 +68,59 @@ std::optional<Surface> WithStationaryOnRow(Surface s, const Camera& cam, Station
   return std::nullopt;
 }
 
+// Screen y of the first fold on edge v = 0 of `s` (where J changes sign along the edge,
+// §3.2.2.3): 512 samples, then bisection to the last bit. nullopt without a fold.
+std::optional<double> FoldY(const Surface& s, const Camera& cam) {
+  const ScreenMap map(cam, s.worldFromObject);
+  auto at = [&](double u) {
+    ScreenDerivs d;
+    EvaluateScreen(s, map, u, 0.0, DerivOrder::First, &d);
+    return d;
+  };
+  constexpr int kSamples = 512;
+  double uPrev = 0.0, jPrev = SilhouetteJ(at(0.0));
+  for (int k = 1; k <= kSamples; ++k) {
+    const double u = double(k) / kSamples, j = SilhouetteJ(at(u));
+    if ((j > 0) != (jPrev > 0)) {
+      double lo = uPrev, hi = u;
+      for (int it = 0; it < 80 && lo < hi; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        if (mid <= lo || mid >= hi) break;
+        ((SilhouetteJ(at(mid)) > 0) == (jPrev > 0) ? lo : hi) = mid;
+      }
+      return at(lo).p.y();
+    }
+    uPrev = u, jPrev = j;
+  }
+  return std::nullopt;
+}
+
+// The folded arch (agreement.h), moved along world z until its fold on edge v = 0
+// lies on screen row `want` (to 1e-9 px).
+std::optional<Surface> FoldOnRow(const Camera& cam, double want) {
+  const Surface base = test::FoldedArch();
+  // Secant iteration on the world-z shift t: the fold slides along the edge as the patch
+  // moves, so y(t) is not linear.
+  auto shifted = [&](double t) {
+    Surface s = base;
+    s.worldFromObject.pretranslate(Vec3(0, 0, t));
+    return s;
+  };
+  double t0 = 0.0;
+  auto y0 = FoldY(base, cam);
+  if (!y0) return std::nullopt;
+  double t1 = (*y0 - want) * (cam.eye - cam.lookAt).norm() / FocalPixels(cam);
+  for (int it = 0; it < 40; ++it) {
+    const auto y1 = FoldY(shifted(t1), cam);
+    if (!y1) return std::nullopt;
+    if (std::abs(*y1 - want) <= 1e-9) return shifted(t1);
+    if (*y1 == *y0) return std::nullopt;
+    const double t2 = t1 - (*y1 - want) * (t1 - t0) / (*y1 - *y0);
+    t0 = t1, y0 = y1, t1 = t2;
+  }
+  return std::nullopt;
+}
+
 struct Case {
   std::string name;
   std::vector<Surface> surfaces;
@@ -150,6 +203,13 @@ std::vector<Case> Cases() {
     EXPECT_TRUE(torus.has_value()) << "no saddle brought onto row " << row;
     if (torus)
       c.push_back({"torus saddle on sample row " + std::to_string(row), {*torus}, cam, true, 100, ""});
+  }
+  // A fold (the silhouette meeting a boundary edge) on a sample row of aa 1 and of aa 8.
+  for (double row : {30.5, 30.0}) {
+    const Camera cam = test::View(Vec3(0.8, -4.0, 2.5), 48);
+    const auto folded = FoldOnRow(cam, row);
+    EXPECT_TRUE(folded.has_value()) << "no fold brought onto row " << row;
+    if (folded) c.push_back({"fold on sample row " + std::to_string(row), {*folded}, cam, true, 100, ""});
   }
   c.push_back({"1x1 image", {Lifted()}, Oblique(1.0, Vec3::Zero(), 1, 1), true, 1, ""});
   c.push_back({"4096x3 image", {Lifted()}, Oblique(1.0, Vec3::Zero(), 4096, 3), true, 0, ""});
