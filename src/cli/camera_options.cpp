@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <numbers>
 #include <ostream>
 
 #include "cli/exit_codes.h"
@@ -47,30 +48,86 @@ std::optional<std::pair<int, int>> ParseSize(const std::string& text) {
 
 void AddCameraOptions(CLI::App* cmd, CameraOptions* o) {
   cmd->option_defaults()->group("Camera");
-  cmd->add_option("--size", o->size, "image size in pixels, WIDTHxHEIGHT")
-      ->capture_default_str();
+  cmd->add_option("--size", o->size,
+                  "image size in pixels, WIDTHxHEIGHT (default: a RIB scene's Format, else 640x480)");
   cmd->add_option("--eye", o->eye,
                   "eye position X,Y,Z in world space (default: framed automatically)");
   cmd->add_option("--look-at", o->lookAt,
                   "point X,Y,Z the camera looks at (default: the centre of the scene's bounds)");
   cmd->add_option("--up", o->up, "up direction X,Y,Z (default: 0,0,1, z up as in .bpt files)");
-  cmd->add_option("--fov", o->fovDeg, "vertical field of view in degrees")->capture_default_str();
+  cmd->add_option("--fov", o->fovDeg,
+                  "field of view in degrees: vertical (default 30), or for a RIB scene's camera "
+                  "that of the image's shorter side (default: its Projection's)");
   cmd->add_option("--hither", o->hither,
                   "distance of the hither (near clipping) plane from the eye (default: half "
                   "the distance to the scene's bounding sphere when framed, else 1/1000 of "
-                  "the distance to the look-at point)");
+                  "the distance to the look-at point; a RIB scene's Clipping)");
+  cmd->add_option("--frame", o->frame,
+                  "RIB scenes: the frame to read, by its FrameBegin number (default: the first)");
   cmd->option_defaults()->group("Options");
 }
+
+namespace {
+
+// The hither plane of a scene's camera without Clipping: 1/1000 of the camera-space
+// depth of the scene's centre (its diagonal's length when the centre is not in front).
+constexpr double kSceneHitherFraction = 1e-3;
+
+// A RIB scene's camera (RenderMan Interface 3.2, "Camera"): the screen window defaults
+// to [-a, a] x [-1, 1] for an image of aspect a >= 1 and [-1, 1] x [-1/a, 1/a] otherwise,
+// and the perspective projection divides x and y by z tan(fov / 2).
+std::variant<ResolvedCamera, std::string> SceneCamera(const CameraOptions& o, const Scene& scene,
+                                                      Camera c) {
+  ResolvedCamera r;
+  r.fromScene = true;
+  const SceneImage& im = scene.image;
+  c.cameraFromWorld = *im.cameraFromWorld;
+  const double fov = o.fovDeg.value_or(im.fovDeg);
+  if (!(fov >= kMinFovDeg && fov <= kMaxFovDeg))
+    return "--fov: expected degrees from " + std::to_string(kMinFovDeg) + " to " + std::to_string(kMaxFovDeg);
+  c.fovDeg = fov;
+  const double aspect = static_cast<double>(c.width) / c.height;
+  const Vec4 window = im.screenWindow ? *im.screenWindow
+                      : aspect >= 1.0 ? Vec4(-aspect, aspect, -1, 1)
+                                      : Vec4(-1, 1, -1 / aspect, 1 / aspect);
+  c.screenWindow = window * std::tan(0.5 * fov * std::numbers::pi / 180.0);
+  if (im.hither) {
+    c.hither = *im.hither;
+  } else {
+    const Bounds3 world = scene.WorldBounds();
+    const Mat4& m = *c.cameraFromWorld;
+    const Vec3 centre = world.Empty() ? Vec3::Zero() : world.Centre();
+    const double z = (m * centre.homogeneous()).z();
+    const double size = world.Empty() ? 1.0 : (m.block<3, 3>(0, 0) * world.Diagonal()).norm();
+    c.hither = kSceneHitherFraction * (z > 0 ? z : std::max(size, 1e-300));
+  }
+  if (!o.hither.empty()) {
+    const auto h = ParseDouble(o.hither);
+    if (!h || !(*h > 0.0)) return "--hither: expected a positive distance, found '" + o.hither + "'";
+    c.hither = *h;
+  }
+  if (auto why = ValidateCamera(c)) return "camera: " + *why;
+  r.camera = c;
+  return r;
+}
+
+}  // namespace
 
 std::variant<ResolvedCamera, std::string> ResolveCamera(const CameraOptions& o,
                                                         const Scene& scene) {
   ResolvedCamera r;
   Camera& c = r.camera;
-  const auto size = ParseSize(o.size);
-  if (!size) return "--size: expected WIDTHxHEIGHT with positive whole numbers, found '" + o.size + "'";
-  c.width = size->first;
-  c.height = size->second;
-  c.fovDeg = o.fovDeg;
+  c.width = scene.image.size ? scene.image.size->first : kDefaultWidth;
+  c.height = scene.image.size ? scene.image.size->second : kDefaultHeight;
+  if (!o.size.empty()) {
+    const auto size = ParseSize(o.size);
+    if (!size) return "--size: expected WIDTHxHEIGHT with positive whole numbers, found '" + o.size + "'";
+    c.width = size->first;
+    c.height = size->second;
+  }
+  if (scene.image.cameraFromWorld && o.eye.empty() && o.lookAt.empty() && o.up.empty())
+    return SceneCamera(o, scene, c);
+  c.fovDeg = o.fovDeg.value_or(kDefaultFovDeg);
   struct {
     const std::string& text;
     const char* name;
@@ -85,7 +142,7 @@ std::variant<ResolvedCamera, std::string> ResolveCamera(const CameraOptions& o,
   }
   // Validate what was given before framing uses it.
   if (c.up.norm() == 0.0) return "--up: the up vector must not be zero";
-  if (!(o.fovDeg >= kMinFovDeg && o.fovDeg <= kMaxFovDeg))
+  if (!(c.fovDeg >= kMinFovDeg && c.fovDeg <= kMaxFovDeg))
     return "--fov: expected degrees from " + std::to_string(kMinFovDeg) + " to " +
            std::to_string(kMaxFovDeg);
   const Bounds3 world = scene.WorldBounds();
@@ -115,7 +172,9 @@ std::variant<ResolvedCamera, std::string> ResolveCamera(const CameraOptions& o,
 
 std::variant<LoadedScene, int> LoadSceneAndCamera(const std::string& file,
                                                   const CameraOptions& opts, std::ostream& err) {
-  auto loaded = LoadScene(file);
+  LoadOptions lo;
+  lo.frame = opts.frame;
+  auto loaded = LoadScene(file, lo);
   if (auto* e = std::get_if<SourceError>(&loaded)) {
     err << "patchscan: " << e->What() << '\n';
     return kExitInputError;
@@ -125,6 +184,7 @@ std::variant<LoadedScene, int> LoadSceneAndCamera(const std::string& file,
     err << "patchscan: " << *why << '\n';
     return kExitUsage;
   }
+  for (const std::string& w : std::get<Scene>(loaded).warnings) err << "patchscan: warning: " << w << '\n';
   return LoadedScene{std::move(std::get<Scene>(loaded)), std::get<ResolvedCamera>(resolved)};
 }
 

@@ -12,21 +12,27 @@
 namespace patchscan::cli {
 
 struct CameraOptions {
-  std::string size = "640x480";
+  std::string size;  // empty: the scene's Format, else 640x480
   std::string eye, lookAt, up;
-  double fovDeg = 30.0;
-  std::string hither;  // empty: automatic
+  std::optional<double> fovDeg;  // none: the scene's Projection, else 30
+  std::string hither;  // empty: the scene's Clipping, else automatic
+  int frame = -1;      // RIB: the frame to read; -1: the first
 };
+
+constexpr int kDefaultWidth = 640, kDefaultHeight = 480;
+constexpr double kDefaultFovDeg = 30.0;
 
 // Adds --size, --eye, --look-at, --up, --fov and --hither to `cmd`.
 void AddCameraOptions(CLI::App* cmd, CameraOptions* opts);
 
-// The camera for `scene`: the options given, with automatic framing of the scene's bounds
-// for whatever of eye and look-at is missing. On a bad option value, the message for
+// The camera for `scene`: a RIB scene's own camera unless --eye, --look-at or --up is
+// given (--size, --fov and --hither still apply to it); otherwise the options given, with
+// automatic framing of the scene's bounds for whatever of eye and look-at is missing. On a bad option value, the message for
 // the user. `framed` says whether automatic framing chose the eye.
 struct ResolvedCamera {
   Camera camera;
   bool framed = false;
+  bool fromScene = false;  // the scene file's camera
 };
 std::variant<ResolvedCamera, std::string> ResolveCamera(const CameraOptions& opts,
                                                         const Scene& scene);

@@ -55,7 +55,8 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
   auto loaded = LoadSceneAndCamera(o.file, o.camera, err);
   if (const int* code = std::get_if<int>(&loaded)) return *code;
   const Scene& scene = std::get<LoadedScene>(loaded).scene;
-  const auto& [camera, framed] = std::get<LoadedScene>(loaded).view;
+  const auto& [camera, framed, fromScene] = std::get<LoadedScene>(loaded).view;
+  (void)fromScene;
 
   // Step 1: scene totals.
   size_t nPatches = 0, nCollapsed = 0;
@@ -71,11 +72,18 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
   if (nPatches > 0)
     out << "control points: " << 16 * nPatches << " (" << distinct.size() << " distinct)\n"
         << "collapsed edges: " << nCollapsed << '\n';
-  out << "world bounds: " << Box3(scene.WorldBounds()) << '\n'
-      << "camera: " << camera.width << 'x' << camera.height << ", eye " << Point(camera.eye)
-      << ", look-at " << Point(camera.lookAt) << ", up " << Point(camera.up) << ", fov "
-      << camera.fovDeg << ", hither " << camera.hither << (framed ? " (framed automatically)" : "")
-      << '\n';
+  out << "world bounds: " << Box3(scene.WorldBounds()) << '\n';
+  if (camera.cameraFromWorld)
+    out << "camera: " << camera.width << 'x' << camera.height << ", eye " << Point(EyePoint(camera))
+        << ", forward " << Point(ViewForward(camera)) << ", right " << Point(ViewRight(camera))
+        << ", fov " << camera.fovDeg << ", hither " << camera.hither << " (the scene's)\n";
+  else
+    out << "camera: " << camera.width << 'x' << camera.height << ", eye " << Point(camera.eye)
+        << ", look-at " << Point(camera.lookAt) << ", up " << Point(camera.up) << ", fov "
+        << camera.fovDeg << ", hither " << camera.hither << (framed ? " (framed automatically)" : "")
+        << '\n';
+  if (!scene.lights.empty() || !scene.appearances.empty())
+    out << "lights: " << scene.lights.size() << ", materials: " << scene.appearances.size() << '\n';
 
   // Step 2: one line per surface.
   out << "surface  line  kind             collapsed  world bounds | screen bounds (x, y px)\n";

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "cli/compare.h"
+#include "cli/convert.h"
 #include "cli/exit_codes.h"
 #include "cli/info.h"
 #include "cli/render.h"
@@ -33,6 +34,8 @@ int main(int argc, char** argv) {
   CLI::App* renderCmd = AddRenderCommand(&app, &render);
   CompareOptions compare;
   CLI::App* compareCmd = AddCompareCommand(&app, &compare);
+  ConvertOptions convert;
+  CLI::App* convertCmd = AddConvertCommand(&app, &convert);
 
   try {
     app.parse(argc, argv);
@@ -41,6 +44,7 @@ int main(int argc, char** argv) {
     const CLI::App* shown = infoCmd->parsed()      ? infoCmd
                             : renderCmd->parsed()  ? renderCmd
                             : compareCmd->parsed() ? compareCmd
+                            : convertCmd->parsed() ? convertCmd
                                                    : &app;
     std::cout << (shown == &app ? app.help("", CLI::AppFormatMode::All) : shown->help());
     return kExitOk;
@@ -56,5 +60,6 @@ int main(int argc, char** argv) {
   if (infoCmd->parsed()) return RunInfo(info, std::cout, std::cerr);
   if (renderCmd->parsed()) return RunRender(render, std::cerr);
   if (compareCmd->parsed()) return RunCompare(compare, std::cout, std::cerr);
+  if (convertCmd->parsed()) return RunConvert(convert, std::cerr);
   return kExitUsage;
 }

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <ostream>
 
 #include "cli/exit_codes.h"
@@ -78,6 +79,69 @@ class ProgressSink final : public raster::RowSink {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
+// RenderMan light sources as the back end's lights: ambient lights sum into the rig's
+// ambient light; the others keep their colour (intensity times lightcolor).
+raster::LightRig SceneLights(const std::vector<SceneLight>& lights) {
+  raster::LightRig rig;
+  rig.ambient = raster::Rgb::Zero();
+  for (const SceneLight& l : lights) {
+    raster::Light out;
+    out.intensity = l.colour;
+    switch (l.kind) {
+      case SceneLight::Kind::Ambient:
+        rig.ambient += l.colour;
+        continue;
+      case SceneLight::Kind::Distant:
+        out.kind = raster::Light::Kind::Directional;
+        out.vector = (l.to - l.from).normalized();
+        break;
+      case SceneLight::Kind::Point:
+        out.kind = raster::Light::Kind::Point;
+        out.vector = l.from;
+        out.inverseSquare = true;
+        break;
+      case SceneLight::Kind::Spot:
+        out.kind = raster::Light::Kind::Spot;
+        out.vector = l.from;
+        out.inverseSquare = true;
+        out.axis = (l.to - l.from).normalized();
+        out.cosOutside = std::cos(l.coneAngle);
+        out.cosInside = std::cos(std::max(0.0, l.coneAngle - l.coneDelta));
+        out.beamDistribution = l.beamDistribution;
+        break;
+    }
+    rig.lights.push_back(out);
+  }
+  return rig;
+}
+
+// A scene file's appearance as a back-end material. The default shader keeps the
+// renderer's material, tinted by the colour.
+raster::Material SceneMaterial(const Appearance& a, const raster::Material& fallback) {
+  using S = Appearance::Shader;
+  using M = raster::Material::Model;
+  raster::Material m = fallback;
+  m.opacity = a.opacity.mean();
+  m.twoSided = a.twoSided;
+  m.reversed = a.reversed;
+  if (a.shader == S::Default) {
+    m.colour = fallback.colour.cwiseProduct(a.colour);
+    return m;
+  }
+  m.model = a.shader == S::Constant ? M::Constant
+            : a.shader == S::Matte  ? M::Matte
+            : a.shader == S::Metal  ? M::Metal
+                                    : M::Plastic;
+  m.colour = a.colour;
+  m.emission = raster::Rgb::Zero();
+  m.ka = a.ka;
+  m.kd = a.kd;
+  m.ks = a.ks;
+  m.roughness = a.roughness;
+  m.specularColour = a.specularColour;
+  return m;
+}
+
 }  // namespace
 
 CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
@@ -86,8 +150,9 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
       "Render a scene file to an image. The format follows the output's extension: .png, "
       ".tif/.tiff, .jpg/.jpeg (no alpha) or .exr; alpha is coverage. The image is written to "
       "a temporary file and renamed into place, so a failed render leaves no file.");
-  cmd->add_option("FILE", o->file, "scene file (.bpt)")->required();
-  cmd->add_option("-o,--output", o->output, "output image file")->required();
+  cmd->add_option("FILE", o->file, "scene file: .bpt (Bézier patches) or .rib (RenderMan scene)")->required();
+  cmd->add_option("-o,--output", o->output,
+                  "output image file (default: a RIB scene's Display file name; required otherwise)");
   cmd->add_option("--mode", o->mode,
                   "how surfaces become samples: exact = Blinn's scan-line algorithm, every "
                   "visible sample's (u,v) found by Newton iteration (shading always uses the "
@@ -122,9 +187,9 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
       ->check(CLI::Range(0.01, 1e6));
   cmd->add_option("--aa", o->aa,
                   "supersampling: an l x l grid of samples per pixel whose edge samples are "
-                  "shared with the neighbours (1: one sample at the pixel centre)")
-      ->check(CLI::Range(1, raster::kMaxAa))
-      ->capture_default_str();
+                  "shared with the neighbours (1: one sample at the pixel centre; default: a RIB "
+                  "scene's PixelSamples, else 3)")
+      ->check(CLI::Range(1, raster::kMaxAa));
   cmd->add_option("--shading", o->shading, "flat, gouraud or phong")
       ->check(CLI::IsMember({"flat", "gouraud", "phong"}))
       ->capture_default_str();
@@ -164,6 +229,12 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   const Scene& scene = std::get<LoadedScene>(loaded).scene;
   const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
   const auto tLoaded = Clock::now();
+  const std::string output = !o.output.empty() ? o.output : scene.image.displayName;
+  if (output.empty()) {
+    err << "patchscan: no output image: give -o IMAGE" << (scene.image.cameraFromWorld ? " (the scene has no Display file)" : "") << '\n';
+    return kExitUsage;
+  }
+  const int aa = o.aa.value_or(scene.image.pixelSamples.value_or(kDefaultAa));
 
   // Both direct modes run Blinn's Y scan; they differ in the X scan.
   const bool exact = o.mode == "exact" || o.mode == "theta";
@@ -206,7 +277,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   raster::RenderSettings s;
   s.width = camera.width;
   s.height = camera.height;
-  s.aa = o.aa;
+  s.aa = aa;
   s.shading = o.shading == "flat"      ? raster::ShadingMode::Flat
               : o.shading == "gouraud" ? raster::ShadingMode::Gouraud
                                        : raster::ShadingMode::Phong;
@@ -215,7 +286,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   s.opacity = o.opacity;
   s.seed = o.seed;
   s.hither = camera.hither;
-  s.eye = camera.eye;
+  s.eye = EyePoint(camera);
   std::unique_ptr<raster::ImageTexture> texture;
   if (o.texture == "checker") {
     s.material.checkerSquares = 8;
@@ -228,11 +299,28 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
     texture = std::make_unique<raster::ImageTexture>(o.texture);
     s.material.texture = texture.get();
   }
-  const Vec3 forward = (camera.lookAt - camera.eye).normalized();
-  const Vec3 right = forward.cross(camera.up).normalized();
-  s.lights = raster::DefaultLightRig(forward, right.cross(forward), right);
+  const Vec3 forward = ViewForward(camera), right = ViewRight(camera);
+  s.lights = scene.lights.empty() ? raster::DefaultLightRig(forward, right.cross(forward), right)
+                                  : SceneLights(scene.lights);
+  // The scene's own materials, each texture opened only when a visible sample needs it.
+  std::map<std::string, std::unique_ptr<raster::ImageTexture>> sceneTextures;
+  for (const Appearance& a : scene.appearances) {
+    raster::Material m = SceneMaterial(a, s.material);
+    if (!a.textureName.empty()) {
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(a.textureName, ec)) {
+        err << "patchscan: " << scene.source << ": paintedplastic texture '" << a.textureName << "' not found\n";
+        return kExitInputError;
+      }
+      auto& t = sceneTextures[a.textureName];
+      if (!t) t = std::make_unique<raster::ImageTexture>(a.textureName);
+      m.texture = t.get();
+    }
+    s.materials.push_back(m);
+  }
+  s.materialOf = scene.appearanceOf;
 
-  auto opened = raster::ImageWriter::Open(o.output, camera.width, camera.height, o.aov);
+  auto opened = raster::ImageWriter::Open(output, camera.width, camera.height, o.aov);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';
     return kExitUsage;
@@ -257,7 +345,12 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
       err << "patchscan: " << texture->Error() << '\n';
       return kExitInputError;
     }
-    err << "patchscan: " << o.output << ": writing the image failed\n";
+    for (const auto& [name, t] : sceneTextures)
+      if (!t->Error().empty()) {
+        err << "patchscan: " << t->Error() << '\n';
+        return kExitInputError;
+      }
+    err << "patchscan: " << output << ": writing the image failed\n";
     return kExitOutputError;
   }
   const auto tCommit = Clock::now();

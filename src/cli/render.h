@@ -4,11 +4,14 @@
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <iosfwd>
+#include <optional>
 #include <string>
 
 #include "cli/camera_options.h"
 
 namespace patchscan::cli {
+
+constexpr int kDefaultAa = 3;
 
 struct RenderOptions {
   std::string file, output;
@@ -18,7 +21,7 @@ struct RenderOptions {
   std::string overlay = "none";
   int tessRate = 8;
   double tessPixels = 0.0;  // > 0: screen-adaptive tessellation instead of tessRate
-  int aa = 3;
+  std::optional<int> aa;  // none: a RIB scene's PixelSamples, else kDefaultAa
   std::string shading = "phong";
   std::string texture = "none";
   bool cullBackFaces = false;

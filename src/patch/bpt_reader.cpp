@@ -41,44 +41,11 @@ std::vector<Token> Tokenize(std::string_view text) {
   return tokens;
 }
 
-// A token as the user should see it in a message: quoted, bounded, printable.
-std::string Shown(std::string_view t) {
-  constexpr size_t kMaxShown = 24;
-  std::string s = "'";
-  for (size_t i = 0; i < t.size() && i < kMaxShown; ++i) {
-    const unsigned char c = static_cast<unsigned char>(t[i]);
-    s += (c >= 0x20 && c < 0x7f) ? static_cast<char>(c) : '?';
-  }
-  if (t.size() > kMaxShown) s += "...";
-  return s + "'";
-}
-
 std::optional<long long> ParseWhole(std::string_view t) {
   long long value = 0;
   const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), value);
   if (ec != std::errc() || end != t.data() + t.size()) return std::nullopt;
   return value;
-}
-
-// A decimal number as the whole token; nullopt if the token is not one, and
-// {false, ...} for a number that is not finite (nan, inf, or beyond double range).
-struct Number {
-  bool finite;
-  double value;
-};
-std::optional<Number> ParseNumber(std::string_view t) {
-  if (!t.empty() && t.front() == '+') t.remove_prefix(1);
-  double value = 0.0;
-  const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), value);
-  if (end != t.data() + t.size() || t.empty()) return std::nullopt;
-  if (ec == std::errc::result_out_of_range) {
-    // Overflow is not finite; underflow reads as the nearest representable (0 or subnormal).
-    const std::string copy(t);
-    value = std::strtod(copy.c_str(), nullptr);
-    return Number{std::isfinite(value), value};
-  }
-  if (ec != std::errc()) return std::nullopt;
-  return Number{std::isfinite(value), value};
 }
 
 class Parser {

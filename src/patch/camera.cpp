@@ -31,6 +31,27 @@ ViewFrame Frame(const Camera& c) {
 
 std::optional<std::string> ValidateCamera(const Camera& c) {
   std::ostringstream why;
+  if (c.cameraFromWorld) {
+    const Mat4& m = *c.cameraFromWorld;
+    const Vec4& win = c.screenWindow;
+    // The linear part must be invertible relative to its own scale for the eye and the
+    // view axes to exist.
+    const double scale = m.block<3, 3>(0, 0).cwiseAbs().maxCoeff();
+    if (c.width < 1 || c.height < 1 || c.width > kMaxImageSide || c.height > kMaxImageSide)
+      why << "image size " << c.width << "x" << c.height << " is outside 1x1 to " << kMaxImageSide
+          << "x" << kMaxImageSide;
+    else if (!m.allFinite() || m.row(3) != Vec4(0, 0, 0, 1).transpose())
+      why << "the camera transformation must be finite and affine";
+    else if (!(std::abs(m.block<3, 3>(0, 0).determinant()) > 1e-12 * scale * scale * scale))
+      why << "the camera transformation is singular";
+    else if (!win.allFinite() || win[0] == win[1] || win[2] == win[3])
+      why << "the screen window is empty or not finite";
+    else if (!(c.hither > 0.0) || !std::isfinite(c.hither))
+      why << "hither distance must be positive and finite";
+    else
+      return std::nullopt;
+    return why.str();
+  }
   if (c.width < 1 || c.height < 1 || c.width > kMaxImageSide || c.height > kMaxImageSide)
     why << "image size " << c.width << "x" << c.height << " is outside 1x1 to " << kMaxImageSide
         << "x" << kMaxImageSide;
@@ -55,7 +76,37 @@ double FocalPixels(const Camera& c) {
   return 0.5 * c.height / std::tan(0.5 * c.fovDeg * kRadPerDeg);
 }
 
+Vec3 EyePoint(const Camera& c) {
+  if (!c.cameraFromWorld) return c.eye;
+  const Mat4& m = *c.cameraFromWorld;
+  return m.block<3, 3>(0, 0).inverse() * -m.block<3, 1>(0, 3);
+}
+
+Vec3 ViewRight(const Camera& c) {
+  if (!c.cameraFromWorld) return Frame(c).right;
+  return (c.cameraFromWorld->block<3, 3>(0, 0).inverse() * Vec3(1, 0, 0)).normalized();
+}
+
+Vec3 ViewForward(const Camera& c) {
+  if (!c.cameraFromWorld) return Frame(c).forward;
+  // The world direction whose camera-space image has no x or y: the view axis.
+  return (c.cameraFromWorld->block<3, 3>(0, 0).inverse() * Vec3(0, 0, 1)).normalized();
+}
+
 Mat4 ScreenFromWorld(const Camera& c) {
+  if (c.cameraFromWorld) {
+    // Camera space (x, y, z) to pixels: x_px = W (x/z - l) / (r - l), y_px = H (t - y/z) /
+    // (t - b), depth = 1 - hither / z, w = z.
+    const double l = c.screenWindow[0], r = c.screenWindow[1], b = c.screenWindow[2],
+                 t = c.screenWindow[3];
+    const double sx = c.width / (r - l), sy = c.height / (t - b);
+    Mat4 p = Mat4::Zero();
+    p.row(0) << sx, 0, -sx * l, 0;
+    p.row(1) << 0, -sy, sy * t, 0;
+    p.row(2) << 0, 0, 1, -c.hither;
+    p.row(3) << 0, 0, 1, 0;
+    return p * *c.cameraFromWorld;
+  }
   const ViewFrame f = Frame(c);
   const double focal = FocalPixels(c), cx = 0.5 * c.width, cy = 0.5 * c.height;
   // Rows applied to (p - eye): X = focal * right + cx * forward, Y = focal * down +

@@ -16,7 +16,21 @@ struct Camera {
   Vec3 eye = Vec3(0, -10, 0), lookAt = Vec3(0, 0, 0), up = Vec3(0, 0, 1);
   double fovDeg = 30.0;  // vertical field of view
   double hither = 0.01;  // distance of the hither (near) plane from the eye, > 0
+
+  // A RenderMan camera (RenderMan Interface 3.2, "Camera"), from a scene file. When set,
+  // eye, lookAt, up and fovDeg are ignored: `cameraFromWorld` maps world points into camera
+  // space (x right, y up, z forward: left-handed for a rotation), and the image spans the
+  // screen window (left, right, bottom, top) on the plane z = 1 (perspective: the window
+  // of Projection and ScreenWindow scaled by tan(fov/2)). hither is a camera-space z.
+  std::optional<Mat4> cameraFromWorld;
+  Vec4 screenWindow = Vec4(-1, 1, -1, 1);
 };
+
+// The eye's world position, the world direction of the image's x axis (to the right) and
+// of the view axis (forward), for either kind of camera. Precondition: a valid camera.
+Vec3 EyePoint(const Camera& c);
+Vec3 ViewRight(const Camera& c);
+Vec3 ViewForward(const Camera& c);
 
 // Limits that keep the arithmetic of a camera meaningful.
 constexpr int kMaxImageSide = 1 << 16;   // pixel indices stay exact in int and float

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "patch/bpt_reader.h"
+#include "patch/rib_reader.h"
 
 namespace patchscan {
 
@@ -12,10 +13,11 @@ Bounds3 Scene::WorldBounds() const {
   return b;
 }
 
-std::variant<Scene, SourceError> LoadScene(const std::string& path) {
+std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOptions& options) {
   const std::string ext = std::filesystem::path(path).extension().string();
+  if (ext == ".rib") return ReadRib(path, options);
   if (ext != ".bpt")
-    return SourceError{path, 0, "unknown scene format '" + ext + "' (known: .bpt)"};
+    return SourceError{path, 0, "unknown scene format '" + ext + "' (known: .bpt, .rib)"};
   auto read = ReadBpt(path);
   if (auto* e = std::get_if<SourceError>(&read)) return *e;
   Scene scene;
@@ -23,6 +25,7 @@ std::variant<Scene, SourceError> LoadScene(const std::string& path) {
   for (const BptPatch& p : std::get<BptFile>(read).patches) {
     scene.surfaces.push_back(Surface{BicubicPatch(p.cv), Affine3::Identity()});
     scene.sourceLines.push_back(p.line);
+    scene.sourceFiles.push_back(path);
   }
   return scene;
 }

@@ -2,7 +2,10 @@
 // came from. Readers are chosen by file extension.
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -11,16 +14,65 @@
 
 namespace patchscan {
 
+// How a surface looks, as RenderMan's attributes say (RenderMan Interface 3.2: Color,
+// Opacity, Surface, Sides, and the standard shaders of its appendix A).
+struct Appearance {
+  enum class Shader { Default, Constant, Matte, Plastic, Metal, PaintedPlastic };
+  Shader shader = Shader::Default;  // Default: the renderer's own material
+  Vec3 colour = Vec3(1, 1, 1);      // Cs
+  Vec3 opacity = Vec3(1, 1, 1);     // Os
+  double ka = 1.0, kd = 0.5, ks = 0.5, roughness = 0.1;
+  Vec3 specularColour = Vec3(1, 1, 1);
+  std::string textureName;          // paintedplastic: a path, resolved against the scene file
+  bool twoSided = true;             // Sides 2 (the default) or 1
+  bool reversed = false;            // the front is the side the normal points away from
+  bool operator==(const Appearance&) const = default;
+};
+
+// A light source in world space (RenderMan's ambientlight, distantlight, pointlight and
+// spotlight). Intensities multiply the colour; point and spot lights fall off as 1/d^2.
+struct SceneLight {
+  enum class Kind { Ambient, Distant, Point, Spot };
+  Kind kind = Kind::Distant;
+  Vec3 colour = Vec3(1, 1, 1);  // lightcolor times intensity
+  Vec3 from = Vec3(0, 0, 0), to = Vec3(0, 0, 1);  // world space
+  double coneAngle = 0.0, coneDelta = 0.0;        // spot: radians
+  double beamDistribution = 2.0;                   // spot: cosine exponent
+  int line = 0;
+};
+
+// What a scene file says about the image beyond its geometry.
+struct SceneImage {
+  std::optional<Mat4> cameraFromWorld;      // the transformation at WorldBegin: a RIB camera
+  double fovDeg = 90.0;                     // Projection "perspective" "fov"
+  std::optional<Vec4> screenWindow;         // ScreenWindow (left, right, bottom, top)
+  std::optional<std::pair<int, int>> size;  // Format
+  std::optional<double> hither;             // Clipping's near
+  std::optional<int> pixelSamples;          // PixelSamples, as the side of a square grid
+  std::string displayName;                  // Display's file name ("" when none)
+};
+
 struct Scene {
   std::string source;             // the file it was read from
   std::vector<Surface> surfaces;
   std::vector<int> sourceLines;   // per surface, the line that defines it
+  std::vector<std::string> sourceFiles;  // per surface, the file that defines it (RIB archives)
+  std::vector<Appearance> appearances;   // distinct appearances (empty: the renderer's default)
+  std::vector<std::uint32_t> appearanceOf;  // per surface, into appearances (empty when it is)
+  std::vector<SceneLight> lights;        // empty: the renderer's default lights
+  SceneImage image;
+  std::vector<std::string> warnings;     // statements read and skipped, file:line: what
 
   // A conservative world-space box of the whole scene.
   Bounds3 WorldBounds() const;
 };
 
-// Read a scene file. Known extensions: .bpt (Bézier patch text). Errors name file:line.
-std::variant<Scene, SourceError> LoadScene(const std::string& path);
+struct LoadOptions {
+  int frame = -1;  // RIB: the FrameBegin number to read; -1: the first frame
+};
+
+// Read a scene file. Known extensions: .bpt (Bézier patch text) and .rib (RenderMan
+// Interface Bytestream). Errors name file:line.
+std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOptions& options = {});
 
 }  // namespace patchscan

@@ -1,6 +1,9 @@
 #include "patch/text_file.h"
 
 #include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -26,6 +29,32 @@ std::variant<std::string, SourceError> ReadTextFile(const std::string& path) {
   std::fclose(f);
   if (failed) return SourceError{path, 0, "read error"};
   return text;
+}
+
+std::string Shown(std::string_view t) {
+  constexpr size_t kMaxShown = 24;
+  std::string s = "'";
+  for (size_t i = 0; i < t.size() && i < kMaxShown; ++i) {
+    const unsigned char c = static_cast<unsigned char>(t[i]);
+    s += (c >= 0x20 && c < 0x7f) ? static_cast<char>(c) : '?';
+  }
+  if (t.size() > kMaxShown) s += "...";
+  return s + "'";
+}
+
+std::optional<Number> ParseNumber(std::string_view t) {
+  if (!t.empty() && t.front() == '+') t.remove_prefix(1);
+  double value = 0.0;
+  const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), value);
+  if (end != t.data() + t.size() || t.empty()) return std::nullopt;
+  if (ec == std::errc::result_out_of_range) {
+    // Overflow is not finite; underflow reads as the nearest representable (0 or subnormal).
+    const std::string copy(t);
+    value = std::strtod(copy.c_str(), nullptr);
+    return Number{std::isfinite(value), value};
+  }
+  if (ec != std::errc()) return std::nullopt;
+  return Number{std::isfinite(value), value};
 }
 
 }  // namespace patchscan

@@ -1,8 +1,10 @@
 // Whole-file reading for the scene readers.
 #pragma once
 
-#include <variant>
+#include <optional>
 #include <string>
+#include <string_view>
+#include <variant>
 
 #include "patch/source_error.h"
 
@@ -14,5 +16,18 @@ std::variant<std::string, SourceError> ReadTextFile(const std::string& path);
 
 // Scene files are text; one of more than 1 GiB is not a scene this program can hold.
 constexpr long long kMaxSceneFileBytes = 1LL << 30;
+
+// A token as the user should see it in a message: quoted, at most 24 characters,
+// non-printable bytes as '?'.
+std::string Shown(std::string_view token);
+
+// A decimal number as the whole token (a leading '+' allowed); nullopt if the token is
+// not one, and {false, ...} for a number that is not finite (nan, inf, or beyond the
+// range of double). Underflow reads as the nearest representable value.
+struct Number {
+  bool finite;
+  double value;
+};
+std::optional<Number> ParseNumber(std::string_view token);
 
 }  // namespace patchscan

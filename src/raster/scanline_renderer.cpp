@@ -59,9 +59,15 @@ struct Member {
 
 // The colour of a surface point: the material's (textured) colour lit by the rig.
 Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, bool* failed) {
-  const auto base = SurfaceColour(s.material, a.uv, a.duvdx, a.duvdy);
+  const Material& m = s.MaterialOf(a.surfaceId);
+  const auto base = SurfaceColour(m, a.uv, a.duvdx, a.duvdy);
   if (!base) *failed = true;
-  return Shade(a.position, a.normal, base.value_or(Rgb::Zero()), s.eye, s.material, s.lights);
+  return Shade(a.position, a.normal, base.value_or(Rgb::Zero()), s.eye, m, s.lights);
+}
+
+// Whether a point with normal n (any length) at p shows the front of material m to the eye.
+bool ShowsFront(const Material& m, const Vec3& n, const Vec3& p, const Vec3& eye) {
+  return (n.dot(eye - p) >= 0.0) != m.reversed;
 }
 
 struct ActiveTriangle {
@@ -206,6 +212,12 @@ class TriangleGeometry {
       const auto setup = SetupTriangle(mesh_.vertices[t.v[0]].h, mesh_.vertices[t.v[1]].h,
                                        mesh_.vertices[t.v[2]].h, s_.cullBackFaces, s_.width, s_.height);
       if (!setup) continue;
+      if (const Material& m = s_.MaterialOf(t.surfaceId); !m.twoSided) {
+        const RasterVertex* v[3] = {&mesh_.vertices[t.v[0]], &mesh_.vertices[t.v[1]], &mesh_.vertices[t.v[2]]};
+        if (!ShowsFront(m, v[0]->normal + v[1]->normal + v[2]->normal,
+                        (v[0]->position + v[1]->position + v[2]->position) / 3.0, s_.eye))
+          continue;
+      }
       ++stats_.nTrianglesSetUp;
       ActiveTriangle at{*setup, y.index, y.last, {}};
       if (s_.shading == ShadingMode::Gouraud)
@@ -314,6 +326,8 @@ class FragmentGeometry final : public FragmentRow {
     ++stats_.nSamplesTested;
     if (column < 0 || column >= lat_.nx || !(f.w >= s_.hither)) return;
     if (s_.cullBackFaces && f.normal.dot(s_.eye - f.position) < 0.0) return;
+    if (const Material& m = s_.MaterialOf(f.surfaceId); !m.twoSided && !ShowsFront(m, f.normal, f.position, s_.eye))
+      return;
     const auto handle = static_cast<std::int32_t>(pool_->size());
     if (InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / f.w, handle))
       pool_->push_back(f);
@@ -396,6 +410,7 @@ std::optional<RenderStats> RenderRows(Geometry& geo, const RenderSettings& s, co
         int layer;
         int count;
         double sx, sy;
+        double weight;  // summed over its samples: opacity times the light the layers in front pass
         Rgb rgb;
       };
       std::array<Group, kMaxAa * kMaxAa * kMaxLayers> groups;
@@ -418,14 +433,16 @@ std::optional<RenderStats> RenderRows(Geometry& geo, const RenderSettings& s, co
             const std::uint32_t surface = geo.SurfaceOf(r, keep[layer]);
             int g = 0;
             while (g < nGroups && (groups[g].surface != surface || groups[g].layer != layer)) ++g;
-            if (g == nGroups) groups[nGroups++] = {surface, layer, 0, 0.0, 0.0, Rgb::Zero()};
+            if (g == nGroups) groups[nGroups++] = {surface, layer, 0, 0.0, 0.0, 0.0, Rgb::Zero()};
             if (layer == 0) groupOf[r * s.aa + c] = g;
+            const double opacity = s.opacity * s.MaterialOf(surface).opacity;
             ++groups[g].count;
             groups[g].sx += x;
             groups[g].sy += y;
+            groups[g].weight += opacity * through;
             members[nMembers] = {r, keep[layer]};
             memberGroup[nMembers++] = g;
-            through *= 1.0 - s.opacity;
+            through *= 1.0 - opacity;
           }
           alpha += 1.0 - through;
         }
@@ -446,13 +463,12 @@ std::optional<RenderStats> RenderRows(Geometry& geo, const RenderSettings& s, co
       } else {
         bool superSample = false;
         for (int g = 0; g < nGroups; ++g) {
-          // Linear transparency: layer k is seen through k layers of opacity a, and
-          // contributes a (1 - a)^k of its colour.
+          // Linear transparency: a layer of opacity a seen through layers of opacities
+          // a_j contributes a prod (1 - a_j) of its colour at each sample.
           Group& gr = groups[g];
           const int n = gather(g);
           gr.rgb = geo.ShadeGroup(gathered.data(), n, gr.sx / gr.count, gr.sy / gr.count, stats.nShadingCalls);
-          const double weight = s.opacity * std::pow(1.0 - s.opacity, gr.layer);
-          colour += (weight * gr.count / perPixel) * gr.rgb;
+          colour += (gr.weight / perPixel) * gr.rgb;
         }
         // Only the (l-1) x (l-1) samples a pixel owns (not its right and bottom edges, which
         // belong to the neighbours) draw, so each sample draws once.
@@ -507,12 +523,19 @@ std::optional<RenderStats> RenderRows(Geometry& geo, const RenderSettings& s, co
 
 }  // namespace
 
+bool RenderSettings::AnyTransparency() const {
+  if (opacity < 1.0 || material.opacity < 1.0) return true;
+  for (const Material& m : materials)
+    if (m.opacity < 1.0) return true;
+  return false;
+}
+
 std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSettings& s,
                                       RowSink& sink) {
   RenderStats stats;
   const Lattice lat(s);
   // With transparency each sample keeps its `layers` nearest fragments, nearest first.
-  const int layers = s.opacity < 1.0 ? kMaxLayers : 1;
+  const int layers = s.AnyTransparency() ? kMaxLayers : 1;
   TriangleGeometry geo(mesh, s, lat, layers, stats);
   return RenderRows(geo, s, lat, layers, stats, sink);
 }
@@ -521,7 +544,7 @@ std::optional<RenderStats> RenderFragments(FragmentSource& source, const RenderS
                                            RowSink& sink) {
   RenderStats stats;
   const Lattice lat(s);
-  const int layers = s.opacity < 1.0 ? kMaxLayers : 1;
+  const int layers = s.AnyTransparency() ? kMaxLayers : 1;
   FragmentGeometry geo(source, s, lat, layers, stats);
   return RenderRows(geo, s, lat, layers, stats, sink);
 }

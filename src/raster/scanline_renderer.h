@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "raster/fragment.h"
 #include "raster/mesh.h"
@@ -34,8 +35,17 @@ struct RenderSettings {
   bool hiddenLine = false;  // white surfaces with their triangle edges in black, unshaded
   std::uint64_t seed = 1;   // of the stochastic extra shading calls (paper 000 §3.4.2)
   Vec3 eye = Vec3::Zero();
-  Material material;
+  Material material;  // of every surface, unless materialOf is given
+  // Per surface id, an index into materials (a scene's own materials); empty: `material`.
+  std::vector<Material> materials;
+  std::vector<std::uint32_t> materialOf;
   LightRig lights;
+
+  const Material& MaterialOf(std::uint32_t surfaceId) const {
+    return materialOf.empty() ? material : materials[materialOf[surfaceId]];
+  }
+  // Whether any surface is seen through (the back end then keeps kMaxLayers per sample).
+  bool AnyTransparency() const;
 };
 
 // Counts paper 000 reports: n triangles, the most active on one sample row (m), the

@@ -1,7 +1,12 @@
-// The illumination model of paper 004 (COS 426, "Illumination model"):
-//   I = I_E + K_A I_AL + sum_i (K_D (N . L_i) I_i + K_S (V . R_i)^n I_i),
-// with directional and point lights (point lights attenuated by 1 / (1 + k d^2)),
-// shaded two-sided: a normal facing away from the eye is turned towards it.
+// Two illumination models, shaded two-sided (a normal facing away from the eye is turned
+// towards it):
+// - the default, paper 004 (COS 426, "Illumination model"):
+//     I = I_E + K_A I_AL + sum_i (K_D (N . L_i) I_i + K_S (V . R_i)^n I_i);
+// - RenderMan's standard surface shaders (RenderMan Interface 3.2, appendix A: constant,
+//   matte, plastic, metal; paintedplastic is plastic with a texture), whose specular term
+//   is sum_i Cl_i max(0, N . H_i)^(1/roughness) with H the unit half-vector of L and V.
+// Lights: directional, point (attenuated by 1 / (1 + k d^2), or 1 / d^2 as RenderMan's
+// pointlight) and RenderMan's spotlight.
 #pragma once
 
 #include <optional>
@@ -15,17 +20,29 @@ namespace patchscan::raster {
 using Rgb = Eigen::Vector3d;
 
 struct Light {
-  enum class Kind { Directional, Point } kind = Kind::Directional;
-  Vec3 vector;           // Directional: direction the light travels; Point: position
+  enum class Kind { Directional, Point, Spot } kind = Kind::Directional;
+  Vec3 vector;           // Directional: direction the light travels; Point, Spot: position
   Rgb intensity{1, 1, 1};
-  double attenuation = 0.0;  // k in 1 / (1 + k d^2), point lights only
+  double attenuation = 0.0;    // k in 1 / (1 + k d^2), point lights without inverseSquare
+  bool inverseSquare = false;  // point and spot lights: 1 / d^2 (RenderMan)
+  // Spot lights (RenderMan's spotlight): the unit axis, the cosines of the cone's
+  // half-angle and of that less its soft edge, and the cosine exponent of the beam.
+  Vec3 axis = Vec3(0, 0, 1);
+  double cosOutside = 0.0, cosInside = 0.0, beamDistribution = 2.0;
 };
 
 struct Material {
+  enum class Model { Default, Constant, Matte, Plastic, Metal };
+  Model model = Model::Default;
   Rgb colour{0.8, 0.8, 0.8};
   Rgb emission{0, 0, 0};
   double ka = 0.15, kd = 0.75, ks = 0.35;
-  double shininess = 40.0;     // n
+  double shininess = 40.0;     // n, the default model's specular exponent
+  double roughness = 0.1;      // RenderMan's models: the specular exponent is 1 / roughness
+  Rgb specularColour{1, 1, 1};  // plastic
+  double opacity = 1.0;        // (0, 1]: below 1 the surface is seen through
+  bool twoSided = true;        // false: only the front is drawn
+  bool reversed = false;       // the front is the side the normal points away from
   int checkerSquares = 0;      // > 0: modulate colour by a uv checker of this many squares
   ImageTexture* texture = nullptr;  // not owned; modulates colour when set
 };

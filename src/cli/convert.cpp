@@ -1,0 +1,69 @@
+#include "cli/convert.h"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <ostream>
+
+#include "cli/exit_codes.h"
+#include "cli/render.h"
+#include "patch/rib_writer.h"
+
+namespace patchscan::cli {
+
+CLI::App* AddConvertCommand(CLI::App* app, ConvertOptions* o) {
+  CLI::App* cmd = app->add_subcommand(
+      "convert",
+      "Write a scene and its camera as a RenderMan RIB file (.rib) that renders the same "
+      "image: Format, PixelSamples, Projection, Clipping, the world-to-camera Transform, then "
+      "each surface as a Patch (bicubic patches in Bézier form). The file is written to a "
+      "temporary name and renamed into place.");
+  cmd->add_option("FILE", o->file, "scene file: .bpt or .rib")->required();
+  cmd->add_option("-o,--output", o->output, "the RIB file to write")->required();
+  cmd->add_option("--aa", o->aa, "PixelSamples to write, as the side of the grid (default: 3)")
+      ->check(CLI::Range(1, 8));
+  cmd->add_option("--display", o->display,
+                  "the image file name to write in a Display request (default: none)");
+  AddCameraOptions(cmd, &o->camera);
+  return cmd;
+}
+
+int RunConvert(const ConvertOptions& o, std::ostream& err) {
+  auto loaded = LoadSceneAndCamera(o.file, o.camera, err);
+  if (const int* code = std::get_if<int>(&loaded)) return *code;
+  const LoadedScene& ls = std::get<LoadedScene>(loaded);
+  RibWriteOptions wo;
+  wo.pixelSamples = o.aa.value_or(ls.scene.image.pixelSamples.value_or(kDefaultAa));
+  wo.displayName = o.display;
+  auto text = WriteRib(ls.scene, ls.view.camera, wo);
+  if (auto* e = std::get_if<RibWriteError>(&text)) {
+    err << "patchscan: " << o.file << ": " << e->message << '\n';
+    return kExitInputError;
+  }
+  // Step 2: whole or not at all: a temporary file beside the target, renamed into place.
+  const std::filesystem::path target(o.output);
+  const std::filesystem::path temp =
+      target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(getpid()));
+  {
+    std::ofstream f(temp, std::ios::binary);
+    f << std::get<std::string>(text);
+    f.close();
+    if (!f) {
+      std::error_code ec;
+      std::filesystem::remove(temp, ec);
+      err << "patchscan: " << o.output << ": cannot write\n";
+      return kExitOutputError;
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(temp, target, ec);
+  if (ec) {
+    std::filesystem::remove(temp, ec);
+    err << "patchscan: " << o.output << ": cannot rename the finished file into place\n";
+    return kExitOutputError;
+  }
+  return kExitOk;
+}
+
+}  // namespace patchscan::cli

@@ -1,0 +1,44 @@
+// Reader for RenderMan Interface Bytestream scenes (.rib): the subset of the RenderMan
+// Interface Specification 3.2 that describes parametric surfaces, their camera, lights and
+// materials. Supported requests:
+//   structure   FrameBegin/End (one frame is read: the first, or LoadOptions::frame),
+//               WorldBegin/End, AttributeBegin/End, TransformBegin/End, ReadArchive
+//               (paths relative to the including file)
+//   camera      Format, Projection "perspective" ("fov"), ScreenWindow, Clipping,
+//               PixelSamples, Display, and the transformations before WorldBegin (the
+//               world-to-camera transformation, camera space left-handed)
+//   transforms  Identity, Transform, ConcatTransform, Translate, Rotate, Scale,
+//               Orientation, ReverseOrientation, Sides
+//   geometry    Basis (by name or by matrix, with step), Patch "bilinear"/"bicubic" and
+//               PatchMesh (periodic and nonperiodic) with "P", Sphere, Cylinder, Cone,
+//               Paraboloid, Hyperboloid, Disk, Torus, Geometry "teapot"
+//   appearance  Color, Opacity, Surface "constant"/"matte"/"plastic"/"metal"/
+//               "paintedplastic", LightSource "ambientlight"/"distantlight"/
+//               "pointlight"/"spotlight"
+// Every other request is read and skipped with one warning per kind naming file:line.
+// Malformed input (unbalanced blocks, wrong argument counts or array lengths, unknown
+// bases, truncated files, bad numbers) is an error naming file:line. Inside WorldBegin a
+// Transform sets the object-to-world transformation.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <variant>
+
+#include "patch/scene.h"
+
+namespace patchscan {
+
+// Reads a .rib file (and the archives it reads). Never throws on bad input; memory grows
+// with the text, never with a count the text claims.
+std::variant<Scene, SourceError> ReadRib(const std::string& path, const LoadOptions& options = {});
+
+// Parses RIB text; `name` names it in messages and anchors relative archive paths.
+std::variant<Scene, SourceError> ParseRib(std::string_view text, const std::string& name,
+                                          const LoadOptions& options = {});
+
+// The Utah teapot as RenderMan's Geometry "teapot" makes it: 32 bicubic Bézier patches,
+// z up, its base on z = 0 (the same data as surfaces/teapot.bpt).
+std::string_view TeapotBptText();
+
+}  // namespace patchscan

@@ -1,0 +1,91 @@
+#include "patch/rib_writer.h"
+
+#include <cmath>
+#include <iomanip>
+#include <numbers>
+#include <sstream>
+
+namespace patchscan {
+namespace {
+
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+// The far clipping plane written: RenderMan's infinity.
+constexpr double kFarClip = 1e30;
+
+void Point(std::ostream& out, const Vec3& p) { out << ' ' << p.x() << ' ' << p.y() << ' ' << p.z(); }
+
+// RIB's row-vector form of a column-vector affine matrix: its transpose, row by row.
+void Matrix(std::ostream& out, const Mat4& m) {
+  out << '[';
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) out << (i + j == 0 ? "" : " ") << m(j, i);
+  out << ']';
+}
+
+}  // namespace
+
+std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Camera& camera,
+                                                const RibWriteOptions& options) {
+  std::ostringstream out;
+  out << std::setprecision(17);
+  out << "# RenderMan scene written by patchscan from " << scene.source << "\n";
+  if (!options.displayName.empty()) out << "Display \"" << options.displayName << "\" \"file\" \"rgba\"\n";
+  out << "Format " << camera.width << ' ' << camera.height << " 1\n"
+      << "PixelSamples " << options.pixelSamples << ' ' << options.pixelSamples << "\n";
+  // Step 1: the camera. RenderMan's field of view is that of the shorter side, and its
+  // default screen window spans [-a, a] x [-1, 1] (a = width / height >= 1) or [-1, 1] x
+  // [-1/a, 1/a] scaled by tan(fov / 2): equal to this camera's when fov is chosen so.
+  Mat4 cameraFromWorld;
+  double fovDeg = camera.fovDeg;
+  const double aspect = static_cast<double>(camera.width) / camera.height;
+  if (camera.cameraFromWorld) {
+    cameraFromWorld = *camera.cameraFromWorld;
+    const Vec4& w = camera.screenWindow;
+    const double t = std::min(std::abs(w[1] - w[0]), std::abs(w[3] - w[2])) / 2.0;
+    fovDeg = 2.0 * std::atan(t) * kDegPerRad;
+    out << "Projection \"perspective\" \"fov\" [" << fovDeg << "]\n"
+        << "ScreenWindow " << w[0] / t << ' ' << w[1] / t << ' ' << w[2] / t << ' ' << w[3] / t << '\n';
+  } else {
+    // Camera space: x = right, y = up on the image, z = forward (left-handed).
+    const Vec3 eye = EyePoint(camera), forward = ViewForward(camera), right = ViewRight(camera);
+    const Vec3 up = right.cross(forward);  // a right-handed world's up, on the image
+    cameraFromWorld = Mat4::Identity();
+    cameraFromWorld.block<1, 3>(0, 0) = right.transpose();
+    cameraFromWorld.block<1, 3>(1, 0) = up.transpose();
+    cameraFromWorld.block<1, 3>(2, 0) = forward.transpose();
+    cameraFromWorld.block<3, 1>(0, 3) = -cameraFromWorld.block<3, 3>(0, 0) * eye;
+    const double tanHalf = std::tan(0.5 * camera.fovDeg / kDegPerRad);
+    if (aspect < 1.0) fovDeg = 2.0 * std::atan(aspect * tanHalf) * kDegPerRad;
+    out << "Projection \"perspective\" \"fov\" [" << fovDeg << "]\n";
+  }
+  out << "Clipping " << camera.hither << ' ' << kFarClip << "\nTransform ";
+  Matrix(out, cameraFromWorld);
+  out << "\nWorldBegin\n";
+  // Step 2: the surfaces, each in its own attribute block when it is placed.
+  for (size_t k = 0; k < scene.surfaces.size(); ++k) {
+    const Surface& s = scene.surfaces[k];
+    const bool placed = !s.worldFromObject.matrix().isIdentity(0.0);
+    if (placed) {
+      out << "AttributeBegin\nConcatTransform ";
+      Matrix(out, s.worldFromObject.matrix());
+      out << '\n';
+    }
+    if (const auto* b = std::get_if<BicubicPatch>(&s.shape)) {
+      out << "Patch \"bicubic\" \"P\" [";
+      for (const Vec3& p : b->BezierPoints()) Point(out, p);
+      out << " ]\n";
+    } else if (const auto* l = std::get_if<BilinearPatch>(&s.shape)) {
+      out << "Patch \"bilinear\" \"P\" [";
+      for (const Vec3& p : l->Hull()) Point(out, p);
+      out << " ]\n";
+    } else {
+      return RibWriteError{"surface " + std::to_string(k + 1) + " (" + Describe(s) +
+                           ") has no RIB form here: only bicubic and bilinear patches are written"};
+    }
+    if (placed) out << "AttributeEnd\n";
+  }
+  out << "WorldEnd\n";
+  return out.str();
+}
+
+}  // namespace patchscan
