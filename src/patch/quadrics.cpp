@@ -45,6 +45,13 @@ Bounds2 SectorBox(double rhoMin, double rhoMax, double t0, double t1) {
   // the ends of the sweep or at multiples of 90 degrees inside it.
   if (t0 > t1) std::swap(t0, t1);
   Bounds2 box;
+  if (!(t1 - t0 < 2.0 * std::numbers::pi)) {
+    // A whole turn or more (or a sweep beyond double's reach): the annulus's box.
+    const double m = std::max(std::abs(rhoMin), std::abs(rhoMax));
+    box.Extend(Vec2(-m, -m));
+    box.Extend(Vec2(m, m));
+    return box;
+  }
   auto add = [&](double t) {
     for (double rho : {rhoMin, rhoMax}) box.Extend(Vec2(rho * std::cos(t), rho * std::sin(t)));
   };

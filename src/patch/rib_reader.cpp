@@ -117,7 +117,10 @@ class Lexer {
     while (i_ < text_.size() && IsNumberChar(text_[i_])) ++i_;
     const std::string_view t = text_.substr(start, i_ - start);
     const auto n = ParseNumber(t);
-    if (!n) {
+    // A number ends at a delimiter: space, a bracket, a quote or a comment.
+    const bool delimited = i_ >= text_.size() || IsSpace(text_[i_]) || text_[i_] == '[' ||
+                           text_[i_] == ']' || text_[i_] == '"' || text_[i_] == '#';
+    if (!n || !delimited) {
       i_ = start;
       return Fail(line_, "expected a number, found " + Shown(Word()));
     }
@@ -455,6 +458,9 @@ class RibParser {
   bool FrameBegin(const Request& r) {
     if (!Numbers(r, 1)) return false;
     if (!blocks_.empty()) return Fail(r.line, "FrameBegin inside " + std::string(BlockName(blocks_.back().kind)));
+    // Frame numbers are whole numbers within int (a larger one cannot be chosen anyway).
+    if (num_[0] != std::floor(num_[0]) || std::abs(num_[0]) > 2e9)
+      return Fail(r.line, "FrameBegin: the frame number must be a whole number");
     const int number = static_cast<int>(num_[0]);
     const bool chosen = options_.frame < 0 || options_.frame == number;
     blocks_.push_back({Block::Kind::Frame, r.line, file_, attr_});
@@ -914,6 +920,10 @@ class RibParser {
     for (const Param& p : params) IgnoreParam(r, p);
     const double* a = num_.data();
     const double thetaMax = a[count - 1];
+    // Sweeps are angles of at most a turn either way (RenderMan Interface 3.2, "Quadrics").
+    if (!(std::abs(thetaMax) <= 360.0)) return Fail(r.line, n + ": thetamax must be from -360 to 360 degrees");
+    if (n == "Torus" && !(std::abs(a[2]) <= 360.0 && std::abs(a[3]) <= 360.0))
+      return Fail(r.line, "Torus: phimin and phimax must be from -360 to 360 degrees");
     auto positive = [&](double x, const char* what) {
       return x > 0 ? true : Fail(r.line, n + ": " + what + " must be positive");
     };

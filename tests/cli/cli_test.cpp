@@ -110,7 +110,7 @@ TEST(Cli, BadOptionsAreUsageErrors) {
 TEST(Cli, HelpDocumentsEveryOptionWithDefaults) {
   const Result r = Patchscan("--help");
   EXPECT_EQ(r.code, 0);
-  for (const char* word : {"info", "render", "--output", "--mode", "--tess-rate", "--aa",
+  for (const char* word : {"info", "render", "convert", "--frame", "--output", "--mode", "--tess-rate", "--aa",
                            "--shading", "--texture", "--cull-backfaces", "--stats", "--stats-json",
                            "--overlay", "--no-extrapolate", "exact",
                            "--size", "640x480", "--eye", "--look-at", "--up", "--fov", "30",
@@ -276,6 +276,65 @@ TEST(Cli, InterruptStopsTheRenderAndLeavesNoFile) {
   ASSERT_TRUE(WIFEXITED(status)) << "ended by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
   EXPECT_EQ(WEXITSTATUS(status), 130);
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), {}), 0) << "files left in " << dir;
+  std::filesystem::remove_all(dir);
+}
+
+// A RIB scene renders in every mode; its Display names the image when -o is not given;
+// --frame chooses a frame; warnings name file:line on stderr.
+TEST(Cli, RibScenesRenderInEveryMode) {
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_rib_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  for (const char* mode : {"exact", "theta", "tess"})
+    for (const char* scene : {"quadrics.rib", "teapot_lit.rib", "patchmesh.rib"}) {
+      const std::string out = (dir / (std::string(mode) + "_" + scene + ".png")).string();
+      const Result r = Patchscan("render " PATCHSCAN_SURFACES_DIR "/" + std::string(scene) + " -o " + out +
+                                 " --size 96x72 --aa 2 --mode " + mode);
+      EXPECT_EQ(r.code, 0) << mode << " " << scene << "\n" << r.err;
+      EXPECT_TRUE(std::filesystem::exists(out)) << out;
+    }
+  std::ofstream(dir / "s.rib") << "Display \"shown.png\" \"file\" \"rgba\"\nFormat 40 30 1\n"
+                                  "Hider \"hidden\"\nTranslate 0 0 5\nFrameBegin 1\nWorldBegin\nSphere 1 -1 1 360\n"
+                                  "WorldEnd\nFrameEnd\nFrameBegin 2\nDisplay \"two.png\" \"file\" \"rgba\"\n"
+                                  "WorldBegin\nSphere 2 -2 2 360\nWorldEnd\nFrameEnd\n";
+  // Display names a file relative to the working directory.
+  const std::string cd = "cd " + dir.string() + " && " + PATCHSCAN_BINARY;
+  int code = std::system((cd + " render s.rib --mode tess 2>err.txt").c_str());
+  EXPECT_EQ(code, 0);
+  EXPECT_TRUE(std::filesystem::exists(dir / "shown.png"));
+  EXPECT_EQ(Slurp(dir / "err.txt"), "patchscan: warning: " + (std::string("s.rib")) + ":3: Hider is not supported here: skipped\n");
+  code = std::system((cd + " render s.rib --frame 2 --mode tess 2>/dev/null").c_str());
+  EXPECT_EQ(code, 0);
+  EXPECT_TRUE(std::filesystem::exists(dir / "two.png"));
+  Result r = Patchscan("info " + (dir / "s.rib").string() + " --frame 2");
+  EXPECT_NE(r.out.find("sphere radius 2"), std::string::npos) << r.out;
+  r = Patchscan("info " + (dir / "s.rib").string() + " --frame 3");
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err, "patchscan: " + (dir / "s.rib").string() + ": no FrameBegin 3 in the file\n");
+  std::filesystem::remove_all(dir);
+}
+
+// convert: the RIB written renders to the same bytes as the .bpt it came from, in each
+// mode, for a wide and a tall image (the field of view of the shorter side).
+TEST(Cli, ConvertWritesARibThatRendersTheSameImage) {
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_convert_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  for (const char* size : {"96x72", "60x90"}) {
+    const std::string rib = (dir / (std::string(size) + ".rib")).string();
+    Result r = Patchscan("convert " + kTeapot + " -o " + rib + " --size " + size);
+    ASSERT_EQ(r.code, 0) << r.err;
+    for (const char* mode : {"exact", "theta", "tess"}) {
+      const std::string a = (dir / "a.png").string(), b = (dir / "b.png").string();
+      ASSERT_EQ(Patchscan("render " + kTeapot + " -o " + a + " --size " + size + " --mode " + mode).code, 0);
+      ASSERT_EQ(Patchscan("render " + rib + " -o " + b + " --mode " + mode).code, 0);
+      EXPECT_EQ(Slurp(a), Slurp(b)) << size << " " << mode;
+    }
+  }
+  // A surface with no RIB form here is refused, and nothing is written.
+  std::ofstream(dir / "q.rib") << "WorldBegin\nSphere 1 -1 1 360\nWorldEnd\n";
+  const Result r = Patchscan("convert " + (dir / "q.rib").string() + " -o " + (dir / "out.rib").string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_NE(r.err.find("has no RIB form here"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.rib"));
   std::filesystem::remove_all(dir);
 }
 

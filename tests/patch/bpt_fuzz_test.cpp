@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "patch/bpt_reader.h"
+#include "patch/mutator.h"
 
 namespace patchscan {
 namespace {
@@ -48,69 +49,11 @@ TEST(BptCorpus, EveryMalformedFileGetsItsExactMessage) {
   EXPECT_EQ(n, files);
 }
 
-// Mutations that reach the reader's corners: bytes flipped, inserted from an alphabet of the
-// format's own characters, deleted and duplicated; numbers swapped for extreme ones; the
-// text cut short.
-class Mutator {
- public:
-  explicit Mutator(std::uint64_t seed) : rng_(seed) {}
-
-  std::string Mutate(std::string s) {
-    const int n = 1 + Uniform(3);
-    for (int i = 0; i < n; ++i) s = Once(std::move(s));
-    return s;
-  }
-
- private:
-  int Uniform(int n) { return std::uniform_int_distribution<int>(0, n)(rng_); }
-  std::size_t Pos(const std::string& s) { return s.empty() ? 0 : std::uniform_int_distribution<std::size_t>(0, s.size() - 1)(rng_); }
-
-  std::string Once(std::string s) {
-    static const std::string kAlphabet = "0123456789.-+eE \n\r\t#xnaif,\x01\xff";
-    static const char* kTokens[] = {"1e308", "-1e308", "1e-320", "4.9e-324", "nan", "inf", "-0", "0", "1",
-                                    "99999999999", "10000000", "3", "4", "3 3", "4 4", "#", "\n", "\r\n",
-                                    "0x10", "1e", "--1", ".", "1..2", "\xc3\xa9"};
-    switch (Uniform(6)) {
-      case 0:  // flip a byte
-        if (!s.empty()) s[Pos(s)] = static_cast<char>(Uniform(255));
-        break;
-      case 1:  // insert a character of the format
-        s.insert(s.begin() + static_cast<std::ptrdiff_t>(Pos(s)), kAlphabet[static_cast<std::size_t>(Uniform(static_cast<int>(kAlphabet.size()) - 1))]);
-        break;
-      case 2: {  // delete a run
-        const std::size_t at = Pos(s);
-        s.erase(at, static_cast<std::size_t>(1 + Uniform(8)));
-        break;
-      }
-      case 3: {  // duplicate a run
-        const std::size_t at = Pos(s);
-        s.insert(Pos(s), s.substr(at, static_cast<std::size_t>(1 + Uniform(64))));
-        break;
-      }
-      case 4: {  // replace the token at a position with an extreme one
-        std::size_t at = Pos(s);
-        while (at > 0 && !std::isspace(static_cast<unsigned char>(s[at - 1]))) --at;
-        std::size_t end = at;
-        while (end < s.size() && !std::isspace(static_cast<unsigned char>(s[end]))) ++end;
-        s.replace(at, end - at, kTokens[Uniform(static_cast<int>(std::size(kTokens)) - 1)]);
-        break;
-      }
-      default:  // cut short
-        s.resize(Pos(s));
-        break;
-    }
-    return s;
-  }
-
-  std::mt19937_64 rng_;
-};
-
-// The fixed budget of mutants per run (CI runs exactly this many, in both builds);
-// PATCHSCAN_FUZZ_MUTANTS raises it for a longer search.
-long Budget() {
-  if (const char* e = std::getenv("PATCHSCAN_FUZZ_MUTANTS")) return std::max(1L, std::atol(e));
-  return 100000;
-}
+// The format's own characters, and tokens at the edges of what it reads.
+const std::string kBptAlphabet = "0123456789.-+eE \n\r\t#xnaif,\x01\xff";
+const std::vector<std::string> kBptTokens = {"1e308", "-1e308", "1e-320", "4.9e-324", "nan", "inf", "-0", "0", "1",
+                                             "99999999999", "10000000", "3", "4", "3 3", "4 4", "#", "\n", "\r\n",
+                                             "0x10", "1e", "--1", ".", "1..2", "\xc3\xa9"};
 
 TEST(BptFuzz, MutantsAreReadOrRefusedWithALocatedMessage) {
   // Three mutants in four start from a valid file (so that many stay valid and reach the
@@ -122,9 +65,9 @@ TEST(BptFuzz, MutantsAreReadOrRefusedWithALocatedMessage) {
     if (e.path().extension() == ".bpt") malformed.push_back(Slurp(e.path()));
   ASSERT_GT(malformed.size(), 10u);
 
-  Mutator mutate(20261122);
+  test::Mutator mutate(20261122, kBptAlphabet, kBptTokens);
   long accepted = 0, refused = 0;
-  const long budget = Budget();
+  const long budget = test::FuzzBudget();
   for (long k = 0; k < budget; ++k) {
     const auto& pool = k % 4 == 3 ? malformed : valid;
     const std::string text = mutate.Mutate(pool[static_cast<std::size_t>(k / 4) % pool.size()]);

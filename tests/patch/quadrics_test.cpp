@@ -143,6 +143,13 @@ TEST(Quadrics, SectorBoxIsExact) {
   EXPECT_NEAR(b.hi.x(), 2 * std::cos(kPi / 6), kClosedFormTol);
   EXPECT_NEAR(b.lo.y(), 1 * std::sin(kPi / 6), kClosedFormTol);
   EXPECT_NEAR(b.hi.y(), 2.0, kClosedFormTol);
+  // A turn or more, however many (a sweep of 1e300 radians once walked its quarter turns
+  // one by one): the whole annulus's box, at once.
+  for (double sweep : {2 * kPi, 7.0, 1e300}) {
+    const Bounds2 w = SectorBox(1.0, 2.0, -1.0, -1.0 + sweep);
+    EXPECT_EQ(w.lo, Vec2(-2, -2)) << sweep;
+    EXPECT_EQ(w.hi, Vec2(2, 2)) << sweep;
+  }
 }
 
 }  // namespace

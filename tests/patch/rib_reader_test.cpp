@@ -1,0 +1,520 @@
+// The RIB reader: a small scene for every request it reads, with the effect asserted;
+// quadric parameters against the formulas of the RenderMan Interface 3.2 ("Quadrics");
+// malformed scenes answered with file:line; skipped requests warned about once per kind.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <numbers>
+#include <unistd.h>
+
+#include "patch/mutator.h"
+#include "patch/rib_reader.h"
+#include "patch/screen.h"
+
+namespace patchscan {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr double kRad = kPi / 180.0;
+// Positions computed from parameters read back from text: the reader and the formulas
+// round differently only in the last bits.
+constexpr double kPosTol = 1e-12;
+
+// A world block around `body`.
+std::string World(const std::string& body) { return "WorldBegin\n" + body + "\nWorldEnd\n"; }
+
+Scene Parse(const std::string& text, const LoadOptions& o = {}) {
+  auto r = ParseRib(text, "t.rib", o);
+  if (auto* e = std::get_if<SourceError>(&r)) ADD_FAILURE() << e->What() << "\n" << text;
+  return std::get_if<Scene>(&r) ? std::get<Scene>(r) : Scene{};
+}
+
+std::string Error(const std::string& text, const LoadOptions& o = {}) {
+  auto r = ParseRib(text, "t.rib", o);
+  if (auto* e = std::get_if<SourceError>(&r)) return e->What();
+  return "(accepted)";
+}
+
+Vec3 At(const Surface& s, double u, double v) {
+  SurfaceDerivs d;
+  EvaluateObject(s, u, v, DerivOrder::Position, &d);
+  return s.worldFromObject * d.p;
+}
+
+void ExpectNear(const Vec3& a, const Vec3& b, double tol = kPosTol) {
+  EXPECT_LT((a - b).norm(), tol * std::max(1.0, b.norm())) << a.transpose() << " vs " << b.transpose();
+}
+
+// ---- structure ----
+
+TEST(Rib, CommentsAndBothLayoutsOfArguments) {
+  const Scene s = Parse("# a comment\n" + World("Sphere 1 -1 1 360 # after\nSphere [2 -2 2 360]"));
+  ASSERT_EQ(s.surfaces.size(), 2u);
+  EXPECT_EQ(s.sourceLines[0], 3);
+  EXPECT_EQ(s.sourceLines[1], 4);
+  ExpectNear(At(s.surfaces[1], 0, 1), Vec3(0, 0, 2));
+}
+
+TEST(Rib, FramesTheFirstOrTheChosen) {
+  const std::string text = "Format 10 10 1\nFrameBegin 1\n" + World("Sphere 1 -1 1 360") +
+                           "FrameEnd\nFrameBegin 2\n" + World("Sphere 2 -2 2 360\nSphere 3 -3 3 360") +
+                           "FrameEnd\n";
+  EXPECT_EQ(Parse(text).surfaces.size(), 1u);
+  LoadOptions two;
+  two.frame = 2;
+  const Scene s = Parse(text, two);
+  EXPECT_EQ(s.surfaces.size(), 2u);
+  ASSERT_TRUE(s.image.size);  // options before the frames apply to every frame
+  EXPECT_EQ(s.image.size->first, 10);
+  LoadOptions missing;
+  missing.frame = 7;
+  EXPECT_EQ(Error(text, missing), "t.rib: no FrameBegin 7 in the file");
+}
+
+TEST(Rib, AttributeBlocksRestoreAppearanceAndTransformTransformBlocksOnlyTheTransform) {
+  const Scene s = Parse(World(
+      "Color [1 0 0]\n"
+      "AttributeBegin\n Color [0 1 0]\n Translate 5 0 0\n Sphere 1 -1 1 360\nAttributeEnd\n"
+      "Sphere 1 -1 1 360\n"
+      "TransformBegin\n Color [0 0 1]\n Translate 0 5 0\n Sphere 1 -1 1 360\nTransformEnd\n"
+      "Sphere 1 -1 1 360"));
+  ASSERT_EQ(s.surfaces.size(), 4u);
+  const auto colour = [&](int k) { return s.appearances[s.appearanceOf[k]].colour; };
+  EXPECT_EQ(colour(0), Vec3(0, 1, 0));
+  EXPECT_EQ(colour(1), Vec3(1, 0, 0));
+  EXPECT_EQ(colour(2), Vec3(0, 0, 1));
+  EXPECT_EQ(colour(3), Vec3(0, 0, 1));  // TransformEnd keeps the colour
+  ExpectNear(At(s.surfaces[0], 0, 0.5), Vec3(6, 0, 0));
+  ExpectNear(At(s.surfaces[1], 0, 0.5), Vec3(1, 0, 0));
+  ExpectNear(At(s.surfaces[2], 0, 0.5), Vec3(1, 5, 0));
+  ExpectNear(At(s.surfaces[3], 0, 0.5), Vec3(1, 0, 0));  // TransformEnd restores the transform
+}
+
+TEST(Rib, ReadArchiveReadsRelativeToTheIncludingFile) {
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_rib_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "parts");
+  std::ofstream(dir / "main.rib") << World("Translate 1 0 0\nReadArchive \"parts/a.rib\"");
+  std::ofstream(dir / "parts" / "a.rib") << "Sphere 1 -1 1 360\nReadArchive \"b.rib\"\n";
+  std::ofstream(dir / "parts" / "b.rib") << "Sphere 2 -2 2 360\nAttributeEnd\n";
+  auto r = ReadRib((dir / "main.rib").string());
+  ASSERT_TRUE(std::holds_alternative<SourceError>(r));
+  // The error names the archive and its line.
+  EXPECT_EQ(std::get<SourceError>(r).What(), (dir / "parts" / "b.rib").string() + ":2: AttributeEnd closes WorldBegin at " +
+                                                 (dir / "main.rib").string() + ":1");
+  std::ofstream(dir / "parts" / "b.rib") << "Sphere 2 -2 2 360\n";
+  auto ok = ReadRib((dir / "main.rib").string());
+  ASSERT_TRUE(std::holds_alternative<Scene>(ok)) << std::get<SourceError>(ok).What();
+  const Scene& s = std::get<Scene>(ok);
+  ASSERT_EQ(s.surfaces.size(), 2u);
+  ExpectNear(At(s.surfaces[1], 0, 0.5), Vec3(3, 0, 0));  // the archive's surface, translated
+  EXPECT_EQ(s.sourceFiles[1], (dir / "parts" / "b.rib").string());
+  std::ofstream(dir / "parts" / "b.rib") << "ReadArchive \"b.rib\"\n";
+  auto loop = ReadRib((dir / "main.rib").string());
+  ASSERT_TRUE(std::holds_alternative<SourceError>(loop));
+  EXPECT_NE(std::get<SourceError>(loop).message.find("nested more than 16 deep"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+// ---- camera and image ----
+
+TEST(Rib, CameraStatementsBeforeTheWorld) {
+  const Scene s = Parse(
+      "Display \"out.png\" \"file\" \"rgba\"\nFormat 400 200 1\nPixelSamples 4 4\n"
+      "Projection \"perspective\" \"fov\" [45]\nScreenWindow -1 1 -0.5 0.5\nClipping 0.5 100\n"
+      "Translate 0 0 5\n" + World("Sphere 1 -1 1 360"));
+  EXPECT_EQ(s.image.displayName, "out.png");
+  ASSERT_TRUE(s.image.size && s.image.pixelSamples && s.image.hither && s.image.screenWindow);
+  EXPECT_EQ(*s.image.size, std::make_pair(400, 200));
+  EXPECT_EQ(*s.image.pixelSamples, 4);
+  EXPECT_EQ(*s.image.hither, 0.5);
+  EXPECT_EQ(s.image.fovDeg, 45.0);
+  EXPECT_EQ(*s.image.screenWindow, Vec4(-1, 1, -0.5, 0.5));
+  ASSERT_TRUE(s.image.cameraFromWorld);
+  // World origin at camera (0, 0, 5); the sphere is placed in world space, untouched.
+  EXPECT_EQ((*s.image.cameraFromWorld * Vec4(0, 0, 0, 1)), Vec4(0, 0, 5, 1));
+  EXPECT_EQ(s.surfaces[0].worldFromObject.matrix(), Mat4::Identity());
+}
+
+TEST(Rib, TheCameraMapsAsRenderManSays) {
+  // Camera looking along +z at a point (1, 1, 10) of camera space: with fov 90 and a
+  // square image, x_screen = x/z = 0.1 of the half-width right of centre, y up.
+  Camera c;
+  c.width = c.height = 200;
+  c.cameraFromWorld = Mat4::Identity();
+  c.screenWindow = Vec4(-1, 1, -1, 1) * std::tan(0.5 * 90 * kRad);
+  c.hither = 0.1;
+  ASSERT_FALSE(ValidateCamera(c));
+  const Vec4 h = ScreenFromWorld(c) * Vec4(1, 1, 10, 1);
+  EXPECT_NEAR(h.x() / h.w(), 110.0, 1e-9);
+  EXPECT_NEAR(h.y() / h.w(), 90.0, 1e-9);
+  EXPECT_NEAR(h.w(), 10.0, 1e-12);
+  EXPECT_EQ(EyePoint(c), Vec3(0, 0, 0));
+  EXPECT_EQ(ViewForward(c), Vec3(0, 0, 1));
+  EXPECT_EQ(ViewRight(c), Vec3(1, 0, 0));
+}
+
+TEST(Rib, ProjectionOrthographicAndUnknownAreRefusedClearly) {
+  EXPECT_EQ(Error("Projection \"orthographic\"\n" + World("")),
+            "t.rib:1: Projection \"orthographic\" is not supported yet (only \"perspective\")");
+  EXPECT_EQ(Error("Projection \"fisheye\"\n" + World("")),
+            "t.rib:1: Projection: unknown projection 'fisheye' (known: \"perspective\")");
+}
+
+// ---- transformations ----
+
+TEST(Rib, TransformationsComposeAsTheSpecificationSays) {
+  // Translate then Rotate: the rotation applies first to the object's points.
+  const Scene s = Parse(World(
+      "Translate 10 0 0\nRotate 90 0 0 1\nScale 2 2 2\nSphere 1 -1 1 360\n"
+      "Identity\nConcatTransform [1 0 0 0  0 1 0 0  0 0 1 0  0 0 7 1]\nSphere 1 -1 1 360\n"
+      "Transform [0 1 0 0  -1 0 0 0  0 0 1 0  0 0 0 1]\nSphere 1 -1 1 360"));
+  ASSERT_EQ(s.surfaces.size(), 3u);
+  // The sphere's point at u = 0, v = 1/2 is (1, 0, 0): scaled to (2, 0, 0), rotated to
+  // (0, 2, 0), translated to (10, 2, 0).
+  ExpectNear(At(s.surfaces[0], 0, 0.5), Vec3(10, 2, 0));
+  ExpectNear(At(s.surfaces[1], 0, 0.5), Vec3(1, 0, 7));  // RIB's translation row
+  ExpectNear(At(s.surfaces[2], 0, 0.5), Vec3(0, 1, 0));  // row vectors: x maps to row 0
+}
+
+TEST(Rib, OrientationReverseOrientationAndSides) {
+  const Scene s = Parse(World(
+      "Sphere 1 -1 1 360\nSides 1\nSphere 1 -1 1 360\nReverseOrientation\nSphere 1 -1 1 360\n"
+      "Orientation \"outside\"\nScale -1 1 1\nSphere 1 -1 1 360\nOrientation \"inside\"\nSphere 1 -1 1 360"));
+  ASSERT_EQ(s.surfaces.size(), 5u);
+  const auto look = [&](int k) { return s.appearances[s.appearanceOf[k]]; };
+  EXPECT_TRUE(look(0).twoSided);
+  EXPECT_FALSE(look(0).reversed);
+  EXPECT_FALSE(look(1).twoSided);
+  EXPECT_FALSE(look(1).reversed);
+  EXPECT_TRUE(look(2).reversed);   // ReverseOrientation
+  EXPECT_TRUE(look(3).reversed);   // a mirroring transformation flips the handedness
+  EXPECT_FALSE(look(4).reversed);  // ... and "inside" flips it back
+  EXPECT_EQ(Error(World("Orientation \"up\"")),
+            "t.rib:2: Orientation: expected \"outside\", \"inside\", \"lh\" or \"rh\", found 'up'");
+  EXPECT_EQ(Error(World("Sides 3")), "t.rib:2: Sides: expected 1 or 2");
+}
+
+// ---- geometry ----
+
+// The 16 control points of a bicubic patch over [0, 3]^2 with a bump, u fastest.
+std::string GridPoints(double bump) {
+  std::string p = "[";
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i)
+      p += " " + std::to_string(i) + " " + std::to_string(j) + " " +
+           std::to_string((i == 1 || i == 2) && (j == 1 || j == 2) ? bump : 0.0);
+  return p + " ]";
+}
+
+TEST(Rib, PatchesInEveryBasisAndBilinear) {
+  const Scene s = Parse(World(
+      "Patch \"bicubic\" \"P\" " + GridPoints(1) + "\n" +
+      "Basis \"b-spline\" 1 \"catmull-rom\" 1\nPatch \"bicubic\" \"P\" " + GridPoints(1) + "\n" +
+      "Basis [-1 3 -3 1  3 -6 3 0  -3 3 0 0  1 0 0 0] 3 \"bezier\" 3\nPatch \"bicubic\" \"P\" " + GridPoints(1) + "\n" +
+      "Patch \"bilinear\" \"P\" [0 0 0  1 0 0  0 1 0  1 1 1]"));
+  ASSERT_EQ(s.surfaces.size(), 4u);
+  // Bézier: corners interpolated, the centre at 9/16 of the bump (weights (3/8)^2 * 4).
+  ExpectNear(At(s.surfaces[0], 0, 0), Vec3(0, 0, 0));
+  ExpectNear(At(s.surfaces[0], 1, 1), Vec3(3, 3, 0));
+  ExpectNear(At(s.surfaces[0], 0.5, 0.5), Vec3(1.5, 1.5, 0.5625));
+  // B-spline in u (weights 1/6, 2/3, 1/6 at t = 0) and Catmull-Rom in v (through G1 at
+  // t = 0): at (0, 0) x = 1, y = 1, z = (2/3 + 1/6) of the bump (row j = 1 only).
+  ExpectNear(At(s.surfaces[1], 0, 0), Vec3(1, 1, 5.0 / 6.0));
+  // The explicit Bézier matrix gives the Bézier patch.
+  ExpectNear(At(s.surfaces[2], 0.3, 0.7), At(s.surfaces[0], 0.3, 0.7));
+  ExpectNear(At(s.surfaces[3], 0.5, 0.5), Vec3(0.5, 0.5, 0.25));
+}
+
+TEST(Rib, PatchMeshPeriodicAndNonperiodic) {
+  // A 7 x 4 nonperiodic Bézier mesh (step 3): 2 x 1 patches sharing the column x = 3.
+  std::string p7 = "[";
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 7; ++i) p7 += " " + std::to_string(i) + " " + std::to_string(j) + " 0";
+  p7 += " ]";
+  // A 4 x 2 periodic bilinear mesh (a band closed in u): 4 x 2 patches.
+  std::string band = "[";
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 4; ++i)
+      band += " " + std::to_string(std::cos(i * kPi / 2)) + " " + std::to_string(std::sin(i * kPi / 2)) + " " + std::to_string(j);
+  band += " ]";
+  // A 6 x 4 periodic b-spline mesh in u (step 1): 6 patches.
+  std::string ring = "[";
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 6; ++i)
+      ring += " " + std::to_string(std::cos(i * kPi / 3)) + " " + std::to_string(std::sin(i * kPi / 3)) + " " + std::to_string(j);
+  ring += " ]";
+  const Scene s = Parse(World("PatchMesh \"bicubic\" 7 \"nonperiodic\" 4 \"nonperiodic\" \"P\" " + p7 + "\n" +
+                              "PatchMesh \"bilinear\" 4 \"periodic\" 2 \"periodic\" \"P\" " + band + "\n" +
+                              "Basis \"b-spline\" 1 \"b-spline\" 1\n" +
+                              "PatchMesh \"bicubic\" 6 \"periodic\" 4 \"nonperiodic\" \"P\" " + ring));
+  ASSERT_EQ(s.surfaces.size(), 2u + 8u + 6u);
+  ExpectNear(At(s.surfaces[0], 1, 0), Vec3(3, 0, 0));
+  ExpectNear(At(s.surfaces[1], 0, 0), Vec3(3, 0, 0));
+  ExpectNear(At(s.surfaces[1], 1, 1), Vec3(6, 3, 0));
+  // The band's last patch in u joins its first: u = 1 of patch 3 is u = 0 of patch 0.
+  ExpectNear(At(s.surfaces[2 + 3], 1, 0), At(s.surfaces[2], 0, 0));
+  // The ring's patches join with continuity around the closed direction.
+  for (int k = 0; k < 6; ++k)
+    ExpectNear(At(s.surfaces[10 + k], 1, 0.5), At(s.surfaces[10 + (k + 1) % 6], 0, 0.5), 1e-12);
+  EXPECT_EQ(Error(World("PatchMesh \"bicubic\" 5 \"nonperiodic\" 4 \"nonperiodic\" \"P\" [" + std::string(60, ' ') + "]")),
+            "t.rib:2: PatchMesh: \"P\" expects 60 numbers (20 points), found 0");
+}
+
+// RenderMan Interface 3.2, "Quadrics": each surface at (u, v) from the formulas.
+TEST(Rib, QuadricParametersFollowTheSpecification) {
+  struct Case {
+    std::string rib;
+    std::function<Vec3(double, double)> formula;
+  };
+  std::vector<Case> cases;
+  for (const auto& [zmin, zmax, tmax] : std::vector<std::array<double, 3>>{{-2, 2, 360}, {-1, 1.5, 270}, {0.5, 1.9, 90}, {-2, 0, -120}}) {
+    const double r = 2;
+    const double pmin = std::asin(std::clamp(zmin / r, -1.0, 1.0)), pmax = std::asin(std::clamp(zmax / r, -1.0, 1.0));
+    cases.push_back({"Sphere 2 " + std::to_string(zmin) + " " + std::to_string(zmax) + " " + std::to_string(tmax),
+                     [=](double u, double v) {
+                       const double t = u * tmax * kRad, p = pmin + v * (pmax - pmin);
+                       return Vec3(r * std::cos(t) * std::cos(p), r * std::sin(t) * std::cos(p), r * std::sin(p));
+                     }});
+    cases.push_back({"Cylinder 1.5 " + std::to_string(zmin) + " " + std::to_string(zmax) + " " + std::to_string(tmax),
+                     [=](double u, double v) {
+                       const double t = u * tmax * kRad;
+                       return Vec3(1.5 * std::cos(t), 1.5 * std::sin(t), zmin + v * (zmax - zmin));
+                     }});
+    cases.push_back({"Cone 3 1.25 " + std::to_string(tmax), [=](double u, double v) {
+                       const double t = u * tmax * kRad;
+                       return Vec3(1.25 * (1 - v) * std::cos(t), 1.25 * (1 - v) * std::sin(t), 3 * v);
+                     }});
+    cases.push_back({"Disk 0.5 2 " + std::to_string(tmax), [=](double u, double v) {
+                       const double t = u * tmax * kRad;
+                       return Vec3(2 * (1 - v) * std::cos(t), 2 * (1 - v) * std::sin(t), 0.5);
+                     }});
+    cases.push_back({"Paraboloid 1.5 0.25 2 " + std::to_string(tmax), [=](double u, double v) {
+                       const double t = u * tmax * kRad, z = 0.25 + v * 1.75, rr = 1.5 * std::sqrt(z / 2);
+                       return Vec3(rr * std::cos(t), rr * std::sin(t), z);
+                     }});
+    cases.push_back({"Hyperboloid 1 0 -1  0.5 1 1 " + std::to_string(tmax), [=](double u, double v) {
+                       const double t = u * tmax * kRad;
+                       const Vec3 p = Vec3(1, 0, -1) + v * Vec3(-0.5, 1, 2);
+                       return Vec3(p.x() * std::cos(t) - p.y() * std::sin(t), p.x() * std::sin(t) + p.y() * std::cos(t), p.z());
+                     }});
+    cases.push_back({"Torus 3 0.5 " + std::to_string(zmin * 45) + " " + std::to_string(zmax * 90) + " " + std::to_string(tmax),
+                     [=](double u, double v) {
+                       const double t = u * tmax * kRad, p = (zmin * 45 + v * (zmax * 90 - zmin * 45)) * kRad;
+                       const double rr = 3 + 0.5 * std::cos(p);
+                       return Vec3(rr * std::cos(t), rr * std::sin(t), 0.5 * std::sin(p));
+                     }});
+  }
+  for (const Case& c : cases) {
+    const Scene s = Parse(World(c.rib));
+    ASSERT_EQ(s.surfaces.size(), 1u) << c.rib;
+    for (double u : {0.0, 0.3, 1.0})
+      for (double v : {0.0, 0.6, 1.0}) {
+        SCOPED_TRACE(c.rib + " at u " + std::to_string(u) + " v " + std::to_string(v));
+        ExpectNear(At(s.surfaces[0], u, v), c.formula(u, v), 1e-9);
+      }
+  }
+}
+
+TEST(Rib, GeometryTeapotIsTheUtahTeapot) {
+  const Scene s = Parse(World("Geometry \"teapot\""));
+  ASSERT_EQ(s.surfaces.size(), 32u);
+  const Bounds3 b = s.WorldBounds();
+  EXPECT_NEAR(b.lo.z(), 0.0, 1e-12);
+  EXPECT_NEAR(b.hi.z(), 3.15, 1e-12);
+}
+
+// ---- appearance ----
+
+TEST(Rib, ColourOpacityAndTheStandardShaders) {
+  const Scene s = Parse(World(
+      "Color 0.5 0.25 1\nOpacity [0.5 0.5 0.5]\nSphere 1 -1 1 360\n"
+      "Surface \"matte\" \"Kd\" [0.7]\nSphere 1 -1 1 360\n"
+      "Surface \"plastic\" \"uniform float roughness\" 0.2 \"specularcolor\" [1 0 0]\nSphere 1 -1 1 360\n"
+      "Surface \"metal\" \"Ks\" [0.9]\nSphere 1 -1 1 360\n"
+      "Surface \"constant\"\nSphere 1 -1 1 360\n"
+      "Surface \"paintedplastic\" \"texturename\" \"grid.tx\"\nSphere 1 -1 1 360\n"
+      "Surface \"wood\"\nSphere 1 -1 1 360"));
+  ASSERT_EQ(s.surfaces.size(), 7u);
+  const auto look = [&](int k) { return s.appearances[s.appearanceOf[k]]; };
+  using S = Appearance::Shader;
+  EXPECT_EQ(look(0).colour, Vec3(0.5, 0.25, 1));
+  EXPECT_EQ(look(0).opacity, Vec3(0.5, 0.5, 0.5));
+  EXPECT_EQ(look(0).shader, S::Default);
+  EXPECT_EQ(look(1).shader, S::Matte);
+  EXPECT_EQ(look(1).kd, 0.7);
+  EXPECT_EQ(look(1).ka, 1.0);
+  EXPECT_EQ(look(2).shader, S::Plastic);
+  EXPECT_EQ(look(2).roughness, 0.2);
+  EXPECT_EQ(look(2).specularColour, Vec3(1, 0, 0));
+  EXPECT_EQ(look(2).kd, 0.5);
+  EXPECT_EQ(look(3).shader, S::Metal);
+  EXPECT_EQ(look(3).ks, 0.9);
+  EXPECT_EQ(look(4).shader, S::Constant);
+  EXPECT_EQ(look(5).shader, S::PaintedPlastic);
+  EXPECT_EQ(look(5).textureName, "grid.tx");  // relative to the scene file's directory
+  EXPECT_EQ(look(6).shader, S::Default);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0], "t.rib:15: Surface: unknown shader 'wood': the default material is used");
+}
+
+TEST(Rib, LightSourcesInWorldSpace) {
+  const Scene s = Parse(
+      "Translate 0 0 10\n"
+      "LightSource \"pointlight\" 9 \"from\" [0 0 0]\n" +  // in the space being made world space
+      World("LightSource \"ambientlight\" 1 \"intensity\" 0.2 \"lightcolor\" [1 0.5 0]\n"
+            "LightSource \"distantlight\" 2 \"from\" [0 0 1] \"to\" [0 0 0]\n"
+            "Translate 1 2 3\n"
+            "LightSource \"pointlight\" \"key\" \"intensity\" [5] \"from\" [1 0 0]\n"
+            "LightSource \"spotlight\" 4 \"coneangle\" 0.5 \"conedeltaangle\" 0.1 \"beamdistribution\" 3 \"to\" [0 0 -1]\n"
+            "LightSource \"arealight\" 5"));
+  ASSERT_EQ(s.lights.size(), 5u);
+  using K = SceneLight::Kind;
+  EXPECT_EQ(s.lights[0].kind, K::Point);
+  ExpectNear(s.lights[0].from, Vec3(0, 0, 0));
+  EXPECT_EQ(s.lights[1].kind, K::Ambient);
+  ExpectNear(s.lights[1].colour, Vec3(0.2, 0.1, 0));
+  EXPECT_EQ(s.lights[2].kind, K::Distant);
+  ExpectNear(s.lights[2].to - s.lights[2].from, Vec3(0, 0, -1));
+  EXPECT_EQ(s.lights[3].kind, K::Point);
+  ExpectNear(s.lights[3].from, Vec3(2, 2, 3));
+  ExpectNear(s.lights[3].colour, Vec3(5, 5, 5));
+  EXPECT_EQ(s.lights[4].kind, K::Spot);
+  ExpectNear(s.lights[4].from, Vec3(1, 2, 3));
+  ExpectNear(s.lights[4].to, Vec3(1, 2, 2));
+  EXPECT_EQ(s.lights[4].coneAngle, 0.5);
+  EXPECT_EQ(s.lights[4].coneDelta, 0.1);
+  EXPECT_EQ(s.lights[4].beamDistribution, 3.0);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0], "t.rib:9: LightSource: unknown light shader 'arealight': skipped");
+}
+
+// ---- what is skipped, and what is refused ----
+
+TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
+  const Scene s = Parse(
+      "Option \"searchpath\" \"shader\" [\"@\"]\nHider \"hidden\"\nDeclare \"foo\" \"float\"\n" +
+      World("Attribute \"identifier\" \"name\" [\"a\"]\nAttribute \"visibility\" \"int camera\" [1]\n"
+            "Displacement \"bumpy\"\nMakeShadow \"a\" \"b\"\nPolygon \"P\" [0 0 0 1 0 0 0 1 0]\n"
+            "FooBar 1 2 3\nSphere 1 -1 1 360 \"Cs\" [1 0 0]\n"
+            "ObjectBegin 1\nSphere 5 -5 5 360\nObjectEnd\nObjectInstance 1"));
+  EXPECT_EQ(s.surfaces.size(), 1u);  // the object's sphere is not drawn
+  const std::vector<std::string> want = {
+      "t.rib:1: Option is not supported here: skipped",
+      "t.rib:2: Hider is not supported here: skipped",
+      "t.rib:3: Declare is not supported here: skipped",
+      "t.rib:5: Attribute is not supported here: skipped",
+      "t.rib:7: Displacement is not supported here: skipped",
+      "t.rib:8: MakeShadow is not supported here: skipped",
+      "t.rib:9: Polygon is not supported here: skipped",
+      "t.rib:10: unknown request 'FooBar': skipped",
+      "t.rib:11: Sphere: parameter \"Cs\" is not supported here: ignored",
+      "t.rib:12: ObjectBegin/ObjectInstance are not supported here: the object is skipped",
+      "t.rib:15: ObjectInstance is not supported here: skipped"};
+  EXPECT_EQ(s.warnings, want);
+}
+
+TEST(Rib, MalformedScenesAreAnsweredWithFileAndLine) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"WorldBegin\nAttributeBegin\nSphere 1 -1 1 360\nWorldEnd\n", "t.rib:4: WorldEnd closes AttributeBegin at line 2"},
+      {"WorldBegin\nAttributeEnd\nWorldEnd\n", "t.rib:2: AttributeEnd closes WorldBegin at line 1"},
+      {"AttributeEnd\nWorldBegin\nWorldEnd\n", "t.rib:1: AttributeEnd without AttributeBegin"},
+      {"WorldBegin\nAttributeBegin\n", "t.rib:2: AttributeBegin is never closed"},
+      {"WorldBegin\nSphere 1 -1 1 360\n", "t.rib:1: WorldBegin is never closed"},
+      {"FrameBegin 1\nWorldBegin\nWorldEnd\n", "t.rib:1: FrameBegin is never closed"},
+      {"Sphere 1 -1 1 360\n", "t.rib:1: Sphere outside WorldBegin/WorldEnd"},
+      {"Format 10 10 1\n", "t.rib: no WorldBegin: a RIB scene needs a world block"},
+      {World("Sphere 1 -1 1"), "t.rib:2: Sphere expects 4 numbers, found 3"},
+      {World("Sphere [1 -1 1 360 5]"), "t.rib:2: Sphere expects 4 numbers, found 5"},
+      {World("Sphere 0 -1 1 360"), "t.rib:2: Sphere: the radius must be positive"},
+      {World("Sphere 1 -1 1 1e300"), "t.rib:2: Sphere: thetamax must be from -360 to 360 degrees"},
+      {World("Torus 1 0.5 0 1e300 360"), "t.rib:2: Torus: phimin and phimax must be from -360 to 360 degrees"},
+      {World("Patch \"bicubic\" \"P\" [0 0 0]"), "t.rib:2: Patch: \"P\" expects 48 numbers (16 points), found 3"},
+      {World("Patch \"bilinear\" \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1 1 1 0 1]"),
+       "t.rib:2: Patch: \"Pw\" (rational patches) is not supported; give \"P\""},
+      {World("Patch \"bicubic\""), "t.rib:2: Patch: no \"P\""},
+      {World("Patch \"trilinear\" \"P\" [0 0 0]"), "t.rib:2: Patch: unknown type 'trilinear' (known: \"bilinear\", \"bicubic\")"},
+      {World("Basis \"nurbs\" 3 \"bezier\" 3"),
+       "t.rib:2: Basis: unknown basis 'nurbs' (known: bezier, b-spline, catmull-rom, hermite, power)"},
+      {World("Basis [1 2 3] 3 \"bezier\" 3"), "t.rib:2: Basis: a basis matrix has 16 numbers, found 3"},
+      {World("Basis \"bezier\" 0 \"bezier\" 3"), "t.rib:2: Basis: a step is a whole number from 1 to 4"},
+      {World("Transform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0]"), "t.rib:2: Transform expects 16 numbers, found 15"},
+      {World("Transform [1 0 0 1 0 1 0 0 0 0 1 0 0 0 0 1]"),
+       "t.rib:2: Transform: projective matrices are not supported (the last column must be 0 0 0 1)"},
+      {World("Color [1 0 0"), "t.rib:2: the array opened here is not closed before 'WorldEnd'"},
+      {"WorldBegin\nColor [1 0", "t.rib:2: the array opened here is not closed"},
+      {"WorldBegin\nSurface \"plastic", "t.rib:2: the string opened here is not closed"},
+      {World("Color [1 [0] 0]"), "t.rib:2: arrays do not nest"},
+      {World("Color 1 0 0]"), "t.rib:2: ']' without '['"},
+      {World("Color [1 \"a\" 0]"), "t.rib:2: an array mixes numbers and strings"},
+      {World("Translate 1e999 0 0"), "t.rib:2: number '1e999' is not finite"},
+      {World("Translate 1x 0 0"), "t.rib:2: expected a number, found '1x'"},
+      {"\x80\x01", "t.rib:1: expected a request name, found '??'"},
+      {World("Sphere \x80"), "t.rib:2: binary RIB is not supported (a byte above 0x7f)"},
+      {World("Surface \"plastic\" \"Ks\""), "t.rib:2: Surface: the parameter list must be name-value pairs"},
+      {World("Surface \"plastic\" \"Ks\" [1 2]"), "t.rib:2: Surface: parameter \"Ks\" expects 1 number"},
+      {World("Surface \"plastic\" 0.5 \"Ks\""), "t.rib:2: Surface: expected a parameter name (a string)"},
+      {World("LightSource \"spotlight\" 1 \"from\" [0 0 0] \"to\" [0 0 0]"),
+       "t.rib:2: LightSource: \"from\" and \"to\" are the same point"},
+      {World("PatchMesh \"bicubic\" 5 \"nonperiodic\" 4 \"sideways\" \"P\" []"),
+       "t.rib:2: PatchMesh: wrap is \"periodic\" or \"nonperiodic\""},
+      {"FrameBegin 1.5\nWorldBegin\nWorldEnd\nFrameEnd\n", "t.rib:1: FrameBegin: the frame number must be a whole number"},
+      {"WorldBegin\nWorldBegin\n", "t.rib:2: WorldBegin inside WorldBegin at line 1"},
+      {"ReadArchive \"no-such-file.rib\"\n", "t.rib:1: ReadArchive: no-such-file.rib: cannot open: No such file or directory"},
+  };
+  for (const auto& [text, want] : cases) EXPECT_EQ(Error(text), want) << text;
+}
+
+// The RIB reader against a fixed budget of mutants of the scenes in surfaces/ (CI runs
+// exactly this many, in the release and the sanitizer builds; PATCHSCAN_FUZZ_MUTANTS
+// raises it): each is read or refused with a message located on a line of its text.
+TEST(RibFuzz, MutantsAreReadOrRefusedWithALocatedMessage) {
+  std::vector<std::string> seeds;
+  for (const auto& e : std::filesystem::directory_iterator(PATCHSCAN_SURFACES_DIR))
+    if (e.path().extension() == ".rib") {
+      std::ifstream f(e.path(), std::ios::binary);
+      seeds.emplace_back(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+    }
+  ASSERT_GE(seeds.size(), 3u);
+  const std::string alphabet = "0123456789.-+eE \n\r\t#[]\"\\xaA_\x01\xff";
+  const std::vector<std::string> tokens = {
+      "1e308", "-1e308", "1e-320", "nan", "inf", "-0", "0", "1", "99999999999", "10000000", "[", "]",
+      "\"", "\"\"", "[]", "WorldBegin", "WorldEnd", "AttributeBegin", "AttributeEnd", "TransformEnd",
+      "FrameBegin", "FrameEnd", "ObjectBegin", "ObjectEnd", "\"periodic\"", "\"b-spline\"", "\"P\"",
+      "\"Pw\"", "Sphere", "Torus", "PatchMesh", "Basis", "Rotate", "Scale", "ReadArchive", "\"teapot\"",
+      "#", "\n", "\xc3\xa9"};
+  test::Mutator mutate(20261123, alphabet, tokens);
+  long accepted = 0, refused = 0;
+  const long budget = test::FuzzBudget();
+  for (long k = 0; k < budget; ++k) {
+    const std::string text = mutate.Mutate(seeds[static_cast<std::size_t>(k) % seeds.size()]);
+    const long lines = 1 + std::count(text.begin(), text.end(), '\n');
+    auto r = ParseRib(text, "m.rib");
+    if (const auto* e = std::get_if<SourceError>(&r)) {
+      ++refused;
+      if (e->file != "m.rib") continue;  // an archive the mutant named, located in it
+      ASSERT_GE(e->line, 0) << "mutant " << k;
+      ASSERT_LE(e->line, lines) << "mutant " << k << ": " << e->What();
+      ASSERT_FALSE(e->message.empty()) << "mutant " << k;
+      continue;
+    }
+    ++accepted;
+    const Scene& s = std::get<Scene>(r);
+    ASSERT_EQ(s.surfaces.size(), s.sourceLines.size());
+    ASSERT_EQ(s.surfaces.size(), s.appearanceOf.size());
+    for (std::size_t i = 0; i < s.surfaces.size(); ++i) {
+      ASSERT_LT(s.appearanceOf[i], s.appearances.size());
+      ASSERT_GE(s.sourceLines[i], 1);
+      ASSERT_LE(s.sourceLines[i], lines);
+    }
+  }
+  RecordProperty("mutants", std::to_string(budget));
+  RecordProperty("accepted", std::to_string(accepted));
+  EXPECT_GT(accepted, budget / 50);
+  EXPECT_GT(refused, budget / 4);
+}
+
+}  // namespace
+}  // namespace patchscan
