@@ -235,6 +235,126 @@ TEST(Shading, IlluminationModelTerms) {
   EXPECT_LE((below - 0.1 * m.colour).norm(), 1e-12);
 }
 
+// RenderMan's standard shaders (RenderMan Interface 3.2, appendix A) at a point lit by one
+// inverse-square point light off to the side and an ambient light: each term by hand.
+TEST(Shading, RenderManShadersTermByTerm) {
+  const Vec3 p = Vec3::Zero(), n(0, 0, 1), eye(0, 0, 10), lightAt(3, 0, 4);  // distance 5
+  LightRig rig;
+  rig.ambient = Rgb(0.2, 0.2, 0.2);
+  Light point;
+  point.kind = Light::Kind::Point;
+  point.vector = lightAt;
+  point.intensity = Rgb(50, 25, 50);
+  point.inverseSquare = true;
+  rig.lights.push_back(point);
+  const Rgb cl = point.intensity / 25.0;        // Cl = intensity / d^2
+  const double ndotl = 4.0 / 5.0;               // N . L
+  const Vec3 h = (lightAt.normalized() + Vec3(0, 0, 1)).normalized();
+  const Rgb cs(0.5, 0.25, 1.0);
+  Material m;
+  m.ka = 0.7;
+  m.kd = 0.6;
+  m.ks = 0.4;
+  m.roughness = 0.2;
+  m.specularColour = Rgb(1, 0.5, 0);
+  const double spec = std::pow(h.z(), 1.0 / m.roughness);  // N . H to the 1/roughness
+  const Rgb ambient = m.ka * rig.ambient;
+  struct Case {
+    Material::Model model;
+    Rgb want;
+  } cases[] = {
+      {Material::Model::Constant, cs},
+      {Material::Model::Matte, cs.cwiseProduct(ambient + m.kd * ndotl * cl)},
+      {Material::Model::Plastic, cs.cwiseProduct(ambient + m.kd * ndotl * cl) + m.ks * spec * m.specularColour.cwiseProduct(cl)},
+      {Material::Model::Metal, cs.cwiseProduct(ambient + m.ks * spec * cl)},
+  };
+  for (const Case& c : cases) {
+    m.model = c.model;
+    const Rgb got = Shade(p, n, cs, eye, m, rig);
+    EXPECT_LT((got - c.want).norm(), 1e-12) << static_cast<int>(c.model) << ": " << got.transpose() << " vs " << c.want.transpose();
+  }
+}
+
+// RenderMan's spotlight: full inside the cone less its soft edge, smoothstep across the
+// edge, nothing outside; cos^beamdistribution of the angle off the axis; 1 / d^2.
+TEST(Shading, SpotLightCone) {
+  LightRig rig;
+  rig.ambient = Rgb::Zero();
+  Light spot;
+  spot.kind = Light::Kind::Spot;
+  spot.vector = Vec3(0, 0, 10);
+  spot.axis = Vec3(0, 0, -1);
+  spot.inverseSquare = true;
+  spot.intensity = Rgb(100, 100, 100);
+  const double cone = 0.3, delta = 0.1;
+  spot.cosOutside = std::cos(cone);
+  spot.cosInside = std::cos(cone - delta);
+  spot.beamDistribution = 2.0;
+  rig.lights.push_back(spot);
+  Material m;
+  m.model = Material::Model::Matte;
+  m.ka = 0;
+  m.kd = 1;
+  const Rgb white(1, 1, 1);
+  auto lit = [&](double angle) {  // a surface point at `angle` off the axis, facing the light
+    const Vec3 p = spot.vector + 10.0 / std::cos(angle) * Vec3(std::sin(angle), 0, -std::cos(angle));
+    return Shade(p, spot.vector - p, white, Vec3(0, 0, 20), m, rig).x();
+  };
+  for (double angle : {0.0, 0.1, 0.19}) {
+    const double d2 = std::pow(10.0 / std::cos(angle), 2);
+    EXPECT_NEAR(lit(angle), 100.0 / d2 * std::pow(std::cos(angle), 2), 1e-12) << angle;
+  }
+  const double mid = cone - delta / 2;  // halfway across the edge in angle
+  const double t = (std::cos(mid) - spot.cosOutside) / (spot.cosInside - spot.cosOutside);
+  EXPECT_NEAR(lit(mid), 100.0 / std::pow(10.0 / std::cos(mid), 2) * std::pow(std::cos(mid), 2) * t * t * (3 - 2 * t), 1e-12);
+  EXPECT_EQ(lit(cone + 0.01), 0.0);
+}
+
+// Per-surface materials: each surface's own opacity in the layers (a front square of
+// opacity 1/4 over a back one of 1: 1/4 + 3/4 of their colours), and a one-sided surface
+// drawn only from its front.
+TEST(ScanlineRenderer, PerSurfaceOpacityAndSides) {
+  TriangleMesh m;
+  auto square = [&](double x0, double depth, std::uint32_t id, const Vec3& normal) {
+    const auto base = static_cast<std::uint32_t>(m.vertices.size());
+    for (auto [dx, dy] : {std::pair{0, 0}, {20, 0}, {20, 20}, {0, 20}})
+      m.vertices.push_back({Vec3((x0 + dx) * depth, (4.5 + dy) * depth, depth), Vec3(0, 0, depth), normal, Vec2(0, 0)});
+    m.triangles.push_back({{base, base + 1, base + 2}, id});
+    m.triangles.push_back({{base, base + 2, base + 3}, id});
+  };
+  square(4.5, 2.0, 0, Vec3(0, 0, -1));   // behind, opaque, red
+  square(4.5, 1.0, 1, Vec3(0, 0, -1));   // in front, opacity 1/4, green
+  square(40.5, 1.0, 2, Vec3(0, 0, 1));   // one-sided, its front facing away from the eye
+  square(40.5, 2.0, 3, Vec3(0, 0, -1));  // behind it, blue
+  RenderSettings s;
+  s.width = 72;
+  s.height = 32;
+  s.aa = 1;
+  s.hither = 0.01;
+  Material emissive;
+  emissive.ka = emissive.kd = emissive.ks = 0;
+  for (const Rgb& e : {Rgb(1, 0, 0), Rgb(0, 1, 0), Rgb(1, 1, 1), Rgb(0, 0, 1)}) {
+    emissive.emission = e;
+    s.materials.push_back(emissive);
+  }
+  s.materials[1].opacity = 0.25;
+  s.materials[2].twoSided = false;
+  s.materialOf = {0, 1, 2, 3};
+  ASSERT_TRUE(s.AnyTransparency());
+  CaptureSink sink(s.width);
+  ASSERT_TRUE(RenderMesh(m, s, sink));
+  auto at = [&](int x, int y, int c) { return sink.rgba[(static_cast<size_t>(y) * 72 + x) * 4 + c]; };
+  EXPECT_FLOAT_EQ(at(14, 14, 0), 0.75f);
+  EXPECT_FLOAT_EQ(at(14, 14, 1), 0.25f);
+  EXPECT_FLOAT_EQ(at(14, 14, 3), 1.0f);
+  EXPECT_FLOAT_EQ(at(50, 14, 2), 1.0f);  // the blue square shows through the culled one
+  EXPECT_FLOAT_EQ(at(50, 14, 0), 0.0f);
+  s.materials[2].reversed = true;        // now its front faces the eye
+  CaptureSink again(s.width);
+  ASSERT_TRUE(RenderMesh(m, s, again));
+  EXPECT_FLOAT_EQ(again.rgba[(14 * 72 + 50) * 4 + 0], 1.0f);
+}
+
 TEST(ScanlineRenderer, TriangleCrossingTheEyePlaneRendersOnlyItsFrontPart) {
   // A ground-like triangle running from in front of the eye to far behind it: rendered
   // without clipping, every output finite, the part beyond the hither plane covered and
