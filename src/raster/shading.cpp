@@ -6,7 +6,7 @@ namespace patchscan::raster {
 
 LightRig DefaultLightRig(const Vec3& forward, const Vec3& up, const Vec3& right) {
   LightRig rig;
-  rig.ambient = Rgb(0.9, 0.92, 1.0);
+  rig.ambient = 0.15 * Rgb(0.9, 0.92, 1.0);
   // Directions the light travels (from the light towards the scene).
   rig.lights.push_back({Light::Kind::Directional, (forward + right - 1.2 * up).normalized(),
                         Rgb(0.95, 0.9, 0.82)});

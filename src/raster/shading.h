@@ -36,7 +36,8 @@ struct Material {
   Model model = Model::Default;
   Rgb colour{0.8, 0.8, 0.8};
   Rgb emission{0, 0, 0};
-  double ka = 0.15, kd = 0.75, ks = 0.35;
+  // ka 1 with the default rig's dim ambient light, as RenderMan's shaders take it.
+  double ka = 1.0, kd = 0.75, ks = 0.35;
   double shininess = 40.0;     // n, the default model's specular exponent
   double roughness = 0.1;      // RenderMan's models: the specular exponent is 1 / roughness
   Rgb specularColour{1, 1, 1};  // plastic
@@ -53,7 +54,8 @@ struct LightRig {
 };
 
 // A pleasant default for a camera looking along `forward` with `up` and `right`: a warm
-// key light from the upper left, a cool fill from the right, and a dim rim from behind.
+// key light from the upper left, a cool fill from the right, a dim rim from behind, and a
+// dim bluish ambient light (a seventh of white).
 LightRig DefaultLightRig(const Vec3& forward, const Vec3& up, const Vec3& right);
 
 // The material's colour at uv, modulated by its checker or texture (filtered over the
