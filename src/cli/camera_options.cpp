@@ -90,7 +90,9 @@ std::variant<ResolvedCamera, std::string> SceneCamera(const CameraOptions& o, co
   const Vec4 window = im.screenWindow ? *im.screenWindow
                       : aspect >= 1.0 ? Vec4(-aspect, aspect, -1, 1)
                                       : Vec4(-1, 1, -1 / aspect, 1 / aspect);
-  c.screenWindow = window * std::tan(0.5 * fov * std::numbers::pi / 180.0);
+  // Orthographic: the window is on every plane of constant z, in camera-space units.
+  c.orthographic = im.orthographic;
+  c.screenWindow = im.orthographic ? window : Vec4(window * std::tan(0.5 * fov * std::numbers::pi / 180.0));
   if (im.hither) {
     c.hither = *im.hither;
   } else {

@@ -76,7 +76,8 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
   if (camera.cameraFromWorld)
     out << "camera: " << camera.width << 'x' << camera.height << ", eye " << Point(EyePoint(camera))
         << ", forward " << Point(ViewForward(camera)) << ", right " << Point(ViewRight(camera))
-        << ", fov " << camera.fovDeg << ", hither " << camera.hither << " (the scene's)\n";
+        << (camera.orthographic ? std::string(", orthographic") : ", fov " + std::to_string(camera.fovDeg))
+        << ", hither " << camera.hither << " (the scene's)\n";
   else
     out << "camera: " << camera.width << 'x' << camera.height << ", eye " << Point(camera.eye)
         << ", look-at " << Point(camera.lookAt) << ", up " << Point(camera.up) << ", fov "

@@ -287,6 +287,8 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   s.seed = o.seed;
   s.hither = camera.hither;
   s.eye = EyePoint(camera);
+  s.orthographic = camera.orthographic;
+  s.forward = ViewForward(camera);
   std::unique_ptr<raster::ImageTexture> texture;
   if (o.texture == "checker") {
     s.material.checkerSquares = 8;

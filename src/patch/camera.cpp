@@ -93,6 +93,11 @@ Vec3 ViewForward(const Camera& c) {
   return (c.cameraFromWorld->block<3, 3>(0, 0).inverse() * Vec3(0, 0, 1)).normalized();
 }
 
+Vec4 ViewDepthRow(const Camera& c) {
+  if (c.cameraFromWorld) return c.cameraFromWorld->row(2).transpose();
+  return ScreenFromWorld(c).row(3).transpose();
+}
+
 Mat4 ScreenFromWorld(const Camera& c) {
   if (c.cameraFromWorld) {
     // Camera space (x, y, z) to pixels: x_px = W (x/z - l) / (r - l), y_px = H (t - y/z) /
@@ -101,6 +106,14 @@ Mat4 ScreenFromWorld(const Camera& c) {
                  t = c.screenWindow[3];
     const double sx = c.width / (r - l), sy = c.height / (t - b);
     Mat4 p = Mat4::Zero();
+    if (c.orthographic) {
+      // x_px = W (x - l) / (r - l), y_px = H (t - y) / (t - b), depth = z - hither, w = 1.
+      p.row(0) << sx, 0, 0, -sx * l;
+      p.row(1) << 0, -sy, 0, sy * t;
+      p.row(2) << 0, 0, 1, -c.hither;
+      p.row(3) << 0, 0, 0, 1;
+      return p * *c.cameraFromWorld;
+    }
     p.row(0) << sx, 0, -sx * l, 0;
     p.row(1) << 0, -sy, sy * t, 0;
     p.row(2) << 0, 0, 1, -c.hither;

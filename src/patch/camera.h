@@ -22,8 +22,11 @@ struct Camera {
   // space (x right, y up, z forward: left-handed for a rotation), and the image spans the
   // screen window (left, right, bottom, top) on the plane z = 1 (perspective: the window
   // of Projection and ScreenWindow scaled by tan(fov/2)). hither is a camera-space z.
+  // orthographic (RenderMan's Projection "orthographic"): the window is on every plane
+  // z = const and view rays are parallel to the z axis.
   std::optional<Mat4> cameraFromWorld;
   Vec4 screenWindow = Vec4(-1, 1, -1, 1);
+  bool orthographic = false;
 };
 
 // The eye's world position, the world direction of the image's x axis (to the right) and
@@ -31,6 +34,10 @@ struct Camera {
 Vec3 EyePoint(const Camera& c);
 Vec3 ViewRight(const Camera& c);
 Vec3 ViewForward(const Camera& c);
+
+// The row r with r . (p, 1) the distance of world point p along the view axis from the
+// eye (perspective) or the camera plane (orthographic): what the back end calls w.
+Vec4 ViewDepthRow(const Camera& c);
 
 // Limits that keep the arithmetic of a camera meaningful.
 constexpr int kMaxImageSide = 1 << 16;   // pixel indices stay exact in int and float
@@ -42,7 +49,8 @@ constexpr double kMinUpSine = 1e-9;      // |up x view| below this: up is along 
 std::optional<std::string> ValidateCamera(const Camera& c);
 
 // The projective map from world space to homogeneous screen space (X, Y, D, W):
-// x = X/W, y = Y/W, depth = D/W, and W is the distance along the view axis.
+// x = X/W, y = Y/W, depth = D/W. In perspective W is the distance along the view axis and
+// depth = 1 - hither / W; orthographic cameras have W = 1 and depth = distance - hither.
 // Precondition: ValidateCamera(c) is nullopt.
 Mat4 ScreenFromWorld(const Camera& c);
 

@@ -571,14 +571,13 @@ class RibParser {
     if (!StringArg(r, 0, &name)) return false;
     std::vector<Param> params;
     if (!Params(r, 1, &params)) return false;
-    if (name == "orthographic")
-      return Fail(r.line, "Projection \"orthographic\" is not supported yet (only \"perspective\")");
-    if (name != "perspective")
-      return Fail(r.line, "Projection: unknown projection " + Shown(name) + " (known: \"perspective\")");
+    if (name != "perspective" && name != "orthographic")
+      return Fail(r.line, "Projection: unknown projection " + Shown(name) + " (known: \"perspective\", \"orthographic\")");
+    scene_.image.orthographic = name == "orthographic";
     double& fov = scene_.image.fovDeg;
     fov = kDefaultFovDeg;
     for (const Param& p : params) {
-      if (p.name == "fov") {
+      if (p.name == "fov" && !scene_.image.orthographic) {
         if (!ParamNumbers(r, p, 1, &fov)) return false;
         if (!(fov >= kMinFovDeg && fov <= kMaxFovDeg))
           return Fail(p.value->line, "Projection: fov must be from " + std::to_string(kMinFovDeg) + " to " + std::to_string(kMaxFovDeg) + " degrees");

@@ -38,7 +38,11 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
   Mat4 cameraFromWorld;
   double fovDeg = camera.fovDeg;
   const double aspect = static_cast<double>(camera.width) / camera.height;
-  if (camera.cameraFromWorld) {
+  if (camera.cameraFromWorld && camera.orthographic) {
+    cameraFromWorld = *camera.cameraFromWorld;
+    const Vec4& w = camera.screenWindow;
+    out << "Projection \"orthographic\"\nScreenWindow " << w[0] << ' ' << w[1] << ' ' << w[2] << ' ' << w[3] << '\n';
+  } else if (camera.cameraFromWorld) {
     cameraFromWorld = *camera.cameraFromWorld;
     const Vec4& w = camera.screenWindow;
     const double t = std::min(std::abs(w[1] - w[0]), std::abs(w[3] - w[2])) / 2.0;

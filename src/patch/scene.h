@@ -44,6 +44,7 @@ struct SceneLight {
 // What a scene file says about the image beyond its geometry.
 struct SceneImage {
   std::optional<Mat4> cameraFromWorld;      // the transformation at WorldBegin: a RIB camera
+  bool orthographic = false;                // Projection "orthographic"
   double fovDeg = 90.0;                     // Projection "perspective" "fov"
   std::optional<Vec4> screenWindow;         // ScreenWindow (left, right, bottom, top)
   std::optional<std::pair<int, int>> size;  // Format

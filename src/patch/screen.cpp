@@ -16,7 +16,7 @@ std::optional<Bounds3> ScreenBounds(const Surface& s, const ScreenMap& map) {
 
 bool WhollyBeforeHither(const Surface& s, const ScreenMap& map, double hither) {
   for (const Vec3& p : ObjectHull(s))
-    if (map.Homogeneous(p).w() >= hither) return false;
+    if (map.ViewDepth(p) >= hither) return false;
   return true;
 }
 

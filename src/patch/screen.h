@@ -11,7 +11,8 @@
 namespace patchscan {
 
 // Screen-space position (x, y, depth) and derivatives, plus w, the distance along the
-// view axis (w <= 0: at or behind the eye, where x, y and depth are meaningless).
+// view axis (perspective: w <= 0 is at or behind the eye, where x, y and depth are
+// meaningless; orthographic: behind the camera plane).
 struct ScreenDerivs : SurfaceDerivs {
   double w = 0.0;
 };
@@ -21,9 +22,14 @@ struct ScreenDerivs : SurfaceDerivs {
 class ScreenMap {
  public:
   ScreenMap(const Camera& camera, const Affine3& worldFromObject)
-      : m_(ScreenFromWorld(camera) * worldFromObject.matrix()) {}
+      : m_(ScreenFromWorld(camera) * worldFromObject.matrix()),
+        depth_((ViewDepthRow(camera).transpose() * worldFromObject.matrix()).transpose()),
+        affine_(camera.orthographic) {}
 
   const Mat4& ScreenFromObject() const { return m_; }
+
+  // Distance of an object-space point along the view axis (ScreenDerivs::w).
+  double ViewDepth(const Vec3& pObject) const { return depth_.head<3>().dot(pObject) + depth_[3]; }
 
   // Homogeneous screen point (X, Y, D, W) of an object-space point.
   Vec4 Homogeneous(const Vec3& pObject) const {
@@ -37,6 +43,8 @@ class ScreenMap {
 
  private:
   Mat4 m_;
+  Vec4 depth_;   // object space: the view-depth row
+  bool affine_;  // orthographic: W = 1, and w comes from depth_
 };
 
 // Evaluate a shape (any type with the shapes' Evaluate) in screen space. Inline, no
@@ -81,7 +89,7 @@ inline void ScreenMap::FromObject(const SurfaceDerivs& o, DerivOrder order,
   const Eigen::Matrix<double, 4, 3> a = m_.block<4, 3>(0, 0);
   const Vec4 h = a * o.p + m_.col(3);
   const double w = h.w(), invW = 1.0 / w;
-  s->w = w;
+  s->w = affine_ ? ViewDepth(o.p) : w;
   s->p = h.head<3>() * invW;
   if (!Wants(order, DerivOrder::First)) return;
   const Vec4 hu = a * o.dpdu, hv = a * o.dpdv;

@@ -19,6 +19,7 @@ struct RasterVertex {
   Vec3 position;  // world space, for lighting
   Vec3 normal;    // world space, not necessarily unit
   Vec2 uv;
+  double depth = 0.0;  // orthographic renders: distance along the view axis (W is 1)
 };
 
 struct RasterTriangle {

@@ -62,7 +62,7 @@ Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, bool* failed) {
   const Material& m = s.MaterialOf(a.surfaceId);
   const auto base = SurfaceColour(m, a.uv, a.duvdx, a.duvdy);
   if (!base) *failed = true;
-  return Shade(a.position, a.normal, base.value_or(Rgb::Zero()), s.eye, m, s.lights);
+  return Shade(a.position, a.normal, base.value_or(Rgb::Zero()), s.EyeFor(a.position), m, s.lights);
 }
 
 // Whether a point with normal n (any length) at p shows the front of material m to the eye.
@@ -75,6 +75,8 @@ struct ActiveTriangle {
   std::uint32_t index;  // into mesh.triangles
   int lastRow;
   Rgb vertexColour[3];  // Gouraud only
+  // Orthographic: the depth as an affine function of (x, y, 1), from the vertices' depths.
+  Vec3 depthPlane = Vec3::Zero();
 };
 
 // A uniform number in [0, 1) from a seed and a sample's lattice position (splitmix64):
@@ -156,15 +158,21 @@ class TriangleGeometry {
         sum += e;
       }
       const double absDet = 1.0 / std::abs(t.invDet);
-      clip(-sum.x(), absDet * invHither_ - (sum.y() * y + sum.z()));
+      const Vec3& dp = active_[k].depthPlane;
+      if (s_.orthographic)
+        clip(dp.x(), dp.y() * y + dp.z() - s_.hither);  // depth >= hither
+      else
+        clip(-sum.x(), absDet * invHither_ - (sum.y() * y + sum.z()));
       // One sample of slack each side: the exact test below decides.
       const int i0 = std::max(0, lat_.Ceil(lo, lat_.nx) - 1), i1 = std::min(lat_.nx - 1, lat_.Floor(hi, lat_.nx) + 1);
       for (int i = i0; i <= i1; ++i) {
         double e[3];
         ++stats_.nSamplesTested;
         if (!Inside(t, lat_.At(i), y, e)) continue;
-        const double invW = (e[0] + e[1] + e[2]) * std::abs(t.invDet);
-        if (!(invW <= invHither_)) continue;  // nearer than the hither plane
+        const double invW = s_.orthographic ? 1.0 / (dp.x() * lat_.At(i) + dp.y() * y + dp.z())
+                                            : (e[0] + e[1] + e[2]) * std::abs(t.invDet);
+        // Nearer than the hither plane (orthographic: or behind the camera plane).
+        if (!(invW <= invHither_) || (s_.orthographic && !(invW > 0.0))) continue;
         InsertNearest(&row[static_cast<size_t>(i) * layers_], layers_, invW, k);
       }
     }
@@ -215,11 +223,16 @@ class TriangleGeometry {
       if (const Material& m = s_.MaterialOf(t.surfaceId); !m.twoSided) {
         const RasterVertex* v[3] = {&mesh_.vertices[t.v[0]], &mesh_.vertices[t.v[1]], &mesh_.vertices[t.v[2]]};
         if (!ShowsFront(m, v[0]->normal + v[1]->normal + v[2]->normal,
-                        (v[0]->position + v[1]->position + v[2]->position) / 3.0, s_.eye))
+                        (v[0]->position + v[1]->position + v[2]->position) / 3.0, s_.EyeFor(v[0]->position)))
           continue;
       }
       ++stats_.nTrianglesSetUp;
-      ActiveTriangle at{*setup, y.index, y.last, {}};
+      ActiveTriangle at{*setup, y.index, y.last, {}, Vec3::Zero()};
+      if (s_.orthographic) {
+        // With W = 1 the barycentrics are e_i . (x, y, 1) / |det|.
+        const double absInvDet = std::abs(setup->invDet);
+        for (int k = 0; k < 3; ++k) at.depthPlane += mesh_.vertices[t.v[k]].depth * absInvDet * setup->edge[k];
+      }
       if (s_.shading == ShadingMode::Gouraud)
         for (int k = 0; k < 3; ++k) {
           const RasterVertex& v = mesh_.vertices[t.v[k]];
@@ -254,7 +267,9 @@ class TriangleGeometry {
     for (int i = 0; i < 3; ++i) e[i] = at.setup.edge[i].x() * x + at.setup.edge[i].y() * y + at.setup.edge[i].z();
     const double sum = e.sum();
     a.b = sum != 0.0 ? Vec3(e / sum) : Vec3::Constant(1.0 / 3);
-    f.w = sum != 0.0 ? 1.0 / (sum * std::abs(at.setup.invDet)) : 0.0;
+    f.w = s_.orthographic ? at.depthPlane.dot(Vec3(x, y, 1.0))
+          : sum != 0.0    ? 1.0 / (sum * std::abs(at.setup.invDet))
+                          : 0.0;
     f.position = a.b[0] * v0.position + a.b[1] * v1.position + a.b[2] * v2.position;
     f.uv = a.b[0] * v0.uv + a.b[1] * v1.uv + a.b[2] * v2.uv;
     // uv = sum(uv_i e_i) / sum(e) with each e_i affine in (x, y): the quotient rule.
@@ -325,8 +340,8 @@ class FragmentGeometry final : public FragmentRow {
   void Add(int column, const Fragment& f) override {
     ++stats_.nSamplesTested;
     if (column < 0 || column >= lat_.nx || !(f.w >= s_.hither)) return;
-    if (s_.cullBackFaces && f.normal.dot(s_.eye - f.position) < 0.0) return;
-    if (const Material& m = s_.MaterialOf(f.surfaceId); !m.twoSided && !ShowsFront(m, f.normal, f.position, s_.eye))
+    if (s_.cullBackFaces && f.normal.dot(s_.EyeFor(f.position) - f.position) < 0.0) return;
+    if (const Material& m = s_.MaterialOf(f.surfaceId); !m.twoSided && !ShowsFront(m, f.normal, f.position, s_.EyeFor(f.position)))
       return;
     const auto handle = static_cast<std::int32_t>(pool_->size());
     if (InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / f.w, handle))

@@ -35,6 +35,10 @@ struct RenderSettings {
   bool hiddenLine = false;  // white surfaces with their triangle edges in black, unshaded
   std::uint64_t seed = 1;   // of the stochastic extra shading calls (paper 000 §3.4.2)
   Vec3 eye = Vec3::Zero();
+  // Orthographic: view rays all run along `forward`; triangles carry their depth in their
+  // vertices (W = 1), and fragments' w is that depth.
+  bool orthographic = false;
+  Vec3 forward = Vec3(0, 0, 1);
   Material material;  // of every surface, unless materialOf is given
   // Per surface id, an index into materials (a scene's own materials); empty: `material`.
   std::vector<Material> materials;
@@ -46,6 +50,9 @@ struct RenderSettings {
   }
   // Whether any surface is seen through (the back end then keeps kMaxLayers per sample).
   bool AnyTransparency() const;
+  // The point the eye looks from at world point p: the eye, or (orthographic) a unit
+  // step back along the view axis.
+  Vec3 EyeFor(const Vec3& p) const { return orthographic ? Vec3(p - forward) : eye; }
 };
 
 // Counts paper 000 reports: n triangles, the most active on one sample row (m), the

@@ -61,7 +61,7 @@ raster::Fragment FragmentAt(const WalkPoint& p, const Surface& surface,
 }
 
 ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options)
-    : surfaces_(surfaces), camera_(camera), eye_(EyePoint(camera)), right_(ViewRight(camera)), options_(options) {
+    : surfaces_(surfaces), camera_(camera), eye_(EyePoint(camera)), right_(ViewRight(camera)), forward_(ViewForward(camera)), options_(options) {
   stats_.nSurfaces = static_cast<long>(surfaces.size());
   pending_.reserve(surfaces.size());
   for (std::size_t k = 0; k < surfaces.size(); ++k) {
@@ -180,7 +180,7 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
       };
       using ShapeT = std::decay_t<decltype(shape)>;
       if (options_.thetaSteps > 0) {
-        const ThetaFrame frame{eye_, right_};
+        const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic};
         ThetaWalker<ShapeT> walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_, &stats_.theta,
                                    options_.thetaSteps, frame);
         walker.WalkAll(

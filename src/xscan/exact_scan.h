@@ -68,7 +68,7 @@ class ExactScan final : public raster::FragmentSource {
 
   std::span<const Surface> surfaces_;
   Camera camera_;
-  Vec3 eye_, right_;  // EyePoint and ViewRight of camera_, for the θ frame
+  Vec3 eye_, right_, forward_;  // EyePoint, ViewRight and ViewForward of camera_, for the θ frame
   ExactScanOptions options_;
   struct Pending {
     double yMin, yMax;

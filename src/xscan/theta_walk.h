@@ -41,10 +41,11 @@ struct ThetaVertex {
 
 // The frame the angle θ is measured in: the eye and the camera's right vector (world).
 struct ThetaFrame {
-  Vec3 eye, right;
+  Vec3 eye, right, forward;
+  bool orthographic = false;  // view rays all along `forward`
   // θ of world normal n at world point p, in (-π, π].
   double Theta(const Vec3& p, const Vec3& n) const {
-    const Vec3 r = (p - eye).normalized();
+    const Vec3 r = orthographic ? forward : Vec3((p - eye).normalized());
     const Vec3 plane = right.cross(r).normalized();
     const Vec3 side = r.cross(plane);
     return std::atan2(-n.dot(r), n.dot(side));
@@ -252,10 +253,13 @@ void ThetaWalker<ShapeT>::EmitChain(const std::vector<Vertex>& chain, Emit& emit
     const int dir = b.x > a.x ? 1 : -1;
     for (int c = dir > 0 ? cols.Ceil(a.x + kColumnEpsPx) : cols.Floor(a.x - kColumnEpsPx);
          c >= 0 && c < cols.n && dir * (cols.At(c) - b.x) <= kColumnEpsPx; c += dir) {
-      // Along a straight chord 1/w is affine in screen x: perspective-correct weights.
+      // Along a straight chord 1/w is affine in screen x: perspective-correct weights
+      // (orthographic: w itself is affine, and the weights are linear).
       const double t = std::clamp((cols.At(c) - a.x) / (b.x - a.x), 0.0, 1.0);
-      const double ia = (1.0 - t) / a.f.w, ib = t / b.f.w, inv = 1.0 / (ia + ib);
-      const double wa = ia * inv, wb = ib * inv;
+      const bool affine = frame_.orthographic;
+      const double ia = affine ? 1.0 - t : (1.0 - t) / a.f.w, ib = affine ? t : t / b.f.w;
+      const double inv = affine ? ia * a.f.w + ib * b.f.w : 1.0 / (ia + ib);
+      const double wa = affine ? ia : ia * inv, wb = affine ? ib : ib * inv;
       raster::Fragment f = a.f;
       f.w = inv;
       f.position = wa * a.f.position + wb * b.f.position;

@@ -329,6 +329,16 @@ TEST(Cli, ConvertWritesARibThatRendersTheSameImage) {
       EXPECT_EQ(Slurp(a), Slurp(b)) << size << " " << mode;
     }
   }
+  // An orthographic RIB camera survives the round trip too.
+  std::ofstream(dir / "o.rib") << "Format 64 48 1\nProjection \"orthographic\"\nScreenWindow -4 4 -3 3\n"
+                                  "Translate 0 -1 10\nRotate -110 1 0 0\nWorldBegin\nGeometry \"teapot\"\nWorldEnd\n";
+  ASSERT_EQ(Patchscan("convert " + (dir / "o.rib").string() + " -o " + (dir / "o2.rib").string()).code, 0);
+  for (const char* mode : {"exact", "tess"}) {
+    const std::string a = (dir / "a.png").string(), b = (dir / "b.png").string();
+    ASSERT_EQ(Patchscan("render " + (dir / "o.rib").string() + " -o " + a + " --mode " + mode).code, 0);
+    ASSERT_EQ(Patchscan("render " + (dir / "o2.rib").string() + " -o " + b + " --mode " + mode).code, 0);
+    EXPECT_EQ(Slurp(a), Slurp(b)) << "orthographic " << mode;
+  }
   // A surface with no RIB form here is refused, and nothing is written.
   std::ofstream(dir / "q.rib") << "WorldBegin\nSphere 1 -1 1 360\nWorldEnd\n";
   const Result r = Patchscan("convert " + (dir / "q.rib").string() + " -o " + (dir / "out.rib").string());

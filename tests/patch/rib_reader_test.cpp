@@ -6,6 +6,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 #include <functional>
 #include <numbers>
 #include <unistd.h>
@@ -156,11 +158,37 @@ TEST(Rib, TheCameraMapsAsRenderManSays) {
   EXPECT_EQ(ViewRight(c), Vec3(1, 0, 0));
 }
 
-TEST(Rib, ProjectionOrthographicAndUnknownAreRefusedClearly) {
-  EXPECT_EQ(Error("Projection \"orthographic\"\n" + World("")),
-            "t.rib:1: Projection \"orthographic\" is not supported yet (only \"perspective\")");
+TEST(Rib, OrthographicProjectionAndUnknownOnes) {
+  const Scene s = Parse("Projection \"orthographic\"\nScreenWindow -2 2 -1.5 1.5\nTranslate 0 0 5\n" + World("Sphere 1 -1 1 360"));
+  EXPECT_TRUE(s.image.orthographic);
+  EXPECT_EQ(*s.image.screenWindow, Vec4(-2, 2, -1.5, 1.5));
   EXPECT_EQ(Error("Projection \"fisheye\"\n" + World("")),
-            "t.rib:1: Projection: unknown projection 'fisheye' (known: \"perspective\")");
+            "t.rib:1: Projection: unknown projection 'fisheye' (known: \"perspective\", \"orthographic\")");
+}
+
+// An orthographic camera maps camera space to pixels without division: x_px = W (x - l) /
+// (r - l), y_px = H (t - y) / (t - b), whatever the depth; w is the depth.
+TEST(Rib, TheOrthographicCameraMapsAsRenderManSays) {
+  Camera c;
+  c.width = 200;
+  c.height = 100;
+  c.cameraFromWorld = Mat4::Identity();
+  c.orthographic = true;
+  c.screenWindow = Vec4(-2, 2, -1, 1);
+  c.hither = 0.1;
+  ASSERT_FALSE(ValidateCamera(c));
+  for (double z : {0.5, 7.0, 300.0}) {
+    const Vec4 h = ScreenFromWorld(c) * Vec4(1, 0.5, z, 1);
+    EXPECT_NEAR(h.x() / h.w(), 150.0, 1e-12);
+    EXPECT_NEAR(h.y() / h.w(), 25.0, 1e-12);
+    EXPECT_NEAR(ViewDepthRow(c).dot(Vec4(1, 0.5, z, 1)), z, 1e-12);
+  }
+  const ScreenMap map(c, Affine3(Eigen::Translation3d(0, 0, 4)));
+  ScreenDerivs d;
+  EvaluateScreen(Surface{Sphere(1, -1, 1, 360), Affine3(Eigen::Translation3d(0, 0, 4))}, map, 0.0, 0.5,
+                 DerivOrder::First, &d);
+  EXPECT_NEAR(d.w, 4.0, 1e-12);  // the point (1, 0, 4): depth 4
+  EXPECT_NEAR(d.p.x(), 150.0, 1e-12);
 }
 
 // ---- transformations ----
@@ -199,14 +227,21 @@ TEST(Rib, OrientationReverseOrientationAndSides) {
 
 // ---- geometry ----
 
+// Points as a RIB array, with 17 significant digits.
+std::string Array(const std::vector<Vec3>& points) {
+  std::ostringstream out;
+  out << std::setprecision(17) << '[';
+  for (const Vec3& p : points) out << ' ' << p.x() << ' ' << p.y() << ' ' << p.z();
+  out << " ]";
+  return out.str();
+}
+
 // The 16 control points of a bicubic patch over [0, 3]^2 with a bump, u fastest.
 std::string GridPoints(double bump) {
-  std::string p = "[";
+  std::vector<Vec3> p;
   for (int j = 0; j < 4; ++j)
-    for (int i = 0; i < 4; ++i)
-      p += " " + std::to_string(i) + " " + std::to_string(j) + " " +
-           std::to_string((i == 1 || i == 2) && (j == 1 || j == 2) ? bump : 0.0);
-  return p + " ]";
+    for (int i = 0; i < 4; ++i) p.emplace_back(i, j, (i == 1 || i == 2) && (j == 1 || j == 2) ? bump : 0.0);
+  return Array(p);
 }
 
 TEST(Rib, PatchesInEveryBasisAndBilinear) {
@@ -230,22 +265,20 @@ TEST(Rib, PatchesInEveryBasisAndBilinear) {
 
 TEST(Rib, PatchMeshPeriodicAndNonperiodic) {
   // A 7 x 4 nonperiodic Bézier mesh (step 3): 2 x 1 patches sharing the column x = 3.
-  std::string p7 = "[";
+  std::vector<Vec3> grid;
   for (int j = 0; j < 4; ++j)
-    for (int i = 0; i < 7; ++i) p7 += " " + std::to_string(i) + " " + std::to_string(j) + " 0";
-  p7 += " ]";
+    for (int i = 0; i < 7; ++i) grid.emplace_back(i, j, 0);
+  const std::string p7 = Array(grid);
   // A 4 x 2 periodic bilinear mesh (a band closed in u): 4 x 2 patches.
-  std::string band = "[";
+  std::vector<Vec3> bandPoints;
   for (int j = 0; j < 2; ++j)
-    for (int i = 0; i < 4; ++i)
-      band += " " + std::to_string(std::cos(i * kPi / 2)) + " " + std::to_string(std::sin(i * kPi / 2)) + " " + std::to_string(j);
-  band += " ]";
+    for (int i = 0; i < 4; ++i) bandPoints.emplace_back(std::cos(i * kPi / 2), std::sin(i * kPi / 2), j);
+  const std::string band = Array(bandPoints);
   // A 6 x 4 periodic b-spline mesh in u (step 1): 6 patches.
-  std::string ring = "[";
+  std::vector<Vec3> ringPoints;
   for (int j = 0; j < 4; ++j)
-    for (int i = 0; i < 6; ++i)
-      ring += " " + std::to_string(std::cos(i * kPi / 3)) + " " + std::to_string(std::sin(i * kPi / 3)) + " " + std::to_string(j);
-  ring += " ]";
+    for (int i = 0; i < 6; ++i) ringPoints.emplace_back(std::cos(i * kPi / 3), std::sin(i * kPi / 3), j);
+  const std::string ring = Array(ringPoints);
   const Scene s = Parse(World("PatchMesh \"bicubic\" 7 \"nonperiodic\" 4 \"nonperiodic\" \"P\" " + p7 + "\n" +
                               "PatchMesh \"bilinear\" 4 \"periodic\" 2 \"periodic\" \"P\" " + band + "\n" +
                               "Basis \"b-spline\" 1 \"b-spline\" 1\n" +
@@ -451,7 +484,7 @@ TEST(Rib, MalformedScenesAreAnsweredWithFileAndLine) {
       {World("Color [1 \"a\" 0]"), "t.rib:2: an array mixes numbers and strings"},
       {World("Translate 1e999 0 0"), "t.rib:2: number '1e999' is not finite"},
       {World("Translate 1x 0 0"), "t.rib:2: expected a number, found '1x'"},
-      {"\x80\x01", "t.rib:1: expected a request name, found '??'"},
+      {"\x80\x01", "t.rib:1: expected a request name, found '?" "?'"},
       {World("Sphere \x80"), "t.rib:2: binary RIB is not supported (a byte above 0x7f)"},
       {World("Surface \"plastic\" \"Ks\""), "t.rib:2: Surface: the parameter list must be name-value pairs"},
       {World("Surface \"plastic\" \"Ks\" [1 2]"), "t.rib:2: Surface: parameter \"Ks\" expects 1 number"},

@@ -355,6 +355,49 @@ TEST(ScanlineRenderer, PerSurfaceOpacityAndSides) {
   EXPECT_FLOAT_EQ(again.rgba[(14 * 72 + 50) * 4 + 0], 1.0f);
 }
 
+// Orthographic triangles (W = 1) are ordered by the depth their vertices carry, and
+// their fragments' w is that depth, linear across the triangle: two crossing squares, one
+// tilted in depth, each nearer on its own side of the crossing.
+TEST(ScanlineRenderer, OrthographicDepthComesFromTheVertices) {
+  TriangleMesh m;
+  auto square = [&](double dLeft, double dRight, std::uint32_t id) {
+    const auto base = static_cast<std::uint32_t>(m.vertices.size());
+    for (auto [x, y] : {std::pair{4.5, 4.5}, {60.5, 4.5}, {60.5, 28.5}, {4.5, 28.5}}) {
+      const double d = x < 30 ? dLeft : dRight;
+      m.vertices.push_back({Vec3(x, y, 1), Vec3(x, y, d), Vec3(0, 0, -1), Vec2(0, 0), d});
+    }
+    m.triangles.push_back({{base, base + 1, base + 2}, id});
+    m.triangles.push_back({{base, base + 2, base + 3}, id});
+  };
+  square(2.0, 2.0, 0);  // flat at depth 2
+  square(1.0, 3.0, 1);  // from depth 1 (left) to 3 (right): crosses depth 2 at x = 32.5
+  RenderSettings s;
+  s.width = 64;
+  s.height = 32;
+  s.aa = 1;
+  s.hither = 0.5;
+  s.orthographic = true;
+  s.materials.resize(2);
+  for (int k = 0; k < 2; ++k) {
+    s.materials[static_cast<size_t>(k)].ka = s.materials[static_cast<size_t>(k)].kd = s.materials[static_cast<size_t>(k)].ks = 0;
+    s.materials[static_cast<size_t>(k)].emission = k == 0 ? Rgb(1, 0, 0) : Rgb(0, 1, 0);
+  }
+  s.materialOf = {0, 1};
+  struct Sink : RowSink {
+    std::vector<float> px;
+    bool WriteRow(int, const float* row) override {
+      px.insert(px.end(), row, row + 64 * kChannels);
+      return true;
+    }
+  } sink;
+  ASSERT_TRUE(RenderMesh(m, s, sink));
+  auto at = [&](int x, int c) { return sink.px[(static_cast<size_t>(16) * 64 + x) * kChannels + c]; };
+  EXPECT_FLOAT_EQ(at(20, 1), 1.0f);  // left: the tilted square is nearer
+  EXPECT_FLOAT_EQ(at(45, 0), 1.0f);  // right: the flat one
+  EXPECT_NEAR(at(20, kChannelZ), 1.0 + 2.0 * (20.5 - 4.5) / 56.0, 1e-5);  // w: the depth, linear in x (pixel centre)
+  EXPECT_NEAR(at(45, kChannelZ), 2.0, 1e-6);
+}
+
 TEST(ScanlineRenderer, TriangleCrossingTheEyePlaneRendersOnlyItsFrontPart) {
   // A ground-like triangle running from in front of the eye to far behind it: rendered
   // without clipping, every output finite, the part beyond the hither plane covered and

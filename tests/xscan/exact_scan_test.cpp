@@ -200,6 +200,50 @@ ThetaAgreement CompareTheta(std::span<const Surface> surfaces, const Camera& cam
   return a;
 }
 
+// An orthographic camera (RenderMan's Projection "orthographic") looking along the
+// direction from `from` to the origin, `halfHeight` world units from the centre of the
+// image to its top edge.
+Camera Orthographic(const Vec3& from, double halfHeight, int size = 128, const Vec3& up = Vec3(0, 0, 1)) {
+  const Camera persp = View(from, size, up);
+  Camera c;
+  c.width = c.height = size;
+  // Camera space: x = right, y = up on the image, z = forward; the camera plane 10 units
+  // back from the origin along the view axis.
+  const Vec3 forward = (-from).normalized(), right = ViewRight(persp), upImage = right.cross(forward);
+  Mat4 m = Mat4::Identity();
+  m.block<1, 3>(0, 0) = right.transpose();
+  m.block<1, 3>(1, 0) = upImage.transpose();
+  m.block<1, 3>(2, 0) = forward.transpose();
+  m(2, 3) = 10.0;
+  c.cameraFromWorld = m;
+  c.orthographic = true;
+  c.screenWindow = Vec4(-halfHeight, halfHeight, -halfHeight, halfHeight);
+  c.hither = 0.1;
+  return c;
+}
+
+TEST(ExactScan, OrthographicViewsMatchRayCaster) {
+  ExpectAgree(Surface{Sphere(1.0, -1.0, 1.0, 360), Affine3::Identity()}, Orthographic(Vec3(3, -2, 1.5), 1.3),
+              "sphere, orthographic");
+  ExpectAgree(Surface{Torus(1.0, 0.35, 0, 360, 360), Affine3::Identity()}, Orthographic(Vec3(2.5, -2.0, 2.2), 1.5),
+              "torus, orthographic");
+  const Scene s = Load("teapot.bpt");
+  std::vector<Surface> moved = s.surfaces;
+  for (Surface& m : moved) m.worldFromObject = Eigen::Translation3d(-0.26, 0, -1.5) * m.worldFromObject;
+  ExpectAgree(moved, Orthographic(Vec3(1, -2, 1), 3.4, 200), "teapot, orthographic", 5000);
+}
+
+// A sphere's orthographic outline is a circle of its radius: sample by sample, coverage is
+// the disc (away from its edge).
+TEST(ExactScan, OrthographicSphereOutlineIsItsRadius) {
+  const Camera c = Orthographic(Vec3(0, -1, 0), 2.0, 100);  // 25 px per unit
+  const Surface sphere{Sphere(1.0, -1.0, 1.0, 360), Affine3::Identity()};
+  const Agreement a = Compare(std::span<const Surface>(&sphere, 1), c);
+  const double areaPx = M_PI * 25.0 * 25.0;
+  EXPECT_NEAR(static_cast<double>(a.covered), areaPx, 2 * M_PI * 25.0);  // within the perimeter
+  EXPECT_EQ(a.mismatches, 0);
+}
+
 TEST(ThetaScan, CoverageIsExactAndDepthErrorFallsAsOneOverNSquared) {
   // A unit sphere 4 units away: every section is a circle of radius at most 1, so the
   // chords are within 1 - cos(π/N) of the arcs, and no chord is longer than 2 sin(π/N).
@@ -245,6 +289,10 @@ TEST(ThetaScan, CoverageMatchesExactOnTheTestSurfaces) {
     const ThetaAgreement a = CompareTheta(surfaces, View(Vec3(2.5, -3.0, 2.0)), 16);
     EXPECT_EQ(a.coverageDiffers, 0) << name;
     EXPECT_GT(a.covered, 1000) << name;
+    // Orthographic too: the chords are straight in screen space and depth linear along them.
+    const ThetaAgreement o = CompareTheta(surfaces, Orthographic(Vec3(2.5, -3.0, 2.0), 1.6), 16);
+    EXPECT_EQ(o.coverageDiffers, 0) << name << ", orthographic";
+    EXPECT_GT(o.covered, 1000) << name << ", orthographic";
   }
 }
 
