@@ -20,33 +20,8 @@ namespace {
 
 const std::filesystem::path kCorpus = PATCHSCAN_TESTS_DIR "/corpus/bpt";
 
-std::string Slurp(const std::filesystem::path& p) {
-  std::ifstream f(p, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
 TEST(BptCorpus, EveryMalformedFileGetsItsExactMessage) {
-  std::ifstream manifest(kCorpus / "expected.txt");
-  ASSERT_TRUE(manifest) << kCorpus;
-  int n = 0;
-  for (std::string row; std::getline(manifest, row);) {
-    if (row.empty() || row[0] == '#') continue;
-    const auto tab1 = row.find('\t'), tab2 = row.find('\t', tab1 + 1);
-    ASSERT_NE(tab2, std::string::npos) << row;
-    const std::string name = row.substr(0, tab1);
-    const std::string path = (kCorpus / name).string();
-    const std::string expected = path + ":" + row.substr(tab1 + 1, tab2 - tab1 - 1) + ": " + row.substr(tab2 + 1);
-    auto r = ReadBpt(path);
-    ASSERT_TRUE(std::holds_alternative<SourceError>(r)) << name << " was accepted";
-    EXPECT_EQ(std::get<SourceError>(r).What(), expected);
-    ++n;
-  }
-  // Every file of the corpus is listed, and none twice.
-  long files = 0;
-  for (const auto& e : std::filesystem::directory_iterator(kCorpus)) files += e.path().extension() == ".bpt";
-  EXPECT_EQ(n, files);
+  test::ExpectCorpusMessages(kCorpus, ".bpt", [](const std::string& path) { return ReadBpt(path); });
 }
 
 // The format's own characters, and tokens at the edges of what it reads.
@@ -60,9 +35,9 @@ TEST(BptFuzz, MutantsAreReadOrRefusedWithALocatedMessage) {
   // end of the reader), the rest from the malformed corpus.
   std::vector<std::string> valid, malformed;
   for (const char* f : {"teaspoon.bpt", "teacup.bpt", "sphere.bpt"})
-    valid.push_back(Slurp(std::filesystem::path(PATCHSCAN_SURFACES_DIR) / f));
+    valid.push_back(test::Slurp(std::filesystem::path(PATCHSCAN_SURFACES_DIR) / f));
   for (const auto& e : std::filesystem::directory_iterator(kCorpus))
-    if (e.path().extension() == ".bpt") malformed.push_back(Slurp(e.path()));
+    if (e.path().extension() == ".bpt") malformed.push_back(test::Slurp(e.path()));
   ASSERT_GT(malformed.size(), 10u);
 
   test::Mutator mutate(20261122, kBptAlphabet, kBptTokens);

@@ -1,5 +1,15 @@
-// A deterministic mutation harness for the scene readers' fuzz tests.
+// The scene readers' hostile-input tests: a corpus of malformed files with the exact
+// message each must produce, and a deterministic mutation harness.
 #pragma once
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <variant>
+
+#include "patch/source_error.h"
 
 #include <algorithm>
 #include <cctype>
@@ -10,6 +20,38 @@
 #include <vector>
 
 namespace patchscan::test {
+
+inline std::string Slurp(const std::filesystem::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+// Every file with extension `ext` in `dir` is listed once in dir/expected.txt (rows
+// FILE<TAB>LINE<TAB>MESSAGE, '#' comments), and `read(path)` refuses it with exactly
+// "path:LINE: MESSAGE".
+template <class Read>
+void ExpectCorpusMessages(const std::filesystem::path& dir, const std::string& ext, Read&& read) {
+  std::ifstream manifest(dir / "expected.txt");
+  ASSERT_TRUE(manifest) << dir;
+  int n = 0;
+  for (std::string row; std::getline(manifest, row);) {
+    if (row.empty() || row[0] == '#') continue;
+    const auto tab1 = row.find('\t'), tab2 = row.find('\t', tab1 + 1);
+    ASSERT_NE(tab2, std::string::npos) << row;
+    const std::string name = row.substr(0, tab1);
+    const std::string path = (dir / name).string();
+    const std::string expected = path + ":" + row.substr(tab1 + 1, tab2 - tab1 - 1) + ": " + row.substr(tab2 + 1);
+    auto r = read(path);
+    ASSERT_TRUE(std::holds_alternative<SourceError>(r)) << name << " was accepted";
+    EXPECT_EQ(std::get<SourceError>(r).What(), expected);
+    ++n;
+  }
+  long files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) files += e.path().extension() == ext;
+  EXPECT_EQ(n, files);
+}
 
 // Mutations that reach a reader's corners: bytes flipped, inserted from an alphabet of the
 // format's own characters, deleted and duplicated; numbers swapped for extreme ones; the

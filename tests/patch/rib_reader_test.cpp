@@ -500,17 +500,21 @@ TEST(Rib, MalformedScenesAreAnsweredWithFileAndLine) {
   for (const auto& [text, want] : cases) EXPECT_EQ(Error(text), want) << text;
 }
 
-// The RIB reader against a fixed budget of mutants of the scenes in surfaces/ (CI runs
+TEST(RibCorpus, EveryMalformedFileGetsItsExactMessage) {
+  test::ExpectCorpusMessages(PATCHSCAN_TESTS_DIR "/corpus/rib", ".rib", [](const std::string& path) { return ReadRib(path); });
+}
+
+// The RIB reader against a fixed budget of mutants of the scenes in surfaces/ and the
+// malformed corpus (CI runs
 // exactly this many, in the release and the sanitizer builds; PATCHSCAN_FUZZ_MUTANTS
 // raises it): each is read or refused with a message located on a line of its text.
 TEST(RibFuzz, MutantsAreReadOrRefusedWithALocatedMessage) {
+  // The scenes of surfaces/ and the malformed corpus.
   std::vector<std::string> seeds;
-  for (const auto& e : std::filesystem::directory_iterator(PATCHSCAN_SURFACES_DIR))
-    if (e.path().extension() == ".rib") {
-      std::ifstream f(e.path(), std::ios::binary);
-      seeds.emplace_back(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
-    }
-  ASSERT_GE(seeds.size(), 3u);
+  for (const char* dir : {PATCHSCAN_SURFACES_DIR, PATCHSCAN_TESTS_DIR "/corpus/rib"})
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+      if (e.path().extension() == ".rib") seeds.push_back(test::Slurp(e.path()));
+  ASSERT_GE(seeds.size(), 20u);
   const std::string alphabet = "0123456789.-+eE \n\r\t#[]\"\\xaA_\x01\xff";
   const std::vector<std::string> tokens = {
       "1e308", "-1e308", "1e-320", "nan", "inf", "-0", "0", "1", "99999999999", "10000000", "[", "]",
