@@ -79,7 +79,6 @@ constexpr double kSceneHitherFraction = 1e-3;
 std::variant<ResolvedCamera, std::string> SceneCamera(const CameraOptions& o, const Scene& scene,
                                                       Camera c) {
   ResolvedCamera r;
-  r.fromScene = true;
   const SceneImage& im = scene.image;
   c.cameraFromWorld = *im.cameraFromWorld;
   const double fov = o.fovDeg.value_or(im.fovDeg);

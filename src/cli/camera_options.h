@@ -32,7 +32,6 @@ void AddCameraOptions(CLI::App* cmd, CameraOptions* opts);
 struct ResolvedCamera {
   Camera camera;
   bool framed = false;
-  bool fromScene = false;  // the scene file's camera
 };
 std::variant<ResolvedCamera, std::string> ResolveCamera(const CameraOptions& opts,
                                                         const Scene& scene);

@@ -55,8 +55,8 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
   auto loaded = LoadSceneAndCamera(o.file, o.camera, err);
   if (const int* code = std::get_if<int>(&loaded)) return *code;
   const Scene& scene = std::get<LoadedScene>(loaded).scene;
-  const auto& [camera, framed, fromScene] = std::get<LoadedScene>(loaded).view;
-  (void)fromScene;
+  const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
+  const bool framed = std::get<LoadedScene>(loaded).view.framed;
 
   // Step 1: scene totals.
   size_t nPatches = 0, nCollapsed = 0;
