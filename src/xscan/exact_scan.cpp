@@ -183,6 +183,7 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
         const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic};
         ThetaWalker<ShapeT> walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_, &stats_.theta,
                                    options_.thetaSteps, frame);
+        walker.SetChainSink(chainSink_);
         walker.WalkAll(
             rowTrackers_, &edgeUsed_, &silUsed_, &chain_,
             [&](const WalkPoint& p) { return FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)); },

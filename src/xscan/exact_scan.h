@@ -57,6 +57,9 @@ class ExactScan final : public raster::FragmentSource {
   // Marks every tracker position and event on `trace` from the next row on (null: none).
   void SetTrace(TraceSink* trace) { trace_ = trace; }
 
+  // Theta mode: shows every chain to `sink` as it is made (null: none).
+  void SetThetaChainSink(ThetaChainSink* sink) { chainSink_ = sink; }
+
   // Totals so far, including the surfaces still active.
   ExactScanStats Stats() const;
 
@@ -80,6 +83,7 @@ class ExactScan final : public raster::FragmentSource {
   RowTrackers rowTrackers_;
   WalkEvents walkEvents_;
   std::vector<ThetaVertex> chain_;
+  ThetaChainSink* chainSink_ = nullptr;
   TraceSink* trace_ = nullptr;
   std::vector<char> edgeUsed_, silUsed_;
   ExactScanStats stats_;

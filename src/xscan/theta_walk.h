@@ -20,7 +20,9 @@
 // normal, not in the row's coverage.
 #pragma once
 
+#include <cstdint>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include "xscan/level_walk.h"
@@ -33,10 +35,24 @@ struct ThetaStats {
   long nTurnPoints = 0;  // vertices where θ turned back (§4.3)
 };
 
-// A vertex of a θ chain: its screen x and its surface point.
+// A vertex of a θ chain: its screen x, its surface point, and why it is a vertex: an end
+// on the boundary (or a closed chain's start), a tabulated angle θ_index, a silhouette
+// point (θ = 0 or π) or a turn point (§4.3).
 struct ThetaVertex {
+  enum class Kind : std::uint8_t { End, Table, Silhouette, Turn };
   double x;
   raster::Fragment f;
+  Kind kind = Kind::End;
+  int index = -1;  // Table: i in θ_i = 2πi/N, 0 < i < N, i != N/2
+};
+
+// Receives every θ chain as it is made (tests and diagnostics): one call per chain.
+class ThetaChainSink {
+ public:
+  virtual void Chain(double ys, int steps, std::span<const ThetaVertex> chain) = 0;
+
+ protected:
+  ~ThetaChainSink() = default;
 };
 
 // The frame the angle θ is measured in: the eye and the camera's right vector (world).
@@ -71,10 +87,14 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   void WalkAll(const RowTrackers& t, std::vector<char>* edgeUsed, std::vector<char>* silUsed,
                std::vector<Vertex>* chain, Make&& make, Emit&& emit);
 
+  // Every chain made is also shown to `sink` (none by default).
+  void SetChainSink(ThetaChainSink* sink) { sink_ = sink; }
+
  private:
   template <class Make>
-  Vertex MakeVertex(const WalkPoint& p, Make& make) const {
-    return {p.x, make(p)};
+  Vertex MakeVertex(const WalkPoint& p, Make& make, ThetaVertex::Kind kind = ThetaVertex::Kind::End,
+                    int index = -1) const {
+    return {p.x, make(p), kind, index};
   }
   double ThetaOf(const raster::Fragment& f) const { return frame_.Theta(f.position, f.normal); }
   static double Wrap(double a) {  // into (-π, π]
@@ -95,6 +115,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   int steps_;
   ThetaFrame frame_;
   double table_;  // 2π / N
+  ThetaChainSink* sink_ = nullptr;
 };
 
 template <class ShapeT>
@@ -120,6 +141,7 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
     if (sense == 0.0) continue;
     chain->clear();
     Crawl(p, sense, false, chain, make);
+    if (sink_) sink_->Chain(this->ys_, steps_, *chain);
     EmitChain(*chain, emit);
   }
   for (size_t k = 0; k < t.silhouettePoints.size(); ++k) {
@@ -132,6 +154,7 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
     p.jn = 0.0;  // on the silhouette whatever rounding says
     chain->clear();
     Crawl(p, 1.0, true, chain, make);
+    if (sink_) sink_->Chain(this->ys_, steps_, *chain);
     EmitChain(*chain, emit);
   }
 }
@@ -141,7 +164,7 @@ template <class Make>
 void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool closed,
                                 std::vector<Vertex>* chain, Make& make) {
   ++theta_->nChains;
-  chain->push_back(MakeVertex(start, make));
+  chain->push_back(MakeVertex(start, make, closed ? ThetaVertex::Kind::Silhouette : ThetaVertex::Kind::End));
   WalkPoint p = start;
   double th = ThetaOf(chain->back().f);
   double lastTurn = 0.0;  // the sign θ last moved with (0: not yet)
@@ -156,8 +179,22 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       if (std::abs(std::sin(angle)) < 1e-12) continue;  // 0 or π: a silhouette
       const double t = (i * table_ - a) / d;
       const WalkPoint v = this->Correct(from.uv + t * (to.uv - from.uv));
-      if (v.ok) chain->push_back(MakeVertex(v, make));
+      const long index = static_cast<long>(i) % steps_;
+      if (v.ok) chain->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, static_cast<int>(index < 0 ? index + steps_ : index)));
     }
+  };
+  // A turn point (§4.3: T = 0, the derivative of θ along the curve vanishes) between two
+  // steps: the crawl point there is a vertex, within one step of it, so the chain follows
+  // the crinkle even when no tabulated angle is passed. Every step that passes table
+  // angles notes its change of θ, d, here first.
+  auto noteTurn = [&](const WalkPoint& at, double d) {
+    constexpr double kTurnRad = 1e-9;  // below this θ did not move
+    if (std::abs(d) <= kTurnRad) return;
+    if (lastTurn != 0.0 && (d > 0) != (lastTurn > 0) && std::abs(at.jn) > 1e-9) {
+      chain->push_back(MakeVertex(at, make, ThetaVertex::Kind::Turn));
+      ++theta_->nTurnPoints;
+    }
+    lastTurn = d;
   };
   for (long k = 0; k < this->MaxSteps(); ++k) {
     if (h < kWalkStepMin) break;
@@ -180,8 +217,9 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
           WalkPoint s;
           if (std::abs(p.jn) > 1e-9 && (p.j > 0) != (e.j > 0) && this->LocateSilhouette(p, e, &s)) {
             if (!this->UseSilhouetteTracker(s.uv)) this->Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
-            chain->push_back(MakeVertex(s, make));
+            chain->push_back(MakeVertex(s, make, ThetaVertex::Kind::Silhouette));
           } else {
+            noteTurn(p, d);
             passTable(p, th, e, d);
           }
           chain->push_back(ve);
@@ -216,19 +254,9 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
         this->Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
         if (this->events_) this->events_->untrackedSilhouettes.push_back(s.uv);
       }
-      chain->push_back(MakeVertex(s, make));
+      chain->push_back(MakeVertex(s, make, ThetaVertex::Kind::Silhouette));
     } else {
-      // A turn point (§4.3: T = 0, the derivative of θ along the curve vanishes) between
-      // two steps: the crawl point there is a vertex, within one step of it, so the chain
-      // follows the crinkle even when no tabulated angle is passed.
-      constexpr double kTurnRad = 1e-9;  // below this θ did not move
-      if (std::abs(d) > kTurnRad) {
-        if (lastTurn != 0.0 && (d > 0) != (lastTurn > 0) && !onSil) {
-          chain->push_back(MakeVertex(p, make));
-          ++theta_->nTurnPoints;
-        }
-        lastTurn = d;
-      }
+      noteTurn(p, d);
       passTable(p, th, next, d);
     }
     p = next;

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <optional>
 #include <sstream>
+#include <tuple>
 
 #include "patch/scene.h"
 #include "xscan/exact_scan.h"
@@ -242,6 +243,102 @@ TEST(ExactScan, OrthographicSphereOutlineIsItsRadius) {
   const double areaPx = M_PI * 25.0 * 25.0;
   EXPECT_NEAR(static_cast<double>(a.covered), areaPx, 2 * M_PI * 25.0);  // within the perimeter
   EXPECT_EQ(a.mismatches, 0);
+}
+
+// A table vertex's θ may be off its tabulated angle by this fraction of a table step: it
+// lies within the crawl step in which θ passed θ_i, and θ moves by at most half a table
+// step in one step (theta_walk.h), monotonically between turn points.
+constexpr double kTableVertexThetaTolSteps = 0.5;
+
+// Blinn's chain invariants (paper 001 §4.2, §4.3), checked on every chain a θ scan makes:
+// along a chain, consecutive tabulated-angle vertices differ in index by exactly 1 (mod N);
+// by 2 across a silhouette vertex (its angle, 0 or π, is not a table vertex); by 0 or 1
+// only across a turn point; and θ keeps its direction of travel except at turn points.
+// Each table vertex's θ is recorded against its tabulated angle.
+class ChainChecker final : public ThetaChainSink {
+ public:
+  explicit ChainChecker(const Camera& c)
+      : frame_{EyePoint(c), ViewRight(c), ViewForward(c), c.orthographic} {}
+
+  void Chain(double ys, int steps, std::span<const ThetaVertex> chain) override {
+    ++nChains;
+    const ThetaVertex* prev = nullptr;
+    bool silhouette = false, turn = false, turnSinceSign = false;
+    int lastSign = 0;
+    for (const ThetaVertex& v : chain) {
+      using K = ThetaVertex::Kind;
+      if (v.kind == K::Silhouette) silhouette = true;
+      if (v.kind == K::Turn) turn = turnSinceSign = true;
+      if (v.kind != K::Table) continue;
+      ++nTable;
+      const double want = 2.0 * M_PI * v.index / steps;
+      const double off = std::remainder(frame_.Theta(v.f.position, v.f.normal) - want, 2.0 * M_PI);
+      worstThetaOff = std::max(worstThetaOff, std::abs(off) * steps / (2.0 * M_PI));
+      if (prev) {
+        ++nPairs;
+        int d = (v.index - prev->index) % steps;
+        if (d > steps / 2) d -= steps;
+        if (d <= -steps / 2) d += steps;
+        const int ad = std::abs(d);
+        const bool ok = silhouette && turn ? ad <= 2 : silhouette ? ad == 2 : turn ? ad <= 1 : ad == 1;
+        const int sign = (d > 0) - (d < 0);
+        const bool reversed = sign != 0 && lastSign != 0 && sign != lastSign && !turnSinceSign;
+        if (!ok || reversed) {
+          ++violations;
+          if (violations <= 5)
+            first << "row " << ys << ": indices " << prev->index << " -> " << v.index << (silhouette ? " across a silhouette" : "")
+                  << (turn ? " across a turn point" : "") << (reversed ? " (reversed without a turn point)" : "") << '\n';
+        }
+        if (sign != 0) {
+          lastSign = sign;
+          turnSinceSign = false;
+        }
+      }
+      prev = &v;
+      silhouette = turn = false;
+    }
+  }
+
+  long nChains = 0, nTable = 0, nPairs = 0, violations = 0;
+  double worstThetaOff = 0.0;  // in table steps
+  std::ostringstream first;
+
+ private:
+  ThetaFrame frame_;
+};
+
+TEST(ThetaScan, ChainInvariantsHoldOnTheTestSurfaces) {
+  std::vector<std::tuple<std::string, std::vector<Surface>, Camera>> cases;
+  cases.push_back({"sphere", {Surface{Sphere(1.0, -1.0, 1.0, 360), Affine3::Identity()}}, View(Vec3(3, -2, 1.5), 128)});
+  cases.push_back({"torus", {Surface{Torus(1.0, 0.35, 0, 360, 360), Affine3::Identity()}}, View(Vec3(2.5, -2.0, 2.2), 128)});
+  cases.push_back({"saddle", {Surface{Saddle(1.0), Affine3::Identity()}}, View(Vec3(2.5, -3.0, 2.0), 128)});
+  cases.push_back({"monkey saddle", {Surface{MonkeySaddle(0.9), Affine3::Identity()}}, View(Vec3(2.5, -3.0, 2.0), 128)});
+  cases.push_back({"folded arch", {test::FoldedArch()}, View(Vec3(0.8, -4.0, 2.5), 128)});
+  const Scene teapot = Load("teapot.bpt"), teacup = Load("teacup.bpt");
+  cases.push_back({"teapot", teapot.surfaces, Framed(teapot, Vec3(0, 0, 1))});
+  cases.push_back({"teacup", teacup.surfaces, Framed(teacup, Vec3(0, 1, 0))});
+  cases.push_back({"torus, orthographic", {Surface{Torus(1.0, 0.35, 0, 360, 360), Affine3::Identity()}},
+                   Orthographic(Vec3(2.5, -2.0, 2.2), 1.5)});
+  for (const int steps : {16, 64})
+    for (const auto& [name, surfaces, camera] : cases) {
+      ExactScanOptions o;
+      o.thetaSteps = steps;
+      ExactScan scan(surfaces, camera, o);
+      ChainChecker check(camera);
+      scan.SetThetaChainSink(&check);
+      const raster::SampleColumns cols{0.5, 1.0, camera.width};
+      std::vector<Nearest> row(static_cast<size_t>(camera.width));
+      for (int j = 0; j < camera.height; ++j) {
+        NearestRow out(&row);
+        ASSERT_TRUE(scan.ScanRow(j + 0.5, cols, out));
+      }
+      std::cout << name << " N=" << steps << ": " << check.nChains << " chains, " << check.nTable
+                << " table vertices, " << check.nPairs << " consecutive pairs, " << check.violations
+                << " violations; worst |theta - theta_i| " << check.worstThetaOff << " of a step\n";
+      EXPECT_GT(check.nPairs, 0) << name;
+      EXPECT_EQ(check.violations, 0) << name << " N=" << steps << "\n" << check.first.str();
+      EXPECT_LT(check.worstThetaOff, kTableVertexThetaTolSteps) << name;
+    }
 }
 
 TEST(ThetaScan, CoverageIsExactAndDepthErrorFallsAsOneOverNSquared) {
