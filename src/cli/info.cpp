@@ -73,16 +73,20 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
     out << "control points: " << 16 * nPatches << " (" << distinct.size() << " distinct)\n"
         << "collapsed edges: " << nCollapsed << '\n';
   out << "world bounds: " << Box3(scene.WorldBounds()) << '\n';
-  if (camera.cameraFromWorld)
+  if (camera.cameraFromWorld) {
     out << "camera: " << camera.width << 'x' << camera.height << ", eye " << Point(EyePoint(camera))
-        << ", forward " << Point(ViewForward(camera)) << ", right " << Point(ViewRight(camera))
-        << (camera.orthographic ? std::string(", orthographic") : ", fov " + std::to_string(camera.fovDeg))
-        << ", hither " << camera.hither << " (the scene's)\n";
-  else
+        << ", forward " << Point(ViewForward(camera)) << ", right " << Point(ViewRight(camera));
+    if (camera.orthographic)
+      out << ", orthographic";
+    else
+      out << ", fov " << camera.fovDeg;
+    out << ", hither " << camera.hither << " (the scene's)\n";
+  } else {
     out << "camera: " << camera.width << 'x' << camera.height << ", eye " << Point(camera.eye)
         << ", look-at " << Point(camera.lookAt) << ", up " << Point(camera.up) << ", fov "
         << camera.fovDeg << ", hither " << camera.hither << (framed ? " (framed automatically)" : "")
         << '\n';
+  }
   if (!scene.lights.empty() || !scene.appearances.empty())
     out << "lights: " << scene.lights.size() << ", materials: " << scene.appearances.size() << '\n';
 

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <optional>
 #include <set>
+#include <unordered_map>
 #include <vector>
 
 #include "patch/bpt_reader.h"
@@ -780,10 +781,25 @@ class RibParser {
     // the camera and object transformations together mirror it).
     const bool mirrored = (cameraFromWorld_ * attr_.transform).block<3, 3>(0, 0).determinant() < 0.0;
     a.reversed = attr_.insideOrientation != mirrored;
+    // Distinct appearances, found by hash: a scene may give each of its surfaces its own.
+    std::vector<std::uint32_t>& same = appearanceIndex_[HashOf(a)];
     std::uint32_t index = 0;
-    while (index < scene_.appearances.size() && !(scene_.appearances[index] == a)) ++index;
-    if (index == scene_.appearances.size()) scene_.appearances.push_back(a);
-    scene_.appearanceOf.push_back(index);
+    for (const std::uint32_t k : same)
+      if (scene_.appearances[k] == a) index = k + 1;
+    if (index == 0) {
+      same.push_back(static_cast<std::uint32_t>(scene_.appearances.size()));
+      scene_.appearances.push_back(a);
+      index = static_cast<std::uint32_t>(scene_.appearances.size());
+    }
+    scene_.appearanceOf.push_back(index - 1);
+  }
+  static std::size_t HashOf(const Appearance& a) {
+    std::size_t h = std::hash<std::string>()(a.textureName) ^ (static_cast<std::size_t>(a.shader) << 1) ^
+                    (static_cast<std::size_t>(a.twoSided) << 5) ^ (static_cast<std::size_t>(a.reversed) << 6);
+    for (const double x : {a.colour.x(), a.colour.y(), a.colour.z(), a.opacity.x(), a.opacity.y(), a.opacity.z(), a.ka,
+                           a.kd, a.ks, a.roughness, a.specularColour.x(), a.specularColour.y(), a.specularColour.z()})
+      h = h * 1000003u ^ std::hash<double>()(x);
+    return h;
   }
   bool BasisRequest(const Request& r) {
     // Basis ubasis ustep vbasis vstep: each basis a name or 16 numbers.
@@ -956,7 +972,8 @@ class RibParser {
       Warn(r.line, "geometry " + name, "Geometry: unknown geometry " + Shown(name) + ": skipped");
       return true;
     }
-    auto teapot = ParseBpt(TeapotBptText(), "teapot");
+    // Parsed once per program: a scene may hold a thousand teapots.
+    static const auto teapot = ParseBpt(TeapotBptText(), "teapot");
     if (auto* e = std::get_if<SourceError>(&teapot)) return Fail(r.line, "Geometry \"teapot\": " + e->What());
     for (const BptPatch& p : std::get<BptFile>(teapot).patches) AddSurface(r, BicubicPatch(p.cv));
     return true;
@@ -971,6 +988,7 @@ class RibParser {
   std::set<std::string, std::less<>> warned_;
   std::vector<double> num_;
   std::vector<Vec3> pts_;
+  std::unordered_map<std::size_t, std::vector<std::uint32_t>> appearanceIndex_;
   Mat4 cameraFromWorld_ = Mat4::Identity();
   bool sawWorld_ = false, skippingWorld_ = false, skippingFrame_ = false, done_ = false;
   int objectDepth_ = 0;
