@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
-#include <map>
 #include <numbers>
 #include <optional>
 #include <set>
@@ -22,7 +21,7 @@ constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 // ReadArchive nesting deeper than this is taken as an archive that reads itself.
 constexpr int kMaxArchiveDepth = 16;
 // RenderMan's default field of view (RenderMan Interface 3.2, "Projection").
-constexpr double kDefaultFovDeg = 90.0;
+constexpr double kRibDefaultFovDeg = 90.0;
 // The light and shader parameter defaults of the standard shaders (RenderMan Interface
 // 3.2, appendix A): a spotlight's cone half-angle 30 degrees and its soft edge 5 degrees.
 constexpr double kSpotConeDeg = 30.0, kSpotDeltaDeg = 5.0;
@@ -576,7 +575,7 @@ class RibParser {
       return Fail(r.line, "Projection: unknown projection " + Shown(name) + " (known: \"perspective\", \"orthographic\")");
     scene_.image.orthographic = name == "orthographic";
     double& fov = scene_.image.fovDeg;
-    fov = kDefaultFovDeg;
+    fov = kRibDefaultFovDeg;
     for (const Param& p : params) {
       if (p.name == "fov" && !scene_.image.orthographic) {
         if (!ParamNumbers(r, p, 1, &fov)) return false;
