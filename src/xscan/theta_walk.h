@@ -9,8 +9,9 @@
 // Each curve is crawled along at constant y ("sideways", §4.2) from its boundary end or,
 // closed, from a silhouette tracker, taking steps in which θ turns by at most half a table
 // step; a vertex is made where θ passes a tabulated angle, at every silhouette point (θ = 0
-// or π: where the x extent of the section ends, so coverage along the row is exact) and at
-// both boundary ends. The chain of vertices, in order along the curve, is the polygon that
+// or π: where the x extent of the section ends, so coverage along the row is exact), at
+// both boundary ends, and where the normal has turned a table step out of the scan plane
+// since the last vertex (a turn θ does not see). The chain of vertices, in order along the curve, is the polygon that
 // approximates the section; each sample between two vertices gets a fragment interpolated
 // perspective-correctly along that chord.
 //
@@ -20,6 +21,8 @@
 // normal, not in the row's coverage.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <numbers>
 #include <span>
@@ -33,13 +36,15 @@ namespace patchscan {
 struct ThetaStats {
   long nChains = 0, nVertices = 0, nSteps = 0;
   long nTurnPoints = 0;  // vertices where θ turned back (§4.3)
+  long nTilts = 0;       // vertices where the normal turned out of the scan plane
 };
 
 // A vertex of a θ chain: its screen x, its surface point, and why it is a vertex: an end
 // on the boundary (or a closed chain's start), a tabulated angle θ_index, a silhouette
-// point (θ = 0 or π) or a turn point (§4.3).
+// point (θ = 0 or π), a turn point (§4.3), or a tilt: the normal turned out of the scan
+// plane by a table step since the last vertex.
 struct ThetaVertex {
-  enum class Kind : std::uint8_t { End, Table, Silhouette, Turn };
+  enum class Kind : std::uint8_t { End, Table, Silhouette, Turn, Tilt };
   double x;
   raster::Fragment f;
   Kind kind = Kind::End;
@@ -65,6 +70,12 @@ struct ThetaFrame {
     const Vec3 plane = right.cross(r).normalized();
     const Vec3 side = r.cross(plane);
     return std::atan2(-n.dot(r), n.dot(side));
+  }
+  // The angle of unit normal n out of the scan plane at p, in [-π/2, π/2]: what θ does
+  // not see.
+  double Tilt(const Vec3& p, const Vec3& n) const {
+    const Vec3 r = orthographic ? forward : Vec3((p - eye).normalized());
+    return std::asin(std::clamp(n.dot(right.cross(r).normalized()), -1.0, 1.0));
   }
 };
 
@@ -168,6 +179,9 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
   WalkPoint p = start;
   double th = ThetaOf(chain->back().f);
   double lastTurn = 0.0;  // the sign θ last moved with (0: not yet)
+  double tilt = frame_.Tilt(chain->back().f.position, chain->back().f.normal);  // at p
+  std::size_t tiltCount = chain->size();  // chain size when tiltAtVertex was taken
+  double tiltAtVertex = tilt;             // the tilt of the chain's last vertex
   double h = kWalkStepStart;
   const double cosTurn = std::cos(kWalkMaxTurn);
   // The tabulated angles passed going from θ = a by d (|d| < π), silhouettes aside
@@ -213,7 +227,8 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
           (e.uv - p.uv).norm() <= 2.0 * h + kSameCrossingUv && Base::Tangent(e, sense).dot(tan) >= cosTurn) {
         const Vertex ve = MakeVertex(e, make);
         const double d = Wrap(ThetaOf(ve.f) - th);
-        if (std::abs(d) <= table_ || h <= 4.0 * kWalkStepMin) {
+        const double dTilt = frame_.Tilt(ve.f.position, ve.f.normal) - tilt;
+        if ((std::abs(d) <= table_ && std::abs(dTilt) <= table_) || h <= 4.0 * kWalkStepMin) {
           WalkPoint s;
           if (std::abs(p.jn) > 1e-9 && (p.j > 0) != (e.j > 0) && this->LocateSilhouette(p, e, &s)) {
             if (!this->UseSilhouetteTracker(s.uv)) this->Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
@@ -235,9 +250,12 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       h *= 0.5;
       continue;
     }
-    const double thn = ThetaOf(make(next));
+    const raster::Fragment fn = make(next);
+    const double thn = ThetaOf(fn);
     const double d = Wrap(thn - th);
-    if (std::abs(d) > 0.5 * table_ && h > 4.0 * kWalkStepMin) {
+    const double tiltNext = frame_.Tilt(fn.position, fn.normal);
+    // Steps turn θ, and the normal out of the scan plane, by at most half a table step.
+    if ((std::abs(d) > 0.5 * table_ || std::abs(tiltNext - tilt) > 0.5 * table_) && h > 4.0 * kWalkStepMin) {
       h *= 0.5;
       continue;
     }
@@ -259,8 +277,21 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       noteTurn(p, d);
       passTable(p, th, next, d);
     }
+    // The chord interpolates normals between its vertices: where θ stays within a table
+    // step but the normal leaves the scan plane (a section crossing a ridge of the surface
+    // at a slant), a vertex once it has turned a table step out of the plane bounds that
+    // error too.
+    if (chain->size() != tiltCount) {
+      tiltCount = chain->size();
+      tiltAtVertex = frame_.Tilt(chain->back().f.position, chain->back().f.normal);
+    }
+    if (std::abs(tiltNext - tiltAtVertex) >= table_) {
+      chain->push_back({next.x, fn, ThetaVertex::Kind::Tilt, -1});
+      ++theta_->nTilts;
+    }
     p = next;
     th = thn;
+    tilt = tiltNext;
     h = std::min(2.0 * h, kWalkStepMax);
   }
   this->Failed(p.uv);

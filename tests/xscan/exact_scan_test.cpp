@@ -250,6 +250,12 @@ TEST(ExactScan, OrthographicSphereOutlineIsItsRadius) {
 // step in one step (theta_walk.h), monotonically between turn points.
 constexpr double kTableVertexThetaTolSteps = 0.5;
 
+// The normal turns out of the scan plane by at most this many table steps between two
+// consecutive chain vertices: after every crawl step it is less than one step from the last
+// vertex's (else a tilt vertex is made there), and the step that leaves the domain turns it
+// by at most one step more.
+constexpr double kTiltBetweenVerticesTolSteps = 2.0;
+
 // Blinn's chain invariants (paper 001 §4.2, §4.3), checked on every chain a θ scan makes:
 // along a chain, consecutive tabulated-angle vertices differ in index by exactly 1 (mod N);
 // by 2 across a silhouette vertex (its angle, 0 or π, is not a table vertex); by 0 or 1
@@ -265,6 +271,11 @@ class ChainChecker final : public ThetaChainSink {
     const ThetaVertex* prev = nullptr;
     bool silhouette = false, turn = false, turnSinceSign = false;
     int lastSign = 0;
+    for (size_t k = 1; k < chain.size(); ++k) {
+      const double dTilt = std::abs(frame_.Tilt(chain[k].f.position, chain[k].f.normal) -
+                                    frame_.Tilt(chain[k - 1].f.position, chain[k - 1].f.normal));
+      worstTiltSteps = std::max(worstTiltSteps, dTilt * steps / (2.0 * M_PI));
+    }
     for (const ThetaVertex& v : chain) {
       using K = ThetaVertex::Kind;
       if (v.kind == K::Silhouette) silhouette = true;
@@ -301,6 +312,7 @@ class ChainChecker final : public ThetaChainSink {
 
   long nChains = 0, nTable = 0, nPairs = 0, violations = 0;
   double worstThetaOff = 0.0;  // in table steps
+  double worstTiltSteps = 0.0;  // largest turn of the normal out of the scan plane between vertices
   std::ostringstream first;
 
  private:
@@ -334,10 +346,14 @@ TEST(ThetaScan, ChainInvariantsHoldOnTheTestSurfaces) {
       }
       std::cout << name << " N=" << steps << ": " << check.nChains << " chains, " << check.nTable
                 << " table vertices, " << check.nPairs << " consecutive pairs, " << check.violations
-                << " violations; worst |theta - theta_i| " << check.worstThetaOff << " of a step\n";
+                << " violations; worst |theta - theta_i| " << check.worstThetaOff << " of a step; worst tilt between vertices "
+                << check.worstTiltSteps << " steps\n";
       EXPECT_GT(check.nPairs, 0) << name;
       EXPECT_EQ(check.violations, 0) << name << " N=" << steps << "\n" << check.first.str();
       EXPECT_LT(check.worstThetaOff, kTableVertexThetaTolSteps) << name;
+      // A tilt vertex is made once the normal has turned a table step out of the scan plane
+      // since the last vertex, and a crawl step turns it by at most half a step more.
+      EXPECT_LE(check.worstTiltSteps, kTiltBetweenVerticesTolSteps) << name;
     }
 }
 
