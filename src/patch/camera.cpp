@@ -29,33 +29,26 @@ ViewFrame Frame(const Camera& c) {
 
 }  // namespace
 
-std::optional<std::string> ValidateCamera(const Camera& c) {
-  std::ostringstream why;
+namespace {
+
+// What is wrong with the camera's own view (a RenderMan matrix and window, or eye, look-at,
+// up and field of view), written to `why`; nothing when it is usable.
+void ValidateView(const Camera& c, std::ostream& why) {
   if (c.cameraFromWorld) {
     const Mat4& m = *c.cameraFromWorld;
     const Vec4& win = c.screenWindow;
     // The linear part must be invertible relative to its own scale for the eye and the
     // view axes to exist.
     const double scale = m.block<3, 3>(0, 0).cwiseAbs().maxCoeff();
-    if (c.width < 1 || c.height < 1 || c.width > kMaxImageSide || c.height > kMaxImageSide)
-      why << "image size " << c.width << "x" << c.height << " is outside 1x1 to " << kMaxImageSide
-          << "x" << kMaxImageSide;
-    else if (!m.allFinite() || m.row(3) != Vec4(0, 0, 0, 1).transpose())
+    if (!m.allFinite() || m.row(3) != Vec4(0, 0, 0, 1).transpose())
       why << "the camera transformation must be finite and affine";
     else if (!(std::abs(m.block<3, 3>(0, 0).determinant()) > 1e-12 * scale * scale * scale))
       why << "the camera transformation is singular";
     else if (!win.allFinite() || win[0] == win[1] || win[2] == win[3])
       why << "the screen window is empty or not finite";
-    else if (!(c.hither > 0.0) || !std::isfinite(c.hither))
-      why << "hither distance must be positive and finite";
-    else
-      return std::nullopt;
-    return why.str();
+    return;
   }
-  if (c.width < 1 || c.height < 1 || c.width > kMaxImageSide || c.height > kMaxImageSide)
-    why << "image size " << c.width << "x" << c.height << " is outside 1x1 to " << kMaxImageSide
-        << "x" << kMaxImageSide;
-  else if (!c.eye.allFinite() || !c.lookAt.allFinite() || !c.up.allFinite())
+  if (!c.eye.allFinite() || !c.lookAt.allFinite() || !c.up.allFinite())
     why << "eye, look-at and up must be finite";
   else if (!(c.fovDeg >= kMinFovDeg && c.fovDeg <= kMaxFovDeg))
     why << "field of view " << c.fovDeg << " degrees is outside " << kMinFovDeg << " to "
@@ -65,10 +58,20 @@ std::optional<std::string> ValidateCamera(const Camera& c) {
   else if (c.up.norm() == 0.0 ||
            (c.lookAt - c.eye).normalized().cross(c.up.normalized()).norm() < kMinUpSine)
     why << "up vector is zero or along the view direction";
-  else if (!(c.hither > 0.0) || !std::isfinite(c.hither))
-    why << "hither distance must be positive and finite";
+}
+
+}  // namespace
+
+std::optional<std::string> ValidateCamera(const Camera& c) {
+  std::ostringstream why;
+  if (c.width < 1 || c.height < 1 || c.width > kMaxImageSide || c.height > kMaxImageSide)
+    why << "image size " << c.width << "x" << c.height << " is outside 1x1 to " << kMaxImageSide
+        << "x" << kMaxImageSide;
   else
-    return std::nullopt;
+    ValidateView(c, why);
+  if (why.tellp() == 0 && (!(c.hither > 0.0) || !std::isfinite(c.hither)))
+    why << "hither distance must be positive and finite";
+  if (why.tellp() == 0) return std::nullopt;
   return why.str();
 }
 
