@@ -167,6 +167,17 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
                   "R (1 - cos(pi/N)) pixels for a section of radius R pixels)")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
+  cmd->add_option("--y-step", o->yStep,
+                  "theta mode: pixels between the scan lines whose cross-sections are sampled "
+                  "(rounded to a whole number of sample rows, at least one); the surface between "
+                  "two such lines goes to the back end as one slab of triangles, and where the "
+                  "chains of two lines do not pair up (a curve born or gone, an event of the Y "
+                  "scan) every sample row between them is sampled instead. Silhouettes between "
+                  "the lines are chords: error about h^2 / (8 R) pixels for step h and a "
+                  "silhouette curving with radius R pixels. 0: every sample row is sampled and "
+                  "no triangles are made")
+      ->check(CLI::Range(0.0, 64.0))
+      ->capture_default_str();
   cmd->add_flag("--no-extrapolate", o->noExtrapolate,
                 "exact mode: start each tracker's Newton iteration from its last position "
                 "instead of extrapolating from its last two (to measure what extrapolation saves)");
@@ -255,7 +266,12 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   if (exact) {
     ExactScanOptions xo;
     xo.extrapolate = !o.noExtrapolate;
-    if (o.mode == "theta") xo.thetaSteps = o.thetaSteps;
+    if (o.mode == "theta") {
+      xo.thetaSteps = o.thetaSteps;
+      // Sample rows are 1 / (aa - 1) pixels apart (aa 1: one per pixel).
+      const double spacing = aa == 1 ? 1.0 : 1.0 / (aa - 1);
+      xo.slabRows = o.yStep > 0.0 ? std::max(1, static_cast<int>(std::lround(o.yStep / spacing))) : 0;
+    }
     scan = std::make_unique<ExactScan>(scene.surfaces, camera, xo);
   } else {
     for (size_t k = 0; k < scene.surfaces.size(); ++k) {
@@ -401,7 +417,9 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
           << xs.walk.nFailures << '\n';
     if (o.mode == "theta")
       err << "theta chains: " << xs.theta.nChains << ", vertices " << xs.theta.nVertices << ", crawl steps "
-          << xs.theta.nSteps << ", turn points " << xs.theta.nTurnPoints << '\n';
+          << xs.theta.nSteps << ", turn points " << xs.theta.nTurnPoints << "\nslabs: " << xs.nSlabIntervals
+          << " intervals as slabs (" << xs.nSlabTriangles << " triangles, " << stats->nTrianglesSetUp
+          << " set up), " << xs.nRowIntervals << " row by row\n";
     else
       err << "triangles n: " << stats->nTriangles << " (set up " << stats->nTrianglesSetUp
           << ")\nmost active on one sample row m: " << stats->maxActive << '\n';
@@ -443,7 +461,8 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
        << ", \"repaired_by_search\": " << xs.silhouettes.nRepaired << ", \"failures\": " << xs.walk.nFailures
        << ", \"theta_chains\": " << xs.theta.nChains << ", \"theta_vertices\": " << xs.theta.nVertices
        << ", \"theta_steps\": " << xs.theta.nSteps << ", \"theta_turn_points\": " << xs.theta.nTurnPoints
-       << "}, \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
+       << ", \"slab_intervals\": " << xs.nSlabIntervals << ", \"row_intervals\": " << xs.nRowIntervals
+       << ", \"slab_triangles\": " << xs.nSlabTriangles << "}, \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
        << ", \"seconds_render\": " << renderSec << ", \"seconds_output\": " << outputSec << ", \"peak_rss_kib\": " << peakKiB << "}\n";
     if (!js) {
       err << "patchscan: " << o.statsJson << ": cannot write statistics\n";

@@ -18,6 +18,7 @@ struct RenderOptions {
   std::string mode = "exact";
   bool noExtrapolate = false;
   int thetaSteps = 16;
+  double yStep = 1.0;  // theta mode: pixels between scan lines with chains; 0: every sample row
   std::string overlay = "none";
   int tessRate = 8;
   double tessPixels = 0.0;  // > 0: screen-adaptive tessellation instead of tessRate

@@ -37,10 +37,16 @@ struct SampleColumns {
   }
 };
 
-// Receives the fragments of one sample row (implemented by the back end).
+// Receives the fragments of one sample row (implemented by the back end), and triangles:
+// the slabs of a θ scan (paper 001 §4), one-pixel-high pieces of surface between two
+// scan lines whose samples the back end finds and interpolates itself. A triangle handed
+// over while sample row y is scanned covers its samples on that row and below; none of it
+// may lie above y.
 class FragmentRow {
  public:
   virtual void Add(int column, const Fragment& f) = 0;
+  virtual void AddTriangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
+                           std::uint32_t surfaceId) = 0;
 
  protected:
   ~FragmentRow() = default;

@@ -54,6 +54,7 @@ bool InsertNearest(Sample* keep, int layers, double invW, std::int32_t handle) {
 // One layer of one sample of the pixel being resolved.
 struct Member {
   int r;  // sample row within the pixel's rows
+  int i;  // sample column
   Sample smp;
 };
 
@@ -69,15 +70,6 @@ Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, bool* failed) {
 bool ShowsFront(const Material& m, const Vec3& n, const Vec3& p, const Vec3& eye) {
   return (n.dot(eye - p) >= 0.0) != m.reversed;
 }
-
-struct ActiveTriangle {
-  TriangleSetup setup;
-  std::uint32_t index;  // into mesh.triangles
-  int lastRow;
-  Rgb vertexColour[3];  // Gouraud only
-  // Orthographic: the depth as an affine function of (x, y, 1), from the vertices' depths.
-  Vec3 depthPlane = Vec3::Zero();
-};
 
 // A uniform number in [0, 1) from a seed and a sample's lattice position (splitmix64):
 // the same for the same render whatever order the samples are visited in.
@@ -97,36 +89,61 @@ constexpr double kLineHalfWidth = 0.6;
 // detail that one call per pixel would alias.
 constexpr double kShadeDiscrepancy = 0.08;
 
-// The triangles of a mesh as the back end's geometry: the y-sorted list with integer
-// sample-row bounds, and the active store whose slots do not move while a sample refers
-// to them (a triangle is retired at the start of the first pixel row none of whose
-// sample rows it reaches).
-class TriangleGeometry {
+// Triangles being scanned: the active store whose slots do not move while a sample
+// refers to them (a triangle is retired at the start of the first pixel row none of whose
+// sample rows it reaches). A slot keeps its own copy of the vertices, so triangles may come
+// from a mesh's y-sorted list or arrive while the rows are scanned (θ slabs).
+class TriangleStore {
  public:
-  TriangleGeometry(const TriangleMesh& mesh, const RenderSettings& s, const Lattice& lat,
-                   int layers, RenderStats& stats)
-      : mesh_(mesh), s_(s), lat_(lat), layers_(layers), invHither_(1.0 / s.hither), stats_(stats) {
-    stats.nTriangles = static_cast<std::int64_t>(mesh.triangles.size());
-    ySorted_.reserve(mesh.triangles.size());
-    for (std::uint32_t k = 0; k < mesh.triangles.size(); ++k) {
-      const RasterTriangle& t = mesh.triangles[k];
-      const Vec3 &a = mesh.vertices[t.v[0]].h, &b = mesh.vertices[t.v[1]].h, &c = mesh.vertices[t.v[2]].h;
-      double yMin = 0, yMax = s.height;
-      if (a.z() > 0 && b.z() > 0 && c.z() > 0) {
-        yMin = std::min({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()});
-        yMax = std::max({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()});
-      }
-      const int first = lat.Ceil(yMin, lat.ny), last = lat.Floor(yMax, lat.ny);
-      if (first <= last) ySorted_.push_back({first, last, k});
-    }
-    std::stable_sort(ySorted_.begin(), ySorted_.end(),
-                     [](const YEntry& p, const YEntry& q) { return p.first < q.first; });
+  TriangleStore(const RenderSettings& s, const Lattice& lat, int layers, ShadingMode shading, RenderStats& stats)
+      : s_(s), lat_(lat), layers_(layers), shading_(shading), invHither_(1.0 / s.hither), stats_(stats) {
     active_.reserve(1024);
     live_.reserve(1024);
     freeSlots_.reserve(1024);
   }
 
   bool Failed() const { return failed_; }
+  bool Empty() const { return live_.empty(); }
+
+  // Sets up a triangle whose last sample row is `lastRow`; culled or degenerate ones are
+  // dropped.
+  void Add(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c, std::uint32_t surfaceId, int lastRow) {
+    const auto setup = SetupTriangle(a.h, b.h, c.h, s_.cullBackFaces, s_.width, s_.height);
+    if (!setup) return;
+    if (const Material& m = s_.MaterialOf(surfaceId); !m.twoSided) {
+      if (!ShowsFront(m, a.normal + b.normal + c.normal, (a.position + b.position + c.position) / 3.0,
+                      s_.EyeFor(a.position)))
+        return;
+    }
+    ++stats_.nTrianglesSetUp;
+    Active at{*setup, {a, b, c}, surfaceId, lastRow, {}, Vec3::Zero()};
+    if (s_.orthographic) {
+      // With W = 1 the barycentrics are e_i . (x, y, 1) / |det|.
+      const double absInvDet = std::abs(setup->invDet);
+      for (int k = 0; k < 3; ++k) at.depthPlane += at.v[k].depth * absInvDet * setup->edge[k];
+    }
+    if (shading_ == ShadingMode::Gouraud)
+      for (int k = 0; k < 3; ++k) {
+        Fragment f;
+        f.position = at.v[k].position;
+        f.normal = at.v[k].normal;
+        f.uv = at.v[k].uv;
+        f.duvdx = f.duvdy = Vec2::Zero();
+        f.surfaceId = surfaceId;
+        at.vertexColour[k] = ShadeFragment(f, s_, &failed_);
+        ++stats_.nShadingCalls;
+      }
+    int slot;
+    if (!freeSlots_.empty()) {
+      slot = freeSlots_.back();
+      freeSlots_.pop_back();
+      active_[slot] = at;
+    } else {
+      slot = static_cast<int>(active_.size());
+      active_.push_back(at);
+    }
+    live_.push_back(slot);
+  }
 
   void BeginPixelRow(int j0) {
     std::erase_if(live_, [&](int k) {
@@ -136,11 +153,9 @@ class TriangleGeometry {
     });
   }
 
-  void SwapRows(int, int) {}
-
-  // Resolves sample row j: the nearest triangles per sample.
-  void ScanRow(int j, int /*r*/, double y, Sample* row) {
-    Activate(j);
+  // Resolves sample row j against the live triangles: the nearest per sample, each
+  // sample's handle `handleBase` + the triangle's slot.
+  void ScanRow(int j, double y, Sample* row, std::int32_t handleBase) {
     stats_.maxActive = std::max<std::int64_t>(stats_.maxActive, static_cast<std::int64_t>(live_.size()));
     for (const int k : live_) {
       if (active_[k].lastRow < j) continue;  // done, retired at the next pixel row
@@ -173,95 +188,52 @@ class TriangleGeometry {
                                             : (e[0] + e[1] + e[2]) * std::abs(t.invDet);
         // Nearer than the hither plane (orthographic: or behind the camera plane).
         if (!(invW <= invHither_) || (s_.orthographic && !(invW > 0.0))) continue;
-        InsertNearest(&row[static_cast<size_t>(i) * layers_], layers_, invW, k);
+        InsertNearest(&row[static_cast<size_t>(i) * layers_], layers_, invW, handleBase + k);
       }
     }
   }
 
-  std::uint32_t SurfaceOf(int /*r*/, const Sample& smp) const {
-    return mesh_.triangles[active_[smp.handle].index].surfaceId;
-  }
-  // Screen distance in pixels from (x, y) to the nearest edge line of the sample's
-  // triangle: each oriented edge is an affine function of screen position, so
-  // |e| / |grad e| is exact.
-  double EdgeDistance(int /*r*/, const Sample& smp, double x, double y) const {
-    const TriangleSetup& t = active_[smp.handle].setup;
+  std::uint32_t SurfaceOf(int slot) const { return active_[slot].surfaceId; }
+  // Screen distance in pixels from (x, y) to the nearest edge line of the triangle: each
+  // oriented edge is an affine function of screen position, so |e| / |grad e| is exact.
+  double EdgeDistance(int slot, double x, double y) const {
     double d = INFINITY;
-    for (const Vec3& e : t.edge)
+    for (const Vec3& e : active_[slot].setup.edge)
       d = std::min(d, std::abs(e.x() * x + e.y() * y + e.z()) / std::hypot(e.x(), e.y()));
     return d;
   }
-  Rgb ShadeSample(int /*r*/, const Sample& smp, double x, double y, std::int64_t& nCalls) {
-    return ShadeAt(active_[smp.handle], x, y, nCalls);
-  }
-  // A group of samples of one triangle-meshed surface is shaded once, at its centroid.
-  Rgb ShadeGroup(const Member* m, int /*n*/, double cx, double cy, std::int64_t& nCalls) {
-    return ShadeAt(active_[m[0].smp.handle], cx, cy, nCalls);
-  }
-  Fragment GroupFragment(const Member* m, int /*n*/, double cx, double cy) const {
-    return Interpolate(active_[m[0].smp.handle], cx, cy).f;
+
+  // Perspective-correct attributes of a triangle at (x, y).
+  Fragment Interpolate(int slot, double x, double y) const { return InterpolateAt(active_[slot], x, y).f; }
+
+  Rgb ShadeAt(int slot, double x, double y, std::int64_t& nCalls) {
+    const Active& at = active_[slot];
+    const Interpolated a = InterpolateAt(at, x, y);
+    if (shading_ == ShadingMode::Gouraud)
+      return a.b[0] * at.vertexColour[0] + a.b[1] * at.vertexColour[1] + a.b[2] * at.vertexColour[2];
+    ++nCalls;
+    return ShadeFragment(a.f, s_, &failed_);
   }
 
  private:
-  struct YEntry {
-    int first, last;
-    std::uint32_t index;
+  struct Active {
+    TriangleSetup setup;
+    RasterVertex v[3];
+    std::uint32_t surfaceId;
+    int lastRow;
+    Rgb vertexColour[3];  // Gouraud only
+    // Orthographic: the depth as an affine function of (x, y, 1), from the vertices' depths.
+    Vec3 depthPlane = Vec3::Zero();
   };
   // Perspective-correct attributes of an active triangle at (x, y), and its barycentrics.
-  struct Attributes {
+  struct Interpolated {
     Fragment f;
     Vec3 b;
   };
 
-  void Activate(int j) {
-    for (; nextY_ < ySorted_.size() && ySorted_[nextY_].first <= j; ++nextY_) {
-      const YEntry& y = ySorted_[nextY_];
-      const RasterTriangle& t = mesh_.triangles[y.index];
-      const auto setup = SetupTriangle(mesh_.vertices[t.v[0]].h, mesh_.vertices[t.v[1]].h,
-                                       mesh_.vertices[t.v[2]].h, s_.cullBackFaces, s_.width, s_.height);
-      if (!setup) continue;
-      if (const Material& m = s_.MaterialOf(t.surfaceId); !m.twoSided) {
-        const RasterVertex* v[3] = {&mesh_.vertices[t.v[0]], &mesh_.vertices[t.v[1]], &mesh_.vertices[t.v[2]]};
-        if (!ShowsFront(m, v[0]->normal + v[1]->normal + v[2]->normal,
-                        (v[0]->position + v[1]->position + v[2]->position) / 3.0, s_.EyeFor(v[0]->position)))
-          continue;
-      }
-      ++stats_.nTrianglesSetUp;
-      ActiveTriangle at{*setup, y.index, y.last, {}, Vec3::Zero()};
-      if (s_.orthographic) {
-        // With W = 1 the barycentrics are e_i . (x, y, 1) / |det|.
-        const double absInvDet = std::abs(setup->invDet);
-        for (int k = 0; k < 3; ++k) at.depthPlane += mesh_.vertices[t.v[k]].depth * absInvDet * setup->edge[k];
-      }
-      if (s_.shading == ShadingMode::Gouraud)
-        for (int k = 0; k < 3; ++k) {
-          const RasterVertex& v = mesh_.vertices[t.v[k]];
-          Fragment f;
-          f.position = v.position;
-          f.normal = v.normal;
-          f.uv = v.uv;
-          f.duvdx = f.duvdy = Vec2::Zero();
-          at.vertexColour[k] = ShadeFragment(f, s_, &failed_);
-          ++stats_.nShadingCalls;
-        }
-      int slot;
-      if (!freeSlots_.empty()) {
-        slot = freeSlots_.back();
-        freeSlots_.pop_back();
-        active_[slot] = at;
-      } else {
-        slot = static_cast<int>(active_.size());
-        active_.push_back(at);
-      }
-      live_.push_back(slot);
-    }
-  }
-
-  Attributes Interpolate(const ActiveTriangle& at, double x, double y) const {
-    const RasterTriangle& t = mesh_.triangles[at.index];
-    const RasterVertex &v0 = mesh_.vertices[t.v[0]], &v1 = mesh_.vertices[t.v[1]],
-                       &v2 = mesh_.vertices[t.v[2]];
-    Attributes a;
+  Interpolated InterpolateAt(const Active& at, double x, double y) const {
+    const RasterVertex &v0 = at.v[0], &v1 = at.v[1], &v2 = at.v[2];
+    Interpolated a;
     Fragment& f = a.f;
     Vec3 e;
     for (int i = 0; i < 3; ++i) e[i] = at.setup.edge[i].x() * x + at.setup.edge[i].y() * y + at.setup.edge[i].z();
@@ -279,7 +251,7 @@ class TriangleGeometry {
         double grad = 0.0;
         for (int i = 0; i < 3; ++i) {
           const double g = at.setup.edge[i][axis];
-          numerator += g * mesh_.vertices[t.v[i]].uv;
+          numerator += g * at.v[i].uv;
           grad += g;
         }
         (axis == 0 ? f.duvdx : f.duvdy) = (numerator - f.uv * grad) / sum;
@@ -287,54 +259,121 @@ class TriangleGeometry {
     } else {
       f.duvdx = f.duvdy = Vec2::Zero();
     }
-    f.normal = s_.shading == ShadingMode::Flat
+    f.normal = shading_ == ShadingMode::Flat
                    ? Vec3((v1.position - v0.position).cross(v2.position - v0.position))
                    : Vec3(a.b[0] * v0.normal + a.b[1] * v1.normal + a.b[2] * v2.normal);
-    f.surfaceId = t.surfaceId;
+    f.surfaceId = at.surfaceId;
     return a;
   }
 
-  Rgb ShadeAt(const ActiveTriangle& at, double x, double y, std::int64_t& nCalls) {
-    const Attributes a = Interpolate(at, x, y);
-    if (s_.shading == ShadingMode::Gouraud)
-      return a.b[0] * at.vertexColour[0] + a.b[1] * at.vertexColour[1] + a.b[2] * at.vertexColour[2];
-    ++nCalls;
-    return ShadeFragment(a.f, s_, &failed_);
-  }
-
-  const TriangleMesh& mesh_;
   const RenderSettings& s_;
   const Lattice& lat_;
   int layers_;
+  ShadingMode shading_;
   double invHither_;
   RenderStats& stats_;
   bool failed_ = false;  // a texture could not be read
-  std::vector<YEntry> ySorted_;
-  size_t nextY_ = 0;
-  std::vector<ActiveTriangle> active_;  // the slots
+  std::vector<Active> active_;  // the slots
   std::vector<int> live_, freeSlots_;
 };
 
-// Exact per-sample fragments as the back end's geometry: each sample row's fragments live
-// in a pool of that row, which lasts while the pixel row needs it.
+// The triangles of a mesh as the back end's geometry: the y-sorted list with integer
+// sample-row bounds feeding the active store.
+class TriangleGeometry {
+ public:
+  TriangleGeometry(const TriangleMesh& mesh, const RenderSettings& s, const Lattice& lat,
+                   int layers, RenderStats& stats)
+      : mesh_(mesh), s_(s), lat_(lat), store_(s, lat, layers, s.shading, stats) {
+    stats.nTriangles = static_cast<std::int64_t>(mesh.triangles.size());
+    ySorted_.reserve(mesh.triangles.size());
+    for (std::uint32_t k = 0; k < mesh.triangles.size(); ++k) {
+      const RasterTriangle& t = mesh.triangles[k];
+      const Vec3 &a = mesh.vertices[t.v[0]].h, &b = mesh.vertices[t.v[1]].h, &c = mesh.vertices[t.v[2]].h;
+      double yMin = 0, yMax = s.height;
+      if (a.z() > 0 && b.z() > 0 && c.z() > 0) {
+        yMin = std::min({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()});
+        yMax = std::max({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()});
+      }
+      const int first = lat.Ceil(yMin, lat.ny), last = lat.Floor(yMax, lat.ny);
+      if (first <= last) ySorted_.push_back({first, last, k});
+    }
+    std::stable_sort(ySorted_.begin(), ySorted_.end(),
+                     [](const YEntry& p, const YEntry& q) { return p.first < q.first; });
+  }
+
+  bool Failed() const { return store_.Failed(); }
+  void BeginPixelRow(int j0) { store_.BeginPixelRow(j0); }
+  void SwapRows(int, int) {}
+
+  // Resolves sample row j: the nearest triangles per sample.
+  void ScanRow(int j, int /*r*/, double y, Sample* row) {
+    for (; nextY_ < ySorted_.size() && ySorted_[nextY_].first <= j; ++nextY_) {
+      const YEntry& e = ySorted_[nextY_];
+      const RasterTriangle& t = mesh_.triangles[e.index];
+      store_.Add(mesh_.vertices[t.v[0]], mesh_.vertices[t.v[1]], mesh_.vertices[t.v[2]], t.surfaceId, e.last);
+    }
+    store_.ScanRow(j, y, row, 0);
+  }
+
+  std::uint32_t SurfaceOf(int /*r*/, const Sample& smp) const { return store_.SurfaceOf(smp.handle); }
+  double EdgeDistance(int /*r*/, const Sample& smp, double x, double y) const {
+    return store_.EdgeDistance(smp.handle, x, y);
+  }
+  Rgb ShadeSample(int /*r*/, const Sample& smp, double x, double y, std::int64_t& nCalls) {
+    return store_.ShadeAt(smp.handle, x, y, nCalls);
+  }
+  // A group of samples of one triangle-meshed surface is shaded once, at its centroid.
+  Rgb ShadeGroup(const Member* m, int /*n*/, double cx, double cy, std::int64_t& nCalls) {
+    return store_.ShadeAt(m[0].smp.handle, cx, cy, nCalls);
+  }
+  Fragment GroupFragment(const Member* m, int /*n*/, double cx, double cy) const {
+    return store_.Interpolate(m[0].smp.handle, cx, cy);
+  }
+
+ private:
+  struct YEntry {
+    int first, last;
+    std::uint32_t index;
+  };
+  const TriangleMesh& mesh_;
+  const RenderSettings& s_;
+  const Lattice& lat_;
+  TriangleStore store_;
+  std::vector<YEntry> ySorted_;
+  size_t nextY_ = 0;
+};
+
+// Sample handles at or above this are triangles (handle - kTriangleHandle: the slot);
+// below, a fragment's index in its sample row's pool.
+constexpr std::int32_t kTriangleHandle = std::int32_t{1} << 30;
+
+// A direct render's geometry: exact per-sample fragments, each sample row's in a pool of
+// that row which lasts while the pixel row needs it, and the triangles of θ slabs the
+// source hands over as it goes (always shaded per sample's interpolated normal, as the
+// fragments are: flat, Gouraud and hidden-line modes need a mesh).
 class FragmentGeometry final : public FragmentRow {
  public:
   FragmentGeometry(FragmentSource& source, const RenderSettings& s, const Lattice& lat,
                    int layers, RenderStats& stats)
-      : source_(source), s_(s), lat_(lat), layers_(layers), stats_(stats), pools_(s.aa) {
+      : source_(source), s_(s), lat_(lat), layers_(layers), stats_(stats), pools_(s.aa),
+        store_(s, lat, layers, ShadingMode::Phong, stats) {
     for (auto& p : pools_) p.reserve(static_cast<size_t>(lat.nx) * layers);
   }
 
-  bool Failed() const { return failed_; }
-  void BeginPixelRow(int) {}
+  bool Failed() const { return failed_ || store_.Failed(); }
+  void BeginPixelRow(int j0) {
+    j0_ = j0;
+    store_.BeginPixelRow(j0);
+  }
   void SwapRows(int a, int b) { std::swap(pools_[a], pools_[b]); }
 
-  void ScanRow(int /*j*/, int r, double y, Sample* row) {
+  void ScanRow(int j, int r, double y, Sample* row) {
     pool_ = &pools_[r];
     pool_->clear();
     row_ = row;
     const SampleColumns columns{lat_.offset, lat_.spacing, lat_.nx};
     if (!source_.ScanRow(y, columns, *this)) failed_ = true;
+    if (!store_.Empty()) store_.ScanRow(j, y, row, kTriangleHandle);
   }
 
   void Add(int column, const Fragment& f) override {
@@ -348,9 +387,22 @@ class FragmentGeometry final : public FragmentRow {
       pool_->push_back(f);
   }
 
-  std::uint32_t SurfaceOf(int r, const Sample& smp) const { return pools_[r][smp.handle].surfaceId; }
+  void AddTriangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
+                   std::uint32_t surfaceId) override {
+    ++stats_.nTriangles;
+    double yMax = s_.height;
+    if (a.h.z() > 0 && b.h.z() > 0 && c.h.z() > 0)
+      yMax = std::max({a.h.y() / a.h.z(), b.h.y() / b.h.z(), c.h.y() / c.h.z()});
+    store_.Add(a, b, c, surfaceId, lat_.Floor(yMax, lat_.ny));
+  }
+
+  std::uint32_t SurfaceOf(int r, const Sample& smp) const {
+    return smp.handle >= kTriangleHandle ? store_.SurfaceOf(smp.handle - kTriangleHandle)
+                                         : pools_[r][smp.handle].surfaceId;
+  }
   double EdgeDistance(int, const Sample&, double, double) const { return INFINITY; }
-  Rgb ShadeSample(int r, const Sample& smp, double, double, std::int64_t& nCalls) {
+  Rgb ShadeSample(int r, const Sample& smp, double x, double y, std::int64_t& nCalls) {
+    if (smp.handle >= kTriangleHandle) return store_.ShadeAt(smp.handle - kTriangleHandle, x, y, nCalls);
     ++nCalls;
     return ShadeFragment(pools_[r][smp.handle], s_, &failed_);
   }
@@ -359,8 +411,17 @@ class FragmentGeometry final : public FragmentRow {
     return ShadeFragment(GroupFragment(m, n, cx, cy), s_, &failed_);
   }
   // A group of exact samples of one surface is shaded once, with its samples' attributes
-  // averaged: the surface at their centroid to second order.
-  Fragment GroupFragment(const Member* m, int n, double, double) const {
+  // averaged: the surface at their centroid to second order. A group with slab samples
+  // takes the slab triangle of the sample nearest the centroid, at the centroid.
+  Fragment GroupFragment(const Member* m, int n, double cx, double cy) const {
+    int nearest = -1;
+    double best = INFINITY;
+    for (int k = 0; k < n; ++k) {
+      if (m[k].smp.handle < kTriangleHandle) continue;
+      const double d = std::hypot(lat_.At(m[k].i) - cx, lat_.At(j0_ + m[k].r) - cy);
+      if (d < best) best = d, nearest = k;
+    }
+    if (nearest >= 0) return store_.Interpolate(m[nearest].smp.handle - kTriangleHandle, cx, cy);
     Fragment f = pools_[m[0].r][m[0].smp.handle];
     for (int k = 1; k < n; ++k) {
       const Fragment& g = pools_[m[k].r][m[k].smp.handle];
@@ -391,6 +452,8 @@ class FragmentGeometry final : public FragmentRow {
   std::vector<std::vector<Fragment>> pools_;  // per sample row of the pixel row
   std::vector<Fragment>* pool_ = nullptr;    // the row being scanned
   Sample* row_ = nullptr;
+  TriangleStore store_;
+  int j0_ = 0;  // the pixel row's first sample row
 };
 
 // The pixel rows, for either geometry: sample rows resolved, samples grouped by surface
@@ -455,7 +518,7 @@ std::optional<RenderStats> RenderRows(Geometry& geo, const RenderSettings& s, co
             groups[g].sx += x;
             groups[g].sy += y;
             groups[g].weight += opacity * through;
-            members[nMembers] = {r, keep[layer]};
+            members[nMembers] = {r, i0 + c, keep[layer]};
             memberGroup[nMembers++] = g;
             through *= 1.0 - opacity;
           }

@@ -10,8 +10,9 @@ namespace patchscan {
 
 // A surface being scanned: its screen map and its trackers.
 struct ExactScan::Active {
+  Active(std::size_t i, const ScreenMap& m) : index(i), map(m) {}
   std::size_t index;
-  double yMax;
+  double yMax = INFINITY;
   ScreenMap map;
   Eigen::Matrix3d normalFromObject;
   std::unique_ptr<EdgeScan> edges;
@@ -19,6 +20,15 @@ struct ExactScan::Active {
   // For the trace: the stationary points in screen space, by y, and the next to pass.
   std::vector<std::pair<TraceKind, Vec2>> stationary;
   std::size_t nextStationary = 0;
+  // θ slabs: the chains on the interval's top line and on its bottom line (whether a walk
+  // there failed or repaired a tracker miss), the trackers on each of its sample rows,
+  // and when it is taken row by row each row's chains.
+  ChainSet line, next;
+  bool lineBroken = false, nextBroken = false;
+  std::vector<RowTrackers> rowTrackers;
+  std::vector<ChainSet> rows;
+  std::vector<ChainPair> pairs;
+  std::vector<ThetaVertex> ordered;
 };
 
 namespace {
@@ -81,8 +91,8 @@ ExactScan::~ExactScan() = default;
 
 void ExactScan::Activate(std::size_t index, double y, double spacing) {
   const Surface& s = surfaces_[index];
-  auto a = std::make_unique<Active>(Active{index, INFINITY, ScreenMap(camera_, s.worldFromObject),
-                                           s.worldFromObject.linear().inverse().transpose(), nullptr, nullptr, {}, 0});
+  auto a = std::make_unique<Active>(index, ScreenMap(camera_, s.worldFromObject));
+  a->normalFromObject = s.worldFromObject.linear().inverse().transpose();
   for (const Pending& p : pending_)
     if (p.index == index) a->yMax = p.yMax;
   std::vector<Stationary> stationary = FindStationaryPoints(s, a->map);
@@ -148,8 +158,51 @@ ExactScanStats ExactScan::Stats() const {
   return s;
 }
 
+void ExactScan::AdvanceTo(Active& a, double y) {
+  a.edges->Advance(y);
+  a.silhouettes->Advance(y, *a.edges);
+  rowTrackers_.Clear();
+  for (const EdgeTracker& t : a.edges->Trackers()) {
+    rowTrackers_.edgePoints.push_back(a.edges->Uv(t));
+    rowTrackers_.edgeOf.push_back(a.edges->Pieces()[t.piece].edge);
+  }
+  for (const SilhouetteTracker& t : a.silhouettes->Trackers()) rowTrackers_.silhouettePoints.push_back(t.uv);
+  stats_.nTrackerSteps += static_cast<long>(a.edges->Trackers().size() + a.silhouettes->Trackers().size());
+  if (trace_) TraceTrackers(a, y);
+}
+
+template <class Take>
+void ExactScan::WalkSurface(Active& a, double y, const raster::SampleColumns& columns, raster::FragmentRow& out,
+                            Take&& take) {
+  const Surface& surface = surfaces_[a.index];
+  walkEvents_.Clear();
+  VisitShape(surface, [&](const auto& shape) {
+    using ShapeT = std::decay_t<decltype(shape)>;
+    if (options_.thetaSteps > 0) {
+      const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic};
+      ThetaWalker<ShapeT> walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_, &stats_.theta,
+                                 options_.thetaSteps, frame);
+      walker.SetChainSink(chainSink_);
+      walker.WalkAll(
+          rowTrackers_, &edgeUsed_, &silUsed_, &chain_,
+          [&](const WalkPoint& p) { return FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)); },
+          take);
+      return;
+    }
+    LevelWalker walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_);
+    walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, [&](int column, const WalkPoint& p) {
+      ++stats_.nFragments;
+      out.Add(column, FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)));
+    });
+  });
+  // Silhouettes the walk found without a tracker are tracked from the next row on.
+  for (const Vec2d& uv : walkEvents_.untrackedSilhouettes) a.silhouettes->Adopt(uv);
+  if (trace_) TraceWalk(a);
+}
+
 bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   ++stats_.nRows;
+  if (options_.thetaSteps > 0 && options_.slabRows > 0) return ScanRowSlabs(y, columns, out);
   // Retire surfaces the scan has passed, set up those it has reached.
   std::erase_if(active_, [&](const std::unique_ptr<Active>& a) {
     if (a->yMax >= y) return false;
@@ -159,51 +212,121 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
   for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= y; ++nextPending_)
     if (pending_[nextPending_].yMax >= y) Activate(pending_[nextPending_].index, y, columns.dx);
 
+  auto emit = [&](int column, const raster::Fragment& f) {
+    ++stats_.nFragments;
+    out.Add(column, f);
+  };
   for (const auto& ap : active_) {
-    Active& a = *ap;
-    const Surface& surface = surfaces_[a.index];
-    a.edges->Advance(y);
-    a.silhouettes->Advance(y, *a.edges);
-    rowTrackers_.Clear();
-    for (const EdgeTracker& t : a.edges->Trackers()) {
-      rowTrackers_.edgePoints.push_back(a.edges->Uv(t));
-      rowTrackers_.edgeOf.push_back(a.edges->Pieces()[t.piece].edge);
-    }
-    for (const SilhouetteTracker& t : a.silhouettes->Trackers()) rowTrackers_.silhouettePoints.push_back(t.uv);
-    stats_.nTrackerSteps += static_cast<long>(a.edges->Trackers().size() + a.silhouettes->Trackers().size());
-    walkEvents_.Clear();
-
-    VisitShape(surface, [&](const auto& shape) {
-      auto emit = [&](int column, const WalkPoint& p) {
-        ++stats_.nFragments;
-        out.Add(column, FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)));
-      };
-      using ShapeT = std::decay_t<decltype(shape)>;
-      if (options_.thetaSteps > 0) {
-        const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic};
-        ThetaWalker<ShapeT> walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_, &stats_.theta,
-                                   options_.thetaSteps, frame);
-        walker.SetChainSink(chainSink_);
-        walker.WalkAll(
-            rowTrackers_, &edgeUsed_, &silUsed_, &chain_,
-            [&](const WalkPoint& p) { return FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)); },
-            [&](int column, const raster::Fragment& f) {
-              ++stats_.nFragments;
-              out.Add(column, f);
-            });
-        return;
-      }
-      LevelWalker walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_);
-      walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, emit);
+    AdvanceTo(*ap, y);
+    WalkSurface(*ap, y, columns, out, [&](std::span<const ThetaVertex> chain, bool) {
+      EmitThetaChain(chain, columns, camera_.orthographic, emit);
     });
-    // Silhouettes the walk found without a tracker are tracked from the next row on.
-    for (const Vec2d& uv : walkEvents_.untrackedSilhouettes) a.silhouettes->Adopt(uv);
-    if (trace_) TraceRow(a, y);
   }
   return true;
 }
 
-void ExactScan::TraceRow(Active& a, double y) {
+long ExactScan::EventCount(const Active& a) const {
+  const EdgeScanStats& e = a.edges->Stats();
+  const SilhouetteScanStats& s = a.silhouettes->Stats();
+  return e.nCreated + e.nDeleted + e.nFolds + e.nRepairs + s.nCreatedAtMaxima + s.nCreatedAtFolds +
+         s.nCreatedAtSaddles + s.nDeletedFailed + s.nDeletedLeft + s.nMerged + s.nAdopted + s.nRepairSearches;
+}
+
+void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  const int m = options_.slabRows;
+  intervalStart_ = j;
+  intervalEnd_ = j + m;
+  const double dy = columns.dx;
+  // The lattice is square: sample row j lies at y = x0 + j dy, and the lines half a row
+  // above the interval's first row and below its last.
+  const double yTop = columns.x0 + (static_cast<double>(j) - 0.5) * dy, yBottom = yTop + m * dy;
+  auto rowY = [&](int r) { return columns.x0 + static_cast<double>(j + r) * dy; };
+  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) {
+    if (a->yMax >= yTop) return false;
+    Retire(*a);
+    return true;
+  });
+  const std::size_t firstNew = active_.size();
+  for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= yBottom; ++nextPending_)
+    if (pending_[nextPending_].yMax >= yTop) Activate(pending_[nextPending_].index, yTop, dy);
+  auto walkLine = [&](Active& a, double y, ChainSet* set, bool* broken) {
+    set->Clear();
+    const long failures = stats_.walk.nFailures + stats_.walk.nUntrackedSilhouettes + stats_.walk.nUntrackedExits;
+    WalkSurface(a, y, columns, out, [&](std::span<const ThetaVertex> chain, bool closed) { set->Add(chain, closed); });
+    *broken = failures != stats_.walk.nFailures + stats_.walk.nUntrackedSilhouettes + stats_.walk.nUntrackedExits;
+  };
+  for (std::size_t k = firstNew; k < active_.size(); ++k) {
+    AdvanceTo(*active_[k], yTop);
+    walkLine(*active_[k], yTop, &active_[k]->line, &active_[k]->lineBroken);
+  }
+  // The trackers on every sample row of the interval and on its bottom line, and the
+  // chains there; a slab wants no event of the Y scan between the lines.
+  bool slab = true;
+  for (const auto& ap : active_) {
+    Active& a = *ap;
+    const long events = EventCount(a);
+    a.rowTrackers.resize(static_cast<std::size_t>(m));
+    for (int r = 0; r < m; ++r) {
+      AdvanceTo(a, rowY(r));
+      a.rowTrackers[static_cast<std::size_t>(r)] = rowTrackers_;
+    }
+    AdvanceTo(a, yBottom);
+    walkLine(a, yBottom, &a.next, &a.nextBroken);
+    for (const auto& st : a.stationary)
+      if (st.second.y() > yTop && st.second.y() <= yBottom) slab = false;
+    slab = slab && !a.lineBroken && !a.nextBroken && EventCount(a) == events &&
+           PairChains(a.line, a.next, &a.pairs, &a.ordered);
+  }
+  byRows_ = !slab;
+  if (slab) {
+    ++stats_.nSlabIntervals;
+    const SlabFrame frame{yTop, yBottom, camera_.orthographic, eye_, forward_};
+    for (const auto& ap : active_) {
+      Active& a = *ap;
+      const auto id = static_cast<std::uint32_t>(a.index);
+      for (const ChainPair& p : a.pairs)
+        ZipSlab(a.line.Of(a.line.chains[p.top]),
+                std::span<const ThetaVertex>(a.ordered.data() + p.begin, p.end - p.begin), frame, &anchorsTop_,
+                &anchorsBottom_, [&](const raster::RasterVertex& u, const raster::RasterVertex& v, const raster::RasterVertex& w) {
+                  ++stats_.nSlabTriangles;
+                  out.AddTriangle(u, v, w, id);
+                });
+    }
+  } else {
+    ++stats_.nRowIntervals;
+    for (const auto& ap : active_) {
+      Active& a = *ap;
+      a.rows.resize(static_cast<std::size_t>(m));
+      for (int r = 0; r < m; ++r) {
+        rowTrackers_ = a.rowTrackers[static_cast<std::size_t>(r)];
+        ChainSet& set = a.rows[static_cast<std::size_t>(r)];
+        set.Clear();
+        WalkSurface(a, rowY(r), columns, out, [&](std::span<const ThetaVertex> chain, bool closed) { set.Add(chain, closed); });
+      }
+    }
+  }
+  for (const auto& ap : active_) {
+    std::swap(ap->line, ap->next);
+    ap->lineBroken = ap->nextBroken;
+  }
+}
+
+bool ExactScan::ScanRowSlabs(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  const long j = std::lround((y - columns.x0) / columns.dx);
+  if (j < intervalStart_ || j >= intervalEnd_) BeginInterval(j, columns, out);
+  if (!byRows_) return true;
+  auto emit = [&](int column, const raster::Fragment& f) {
+    ++stats_.nFragments;
+    out.Add(column, f);
+  };
+  const auto r = static_cast<std::size_t>(j - intervalStart_);
+  for (const auto& ap : active_)
+    if (r < ap->rows.size())
+      for (const ChainSet::Chain& c : ap->rows[r].chains) EmitThetaChain(ap->rows[r].Of(c), columns, camera_.orthographic, emit);
+  return true;
+}
+
+void ExactScan::TraceTrackers(Active& a, double y) {
   const Surface& s = surfaces_[a.index];
   auto mark = [&](TraceKind kind, const Vec2d& uv) {
     ScreenDerivs d;
@@ -219,6 +342,15 @@ void ExactScan::TraceRow(Active& a, double y) {
   for (const Vec2d& uv : a.silhouettes->Births()) mark(TraceKind::Birth, uv);
   for (const Vec2d& uv : a.edges->Deaths()) mark(TraceKind::Death, uv);
   for (const Vec2d& uv : a.silhouettes->Deaths()) mark(TraceKind::Death, uv);
+}
+
+void ExactScan::TraceWalk(Active& a) {
+  const Surface& s = surfaces_[a.index];
+  auto mark = [&](TraceKind kind, const Vec2d& uv) {
+    ScreenDerivs d;
+    EvaluateScreen(s, a.map, uv.x(), uv.y(), DerivOrder::Position, &d);
+    if (d.w > 0.0) trace_->Mark(kind, d.p.x(), d.p.y());
+  };
   for (const Vec2d& uv : walkEvents_.repairs) mark(TraceKind::Repair, uv);
   for (const Vec2d& uv : walkEvents_.failures) mark(TraceKind::Failure, uv);
 }

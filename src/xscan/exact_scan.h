@@ -18,6 +18,7 @@
 #include "tracker/maxima.h"
 #include "tracker/silhouette_scan.h"
 #include "xscan/level_walk.h"
+#include "xscan/theta_slab.h"
 #include "xscan/theta_walk.h"
 #include "xscan/trace.h"
 
@@ -32,6 +33,12 @@ struct ExactScanOptions {
   bool extrapolate = true;  // start tracker Newton from the last two positions (§3.5)
   // 0: the exact X scan. N > 0: the θ-sampled X scan (§4) with N angles per turn.
   int thetaSteps = 0;
+  // θ scan only. 0: a chain on every sample row, its samples interpolated along its
+  // chords. R > 0: chains on scan lines R sample rows apart, half a row above sample rows
+  // (so no sample lies on one), and the surface between two lines handed to the back end
+  // as triangles (theta_slab.h); where the lines' chains do not pair up, or the Y scan
+  // has an event between them, every sample row between them takes its own chains.
+  int slabRows = 0;
 };
 
 // Counters of the whole render (DESIGN.md: count what the papers count).
@@ -44,6 +51,8 @@ struct ExactScanStats {
   SilhouetteScanStats silhouettes;
   WalkStats walk;
   ThetaStats theta;
+  // θ slabs: scan-line intervals taken as slabs, and row by row; triangles made.
+  long nSlabIntervals = 0, nRowIntervals = 0, nSlabTriangles = 0;
 };
 
 class ExactScan final : public raster::FragmentSource {
@@ -67,7 +76,18 @@ class ExactScan final : public raster::FragmentSource {
   struct Active;
   void Activate(size_t index, double y, double spacing);
   void Retire(Active& a);
-  void TraceRow(Active& a, double y);
+  // Advances a surface's trackers to y and lists them in rowTrackers_.
+  void AdvanceTo(Active& a, double y);
+  // The X scan of a surface on line y from rowTrackers_: exact fragments, or (θ) each
+  // chain to Take(std::span<const ThetaVertex>, bool closed).
+  template <class Take>
+  void WalkSurface(Active& a, double y, const raster::SampleColumns& columns, raster::FragmentRow& out, Take&& take);
+  // θ slabs: the scan lines around sample rows [j, j + slabRows), their slab or each row's chains.
+  void BeginInterval(long j, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  bool ScanRowSlabs(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  long EventCount(const Active& a) const;
+  void TraceTrackers(Active& a, double y);
+  void TraceWalk(Active& a);
 
   std::span<const Surface> surfaces_;
   Camera camera_;
@@ -87,6 +107,10 @@ class ExactScan final : public raster::FragmentSource {
   TraceSink* trace_ = nullptr;
   std::vector<char> edgeUsed_, silUsed_;
   ExactScanStats stats_;
+  // θ slabs: the interval of sample rows being scanned, and whether it is taken row by row.
+  long intervalStart_ = 0, intervalEnd_ = -1;
+  bool byRows_ = false;
+  std::vector<std::uint32_t> anchorsTop_, anchorsBottom_;
 };
 
 }  // namespace patchscan

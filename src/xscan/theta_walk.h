@@ -92,11 +92,12 @@ class ThetaWalker : public LevelWalker<ShapeT> {
 
   using Vertex = ThetaVertex;
 
-  // Make(const WalkPoint&) -> raster::Fragment; Emit(column, const raster::Fragment&).
-  // `chain` is scratch.
-  template <class Make, class Emit>
+  // Walks every chain of the row: Make(const WalkPoint&) -> raster::Fragment;
+  // Take(std::span<const Vertex> chain, bool closed) receives each chain. `chain` is
+  // scratch.
+  template <class Make, class Take>
   void WalkAll(const RowTrackers& t, std::vector<char>* edgeUsed, std::vector<char>* silUsed,
-               std::vector<Vertex>* chain, Make&& make, Emit&& emit);
+               std::vector<Vertex>* chain, Make&& make, Take&& take);
 
   // Every chain made is also shown to `sink` (none by default).
   void SetChainSink(ThetaChainSink* sink) { sink_ = sink; }
@@ -118,10 +119,6 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   template <class Make>
   void Crawl(const WalkPoint& start, double sense, bool closed, std::vector<Vertex>* chain, Make& make);
 
-  // Fragments for the sample columns along the chain's chords.
-  template <class Emit>
-  void EmitChain(const std::vector<Vertex>& chain, Emit& emit) const;
-
   ThetaStats* theta_;
   int steps_;
   ThetaFrame frame_;
@@ -130,10 +127,10 @@ class ThetaWalker : public LevelWalker<ShapeT> {
 };
 
 template <class ShapeT>
-template <class Make, class Emit>
+template <class Make, class Take>
 void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeUsed,
                                   std::vector<char>* silUsed, std::vector<Vertex>* chain,
-                                  Make&& make, Emit&& emit) {
+                                  Make&& make, Take&& take) {
   this->trackers_ = &t;
   this->edgeUsed_ = edgeUsed;
   this->silUsed_ = silUsed;
@@ -153,7 +150,8 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
     chain->clear();
     Crawl(p, sense, false, chain, make);
     if (sink_) sink_->Chain(this->ys_, steps_, *chain);
-    EmitChain(*chain, emit);
+    theta_->nVertices += static_cast<long>(chain->size());
+    take(std::span<const Vertex>(*chain), false);
   }
   for (size_t k = 0; k < t.silhouettePoints.size(); ++k) {
     if ((*silUsed)[k]) continue;
@@ -166,7 +164,8 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
     chain->clear();
     Crawl(p, 1.0, true, chain, make);
     if (sink_) sink_->Chain(this->ys_, steps_, *chain);
-    EmitChain(*chain, emit);
+    theta_->nVertices += static_cast<long>(chain->size());
+    take(std::span<const Vertex>(*chain), true);
   }
 }
 
@@ -297,17 +296,17 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
   this->Failed(p.uv);
 }
 
-template <class ShapeT>
+// The fragments of a chain on its own scan line: one per sample column along its chords,
+// interpolated perspective-correctly (orthographic: linearly). Emit(column, fragment).
 template <class Emit>
-void ThetaWalker<ShapeT>::EmitChain(const std::vector<Vertex>& chain, Emit& emit) const {
-  theta_->nVertices += static_cast<long>(chain.size());
+void EmitThetaChain(std::span<const ThetaVertex> chain, const raster::SampleColumns& cols, bool orthographic,
+                    Emit& emit) {
   if (chain.empty()) return;
-  const raster::SampleColumns& cols = this->cols_;
   // A column exactly at the first vertex belongs to this chain.
   const int c0 = cols.Ceil(chain.front().x - kColumnEpsPx);
   if (c0 < cols.n && std::abs(cols.At(c0) - chain.front().x) <= kColumnEpsPx) emit(c0, chain.front().f);
   for (size_t k = 1; k < chain.size(); ++k) {
-    const Vertex &a = chain[k - 1], &b = chain[k];
+    const ThetaVertex &a = chain[k - 1], &b = chain[k];
     if (!(a.f.w > 0.0 && b.f.w > 0.0) || a.x == b.x) continue;
     const int dir = b.x > a.x ? 1 : -1;
     for (int c = dir > 0 ? cols.Ceil(a.x + kColumnEpsPx) : cols.Floor(a.x - kColumnEpsPx);
@@ -315,7 +314,7 @@ void ThetaWalker<ShapeT>::EmitChain(const std::vector<Vertex>& chain, Emit& emit
       // Along a straight chord 1/w is affine in screen x: perspective-correct weights
       // (orthographic: w itself is affine, and the weights are linear).
       const double t = std::clamp((cols.At(c) - a.x) / (b.x - a.x), 0.0, 1.0);
-      const bool affine = frame_.orthographic;
+      const bool affine = orthographic;
       const double ia = affine ? 1.0 - t : (1.0 - t) / a.f.w, ib = affine ? t : t / b.f.w;
       const double inv = affine ? ia * a.f.w + ib * b.f.w : 1.0 / (ia + ib);
       const double wa = affine ? ia : ia * inv, wb = affine ? ib : ib * inv;

@@ -205,6 +205,76 @@ TEST(ScanlineRenderer, LinearTransparency) {
   EXPECT_FLOAT_EQ(at(70, 2, 3), 0.0f);    // nothing
 }
 
+// Hands a mesh's triangles to the back end as a direct render's source does with θ slabs:
+// each triangle while the first sample row it reaches is scanned.
+class StreamedMesh final : public FragmentSource {
+ public:
+  StreamedMesh(const TriangleMesh& m, double spacing, double offset) : m_(m) {
+    for (std::uint32_t k = 0; k < m.triangles.size(); ++k) {
+      double yMin = INFINITY;
+      for (const std::uint32_t v : m.triangles[k].v) yMin = std::min(yMin, m.vertices[v].h.y() / m.vertices[v].h.z());
+      order_.push_back({static_cast<long>(std::ceil((yMin - offset) / spacing)), k});
+    }
+    std::sort(order_.begin(), order_.end());
+    spacing_ = spacing;
+    offset_ = offset;
+  }
+  bool ScanRow(double y, const SampleColumns&, FragmentRow& out) override {
+    const long j = std::lround((y - offset_) / spacing_);
+    for (; next_ < order_.size() && order_[next_].first <= j; ++next_) {
+      const RasterTriangle& t = m_.triangles[order_[next_].second];
+      out.AddTriangle(m_.vertices[t.v[0]], m_.vertices[t.v[1]], m_.vertices[t.v[2]], t.surfaceId);
+    }
+    return true;
+  }
+
+ private:
+  const TriangleMesh& m_;
+  std::vector<std::pair<long, std::uint32_t>> order_;
+  std::size_t next_ = 0;
+  double spacing_ = 1, offset_ = 0.5;
+};
+
+TEST(ScanlineRenderer, TrianglesHandedOverByADirectSourceRenderAsAMesh) {
+  // θ slabs reach the back end through the fragment path: the same triangles streamed
+  // row by row cover exactly the samples the mesh path covers, and shade alike (a group
+  // of samples is shaded at its centroid from one of its triangles: the first in the mesh
+  // path, the nearest in the fragment path, so colours differ by the normal's change
+  // across a triangle, a few 1e-3 on this coarse fan).
+  constexpr double kColourTol = 0.02;
+  TriangleMesh m;
+  constexpr int kRing = 24;
+  m.vertices.push_back({Homogeneous(Vec3(0, 0, 3)), Vec3(0, 0, 3), Vec3(0, 0, -1), Vec2(0.5, 0.5)});
+  for (int k = 0; k < kRing; ++k) {
+    const double a = 2 * M_PI * k / kRing;
+    const Vec3 p(0.5 * std::cos(a), 0.4 * std::sin(a), 3 + 0.3 * std::sin(2 * a));
+    m.vertices.push_back({Homogeneous(p), p, Vec3(std::cos(a), std::sin(a), -1.5), Vec2(0.5 + std::cos(a), 0.5)});
+  }
+  for (std::uint32_t k = 0; k < kRing; ++k) m.triangles.push_back({{0, 1 + k, 1 + (k + 1) % kRing}, 0});
+  for (const int aa : {1, 4}) {
+    RenderSettings s;
+    s.width = 128;
+    s.height = 96;
+    s.aa = aa;
+    s.hither = 0.01;
+    CaptureSink mesh(s.width), streamed(s.width);
+    ASSERT_TRUE(RenderMesh(m, s, mesh));
+    const double spacing = aa == 1 ? 1.0 : 1.0 / (aa - 1);
+    StreamedMesh source(m, spacing, aa == 1 ? 0.5 : 0.0);
+    const auto stats = RenderFragments(source, s, streamed);
+    ASSERT_TRUE(stats);
+    EXPECT_EQ(stats->nTriangles, kRing);
+    ASSERT_EQ(mesh.rgba.size(), streamed.rgba.size());
+    double worst = 0;
+    for (std::size_t k = 0; k < mesh.rgba.size(); ++k) {
+      if (k % 4 == 3) EXPECT_EQ(mesh.rgba[k], streamed.rgba[k]) << "alpha of pixel " << k / 4 << ", aa " << aa;
+      else worst = std::max(worst, static_cast<double>(std::abs(mesh.rgba[k] - streamed.rgba[k])));
+    }
+    EXPECT_GT(mesh.Coverage(), 500.0);
+    EXPECT_LT(worst, kColourTol) << "aa " << aa;
+  }
+}
+
 TEST(Shading, FastRenormalizationIsSecondOrder) {
   // |Renormalize(v)| - 1 = -(3/8) e^2 + O(e^3) for |v|^2 = 1 + e.
   for (double e : {-0.02, -0.005, 0.001, 0.01, 0.02}) {

@@ -44,6 +44,11 @@ class NearestRow final : public raster::FragmentRow {
     Nearest& n = (*row_)[column];
     if (f.w < n.w) n = {f.w, f.surfaceId};
   }
+  // Per-row θ chains and the exact scan hand over fragments only.
+  void AddTriangle(const raster::RasterVertex&, const raster::RasterVertex&, const raster::RasterVertex&,
+                   std::uint32_t) override {
+    ADD_FAILURE() << "a triangle from a scan without slabs";
+  }
 
  private:
   std::vector<Nearest>* row_;

@@ -1,0 +1,103 @@
+#include "xscan/theta_slab.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace patchscan {
+namespace {
+
+// The side of the domain [0,1]² a boundary point lies on: 0 v = 0, 1 u = 1, 2 v = 1, 3 u = 0.
+int BoundarySide(const Vec2& uv) {
+  const double d[4] = {uv.y(), 1.0 - uv.x(), 1.0 - uv.y(), uv.x()};
+  return static_cast<int>(std::min_element(d, d + 4) - d);
+}
+
+std::size_t CountAnchors(std::span<const ThetaVertex> c) {
+  if (c.size() < 2) return c.size();
+  std::size_t n = 2;
+  for (std::size_t k = 1; k + 1 < c.size(); ++k) n += c[k].kind == ThetaVertex::Kind::Silhouette;
+  return n;
+}
+
+}  // namespace
+
+raster::RasterVertex SlabVertex(const ThetaVertex& v, double y, bool orthographic) {
+  raster::RasterVertex r;
+  const double w = v.f.w;
+  r.h = orthographic ? Vec3(v.x, y, 1.0) : Vec3(v.x * w, y * w, w);
+  r.position = v.f.position;
+  r.normal = v.f.normal;
+  r.uv = v.f.uv;
+  r.depth = w;
+  return r;
+}
+
+void ChainAnchors(std::span<const ThetaVertex> chain, std::vector<std::uint32_t>* anchors) {
+  anchors->clear();
+  if (chain.empty()) return;
+  anchors->push_back(0);
+  for (std::size_t k = 1; k + 1 < chain.size(); ++k)
+    if (chain[k].kind == ThetaVertex::Kind::Silhouette) anchors->push_back(static_cast<std::uint32_t>(k));
+  if (chain.size() > 1) anchors->push_back(static_cast<std::uint32_t>(chain.size() - 1));
+}
+
+bool PairChains(const ChainSet& top, const ChainSet& bottom, std::vector<ChainPair>* pairs,
+                std::vector<ThetaVertex>* ordered) {
+  pairs->clear();
+  ordered->clear();
+  if (top.chains.size() != bottom.chains.size()) return false;
+  for (const ChainSet* set : {&top, &bottom})
+    for (const ThetaVertex& v : set->v)
+      if (!(v.f.w > 0.0)) return false;
+  std::vector<char> used(bottom.chains.size(), 0);
+  for (std::uint32_t t = 0; t < top.chains.size(); ++t) {
+    const auto a = top.Of(top.chains[t]);
+    if (a.size() < 2) return false;
+    const std::size_t anchors = CountAnchors(a);
+    int best = -1;
+    bool bestReversed = false;
+    std::size_t bestStart = 0;
+    double bestCost = INFINITY;
+    for (std::uint32_t b = 0; b < bottom.chains.size(); ++b) {
+      if (used[b] || bottom.chains[b].closed != top.chains[t].closed) continue;
+      const auto c = bottom.Of(bottom.chains[b]);
+      if (c.size() < 2 || CountAnchors(c) != anchors) continue;
+      if (!top.chains[t].closed) {
+        // The same boundary sides at the same ends, one way round or the other.
+        const int s0 = BoundarySide(a.front().f.uv), s1 = BoundarySide(a.back().f.uv);
+        for (const bool reversed : {false, true}) {
+          const ThetaVertex& first = reversed ? c.back() : c.front();
+          const ThetaVertex& last = reversed ? c.front() : c.back();
+          if (BoundarySide(first.f.uv) != s0 || BoundarySide(last.f.uv) != s1) continue;
+          const double cost = (first.f.uv - a.front().f.uv).norm() + (last.f.uv - a.back().f.uv).norm();
+          if (cost < bestCost) bestCost = cost, best = static_cast<int>(b), bestReversed = reversed;
+        }
+      } else {
+        // A closed chain starts and ends at a silhouette vertex: start the partner at its
+        // silhouette vertex nearest this chain's start (both run the same way round).
+        for (std::size_t k = 0; k + 1 < c.size(); ++k) {
+          if (c[k].kind != ThetaVertex::Kind::Silhouette) continue;
+          const double cost = (c[k].f.uv - a.front().f.uv).norm();
+          if (cost < bestCost) bestCost = cost, best = static_cast<int>(b), bestStart = k;
+        }
+      }
+    }
+    if (best < 0) return false;
+    used[best] = 1;
+    const auto c = bottom.Of(bottom.chains[best]);
+    const auto begin = static_cast<std::uint32_t>(ordered->size());
+    if (!top.chains[t].closed) {
+      ordered->insert(ordered->end(), c.begin(), c.end());
+      if (bestReversed) std::reverse(ordered->begin() + begin, ordered->end());
+    } else {
+      // c.back() repeats c.front(): rotate the ring c[0..n-2] to start at bestStart, closed.
+      const std::size_t n = c.size() - 1;
+      for (std::size_t k = 0; k < n; ++k) ordered->push_back(c[(bestStart + k) % n]);
+      ordered->push_back(c[bestStart]);
+    }
+    pairs->push_back({t, begin, static_cast<std::uint32_t>(ordered->size())});
+  }
+  return true;
+}
+
+}  // namespace patchscan
