@@ -1,0 +1,311 @@
+// θ slabs: the zip fills the polygon between two chains exactly once; chains pair only
+// when they agree; and through the whole scan every sample gets as many layers of surface
+// as exact mode gives it, except within the slabs' chord bound of a true edge.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+#include <random>
+#include <variant>
+
+#include "patch/scene.h"
+#include "raster/triangle_setup.h"
+#include "xscan/agreement.h"
+#include "xscan/exact_scan.h"
+#include "xscan/theta_slab.h"
+
+namespace patchscan {
+namespace {
+
+using test::View;
+
+ThetaVertex V(double x, double w, ThetaVertex::Kind kind, bool front, Vec2 uv = Vec2(0.5, 0.5)) {
+  ThetaVertex v;
+  v.x = x;
+  v.kind = kind;
+  v.f.w = w;
+  v.f.position = Vec3(0.01 * x, 0.0, w);  // the eye is at the origin, looking along +z
+  v.f.normal = kind == ThetaVertex::Kind::Silhouette ? Vec3(1, 0, 0) : front ? Vec3(0, 0, -1) : Vec3(0, 0, 1);
+  v.f.uv = uv;
+  return v;
+}
+
+TEST(ThetaSlab, ZipFillsThePolygonBetweenTwoChainsOnce) {
+  using K = ThetaVertex::Kind;
+  // A section crossing a silhouette: x runs right to the silhouette (front), then back.
+  const std::vector<ThetaVertex> top = {V(2.0, 2, K::End, true),  V(3.1, 2, K::Table, true),
+                                        V(5.0, 2, K::Table, true), V(7.2, 2, K::Silhouette, true),
+                                        V(6.0, 2, K::Table, false), V(4.4, 2, K::End, false)};
+  const std::vector<ThetaVertex> bottom = {V(1.5, 3, K::End, true),   V(2.2, 3, K::Turn, true),
+                                           V(3.9, 3, K::Table, true), V(6.0, 3, K::Table, true),
+                                           V(8.0, 3, K::Silhouette, true), V(7.0, 3, K::Table, false),
+                                           V(5.1, 3, K::Tilt, false),  V(4.0, 3, K::End, false)};
+  const double yTop = 10.5, yBottom = 11.5;
+  const SlabFrame frame{yTop, yBottom, false, Vec3::Zero(), Vec3(0, 0, 1)};
+  std::vector<raster::TriangleSetup> front, back;
+  std::vector<std::uint32_t> at, ab;
+  ZipSlab(top, bottom, frame, &at, &ab,
+          [&](const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c) {
+            const auto t = raster::SetupTriangle(a.h, b.h, c.h, false, 16, 16);
+            ASSERT_TRUE(t);
+            // Triangles of the front piece face the eye on screen, the back piece's away.
+            const bool backPiece = a.normal.z() > 0 || b.normal.z() > 0 || c.normal.z() > 0;
+            (backPiece ? back : front).push_back(*t);
+          });
+  EXPECT_EQ(front.size() + back.size(), top.size() + bottom.size() - 2);  // one per chord of either chain
+  for (const auto& t : front) EXPECT_TRUE(t.frontFacing);
+  for (const auto& t : back) EXPECT_FALSE(t.frontFacing);
+  // Each piece is the trapezoid between its anchors' chords: a point inside it is inside
+  // exactly one of the piece's triangles.
+  auto between = [&](double x, double y, double t0, double t1, double b0, double b1) {
+    const double s = (y - yTop) / (yBottom - yTop);
+    const double a = t0 + s * (b0 - t0), b = t1 + s * (b1 - t1);
+    return x > std::min(a, b) && x < std::max(a, b);
+  };
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> ux(0.0, 9.0), uy(yTop + 1e-9, yBottom - 1e-9);
+  int inFront = 0, inBack = 0;
+  for (int n = 0; n < 20000; ++n) {
+    const double x = ux(rng), y = uy(rng);
+    double e[3];
+    int f = 0, b = 0;
+    for (const auto& t : front) f += raster::Inside(t, x, y, e);
+    for (const auto& t : back) b += raster::Inside(t, x, y, e);
+    const bool wantF = between(x, y, 2.0, 7.2, 1.5, 8.0), wantB = between(x, y, 7.2, 4.4, 8.0, 4.0);
+    EXPECT_EQ(f, wantF ? 1 : 0) << "(" << x << ", " << y << ")";
+    EXPECT_EQ(b, wantB ? 1 : 0) << "(" << x << ", " << y << ")";
+    inFront += wantF;
+    inBack += wantB;
+  }
+  EXPECT_GT(inFront, 1000);
+  EXPECT_GT(inBack, 1000);
+}
+
+TEST(ThetaSlab, ChainsPairOnlyWhenTheyAgree) {
+  using K = ThetaVertex::Kind;
+  // Top: chain A from side u = 0 to side u = 1, chain B from v = 0 to v = 1.
+  ChainSet top, bottom;
+  const std::vector<ThetaVertex> a = {V(1, 2, K::End, true, Vec2(0, 0.3)), V(2, 2, K::Table, true, Vec2(0.5, 0.35)),
+                                      V(3, 2, K::End, true, Vec2(1, 0.4))};
+  const std::vector<ThetaVertex> b = {V(5, 2, K::End, true, Vec2(0.5, 0)), V(6, 2, K::End, true, Vec2(0.6, 1))};
+  top.Add(a, false);
+  top.Add(b, false);
+  // Bottom: B' first and walked the other way, then A'.
+  const std::vector<ThetaVertex> b1 = {V(6.1, 3, K::End, true, Vec2(0.62, 1)), V(5.5, 3, K::Table, true, Vec2(0.56, 0.5)),
+                                       V(5.1, 3, K::End, true, Vec2(0.52, 0))};
+  const std::vector<ThetaVertex> a1 = {V(1.1, 3, K::End, true, Vec2(0, 0.31)), V(3.1, 3, K::End, true, Vec2(1, 0.41))};
+  bottom.Add(b1, false);
+  bottom.Add(a1, false);
+  std::vector<ChainPair> pairs;
+  std::vector<ThetaVertex> ordered;
+  ASSERT_TRUE(PairChains(top, bottom, &pairs, &ordered));
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(pairs[0].end - pairs[0].begin, 2u);  // A' as it is
+  EXPECT_EQ(ordered[pairs[0].begin].x, 1.1);
+  EXPECT_EQ(pairs[1].end - pairs[1].begin, 3u);  // B' reversed
+  EXPECT_EQ(ordered[pairs[1].begin].x, 5.1);
+  EXPECT_EQ(ordered[pairs[1].end - 1].x, 6.1);
+
+  // A silhouette more on one side, a chain fewer, a vertex behind the eye: no pairing.
+  ChainSet folded;
+  std::vector<ThetaVertex> a2 = a1;
+  a2.insert(a2.begin() + 1, V(2.0, 3, K::Silhouette, true, Vec2(0.5, 0.36)));
+  folded.Add(b1, false);
+  folded.Add(a2, false);
+  EXPECT_FALSE(PairChains(top, folded, &pairs, &ordered));
+  ChainSet fewer;
+  fewer.Add(a1, false);
+  EXPECT_FALSE(PairChains(top, fewer, &pairs, &ordered));
+  ChainSet behind = bottom;
+  behind.v[1].f.w = -1.0;
+  EXPECT_FALSE(PairChains(top, behind, &pairs, &ordered));
+
+  // Closed rings start at a silhouette vertex; the partner is turned to start at the one
+  // nearest the top ring's start, and closes there.
+  ChainSet ringTop, ringBottom;
+  const std::vector<ThetaVertex> r = {V(1, 2, K::Silhouette, true, Vec2(0.4, 0.5)), V(2, 2, K::Table, true, Vec2(0.5, 0.45)),
+                                      V(3, 2, K::Silhouette, false, Vec2(0.6, 0.5)), V(2, 2, K::Table, false, Vec2(0.5, 0.55)),
+                                      V(1, 2, K::Silhouette, true, Vec2(0.4, 0.5))};
+  const std::vector<ThetaVertex> r1 = {V(3.2, 3, K::Silhouette, false, Vec2(0.61, 0.5)), V(2, 3, K::Table, false, Vec2(0.5, 0.56)),
+                                       V(0.9, 3, K::Silhouette, true, Vec2(0.39, 0.5)), V(2, 3, K::Table, true, Vec2(0.5, 0.44)),
+                                       V(3.2, 3, K::Silhouette, false, Vec2(0.61, 0.5))};
+  ringTop.Add(r, true);
+  ringBottom.Add(r1, true);
+  ASSERT_TRUE(PairChains(ringTop, ringBottom, &pairs, &ordered));
+  ASSERT_EQ(ordered.size(), 5u);
+  EXPECT_EQ(ordered.front().x, 0.9);
+  EXPECT_EQ(ordered[1].f.uv.y(), 0.44);
+  EXPECT_EQ(ordered.back().x, 0.9);
+}
+
+// Counts, per sample of a lattice, the layers of surface a scan hands over: its fragments
+// and the slab triangles covering the sample (found here by plain point-in-triangle tests
+// in screen space, independently of the back end).
+class LayerCounter final : public raster::FragmentRow {
+ public:
+  LayerCounter(int nx, int ny) : nx_(nx), count_(static_cast<std::size_t>(nx) * ny, 0) {}
+  void BeginRow(int j, double y, const raster::SampleColumns& cols) {
+    j_ = j;
+    y_ = y;
+    cols_ = cols;
+  }
+  void Add(int column, const raster::Fragment& f) override {
+    ASSERT_TRUE(f.normal.allFinite() && std::isfinite(f.w));
+    ++count_[static_cast<std::size_t>(j_) * nx_ + column];
+  }
+  void AddTriangle(const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c,
+                   std::uint32_t) override {
+    Tri t;
+    const raster::RasterVertex* v[3] = {&a, &b, &c};
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_GT(v[k]->h.z(), 0.0);
+      t.p[k] = Vec2(v[k]->h.x() / v[k]->h.z(), v[k]->h.y() / v[k]->h.z());
+      EXPECT_GE(t.p[k].y(), y_ - cols_.dx) << "a triangle above the row being scanned";
+    }
+    ++nTriangles;
+    live_.push_back(t);
+  }
+  // After the scan's row: the live triangles' samples on it.
+  void RasterizeRow() {
+    std::erase_if(live_, [&](const Tri& t) { return std::max({t.p[0].y(), t.p[1].y(), t.p[2].y()}) < y_; });
+    for (const Tri& t : live_) {
+      const double area = Cross(t.p[1] - t.p[0], t.p[2] - t.p[0]);
+      if (area == 0.0) continue;
+      for (int i = 0; i < cols_.n; ++i) {
+        const Vec2 q(cols_.At(i), y_);
+        const double e0 = Cross(t.p[1] - q, t.p[2] - q) / area, e1 = Cross(t.p[2] - q, t.p[0] - q) / area,
+                     e2 = Cross(t.p[0] - q, t.p[1] - q) / area;
+        if (e0 >= 0 && e1 >= 0 && e2 >= 0) ++count_[static_cast<std::size_t>(j_) * nx_ + i];
+      }
+    }
+  }
+  const std::vector<int>& Count() const { return count_; }
+  long nTriangles = 0;
+
+ private:
+  struct Tri {
+    Vec2 p[3];
+  };
+  static double Cross(const Vec2& a, const Vec2& b) { return a.x() * b.y() - a.y() * b.x(); }
+  int nx_, j_ = 0;
+  double y_ = 0;
+  raster::SampleColumns cols_;
+  std::vector<int> count_;
+  std::vector<Tri> live_;
+};
+
+// Layers per sample on a lattice `spacing` apart, from exact mode or θ mode with slabs
+// of `slabRows` rows.
+std::vector<int> Layers(std::span<const Surface> surfaces, const Camera& camera, double spacing, int thetaSteps,
+                        int slabRows, ExactScanStats* stats) {
+  ExactScanOptions o;
+  o.thetaSteps = thetaSteps;
+  o.slabRows = slabRows;
+  ExactScan scan(surfaces, camera, o);
+  const int nx = static_cast<int>(std::lround(camera.width / spacing)) + 1;
+  const int ny = static_cast<int>(std::lround(camera.height / spacing)) + 1;
+  const raster::SampleColumns cols{0.0, spacing, nx};
+  LayerCounter counter(nx, ny);
+  for (int j = 0; j < ny; ++j) {
+    counter.BeginRow(j, j * spacing, cols);
+    EXPECT_TRUE(scan.ScanRow(j * spacing, cols, counter));
+    counter.RasterizeRow();
+  }
+  *stats = scan.Stats();
+  return counter.Count();
+}
+
+// The slabs' coverage error: a silhouette between two lines h pixels apart is the chord of
+// its arc. For an arc of radius R pixels spanning height h the chord is at most
+// sqrt(2 R h + h^2) long (the arc from a horizontal tangent down), so it is within
+// L^2 / (8 R) = h / 4 + h^2 / (8 R) pixels of the arc; boundary edges alike.
+double SlabChordBoundPx(double h, double minRadiusPx) { return h / 4 + h * h / (8 * minRadiusPx); }
+
+struct SlabCase {
+  std::string name;
+  std::vector<Surface> surfaces;
+  Camera camera;
+  double minRadiusPx;  // the smallest radius of curvature of a silhouette or boundary on screen
+};
+
+void ExpectLayersMatchExact(const SlabCase& c, double spacing, int slabRows) {
+  ExactScanStats exactStats, slabStats;
+  const std::vector<int> exact = Layers(c.surfaces, c.camera, spacing, 0, 0, &exactStats);
+  const std::vector<int> slab = Layers(c.surfaces, c.camera, spacing, 16, slabRows, &slabStats);
+  const int nx = static_cast<int>(std::lround(c.camera.width / spacing)) + 1;
+  const int ny = static_cast<int>(exact.size()) / nx;
+  const double h = slabRows * spacing;
+  // A sample may differ where the exact layer count changes within the chord bound (plus
+  // the lattice's diagonal, over which the nearest differing sample is found).
+  const double reach = SlabChordBoundPx(h, c.minRadiusPx) + spacing * std::sqrt(2.0);
+  const int r = static_cast<int>(std::ceil(reach / spacing));
+  long differ = 0, nearEdge = 0, covered = 0;
+  std::ostringstream first;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int want = exact[static_cast<std::size_t>(j) * nx + i], got = slab[static_cast<std::size_t>(j) * nx + i];
+      covered += want > 0;
+      if (want == got) continue;
+      bool near = false;
+      for (int dj = -r; dj <= r && !near; ++dj)
+        for (int di = -r; di <= r && !near; ++di) {
+          const int jj = j + dj, ii = i + di;
+          if (jj < 0 || jj >= ny || ii < 0 || ii >= nx || std::hypot(di, dj) * spacing > reach) continue;
+          near = exact[static_cast<std::size_t>(jj) * nx + ii] != want;
+        }
+      if (near) {
+        ++nearEdge;
+        continue;
+      }
+      if (differ++ < 5) first << " (" << i * spacing << ", " << j * spacing << "): " << got << " layers, exact " << want << ";";
+    }
+  std::cout << c.name << ", slabs " << h << " px high: " << slabStats.nSlabIntervals << " intervals as slabs, "
+            << slabStats.nRowIntervals << " row by row, " << slabStats.nSlabTriangles << " triangles; " << covered
+            << " samples covered, " << nearEdge << " differ within " << reach << " px of an edge, " << differ
+            << " elsewhere\n";
+  EXPECT_EQ(differ, 0) << c.name << ", h " << h << ":" << first.str();
+  EXPECT_GT(covered, 1000) << c.name;
+  // The slabs were used: most intervals are slabs.
+  EXPECT_GT(slabStats.nSlabTriangles, 0) << c.name;
+  EXPECT_GT(slabStats.nSlabIntervals, slabStats.nRowIntervals) << c.name;
+  EXPECT_EQ(slabStats.walk.nFailures, 0) << c.name;
+}
+
+Scene Load(const char* file) {
+  auto loaded = LoadScene(std::string(PATCHSCAN_SURFACES_DIR "/") + file);
+  EXPECT_TRUE(std::holds_alternative<Scene>(loaded));
+  return std::get<Scene>(std::move(loaded));
+}
+
+Camera Framed(const Scene& scene, const Vec3& up, int size) {
+  Camera base = View(Vec3::Zero(), size, up);
+  return FrameBounds(scene.WorldBounds(), base, DefaultViewDirection(up));
+}
+
+TEST(ThetaSlab, LayersMatchExactModeWithinTheChordBound) {
+  // Radii: the sphere's outline is a circle of about 30 px at this view; the torus's tube
+  // about 9 px; the saddles' boundary curves are far flatter than either.
+  std::vector<SlabCase> cases;
+  cases.push_back({"sphere", {Surface{Sphere(1.0, -1.0, 1.0, 360), Affine3::Identity()}}, View(Vec3(3, -2, 1.5), 128), 20});
+  cases.push_back({"torus", {Surface{Torus(1.0, 0.35, 0, 360, 360), Affine3::Identity()}}, View(Vec3(2.5, -2.0, 2.2), 128), 5});
+  cases.push_back({"saddle", {Surface{Saddle(1.0), Affine3::Identity()}}, View(Vec3(2.5, -3.0, 2.0), 128), 20});
+  cases.push_back({"monkey saddle", {Surface{MonkeySaddle(0.9), Affine3::Identity()}}, View(Vec3(2.5, -3.0, 2.0), 128), 10});
+  for (const SlabCase& c : cases) {
+    ExpectLayersMatchExact(c, 0.25, 4);   // 1 px slabs on a 4x4 lattice per pixel
+    ExpectLayersMatchExact(c, 0.25, 12);  // 3 px slabs
+  }
+}
+
+TEST(ThetaSlab, WatertightOnTeapotTeacupTeaspoon) {
+  // Inside a closed model no sample may lose a layer: shared patch boundaries are the
+  // same chords on both sides. Only the outline moves, within the chord bound (radius of
+  // the tightest outlines, the spout's tip and the spoon's tip, about 3 px at 192 px).
+  for (const auto& [file, up] : {std::pair{"teapot.bpt", Vec3(0, 0, 1)}, {"teacup.bpt", Vec3(0, 1, 0)},
+                                 {"teaspoon.bpt", Vec3(0, 1, 0)}}) {
+    const Scene s = Load(file);
+    ExpectLayersMatchExact({file, s.surfaces, Framed(s, up, 192), 3}, 0.5, 2);
+  }
+}
+
+}  // namespace
+}  // namespace patchscan
