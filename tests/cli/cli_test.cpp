@@ -160,6 +160,36 @@ TEST(Cli, ExactModeIsTheDefaultAndReportsItsTrackers) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Cli, ThetaSlabsTradeSilhouetteAccuracyForScanLines) {
+  // --y-step h: the silhouette between two lines h px apart is a chord, within
+  // h/4 + h^2/(8R) px of the curve (tests/xscan/theta_slab_test.cpp); the tightest
+  // outline of the teapot at this size (the spout's tip) has R of a few pixels. 0: every
+  // sample row has its own chains, and coverage is exact mode's.
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_slabs";
+  std::filesystem::create_directories(dir);
+  const std::string scene = "render " + kTeapot + " --aov --aa 4 --size 160x120 -o ";
+  const std::string exact = (dir / "exact.exr").string();
+  ASSERT_EQ(Patchscan(scene + exact).code, 0);
+  for (const double h : {0.0, 1.0, 3.0}) {
+    const std::string theta = (dir / "theta.exr").string(), js = (dir / "s.json").string();
+    std::ostringstream step;
+    step << h;
+    const Result r = Patchscan(scene + theta + " --mode theta --y-step " + step.str() + " --stats-json " + js);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const std::string json = Slurp(js);
+    // (At 3 px nearly every interval of this small teapot holds an event of some patch
+    // and is taken row by row.)
+    if (h <= 1.0) EXPECT_EQ(json.find("\"slab_triangles\": 0}") != std::string::npos, h == 0.0) << json;
+    const double bound = h == 0.0 ? 1e-9 : h / 4 + h * h / (8 * 3.0);
+    std::ostringstream fail;
+    fail << " --fail-silhouette " << bound << " --fail-rmse 1 --fail-depth 1 --fail-normal 180 --warn-silhouette " << bound
+         << " --warn-rmse 1 --warn-depth 1 --warn-normal 180";
+    const Result c = Patchscan("compare " + theta + " " + exact + fail.str());
+    EXPECT_EQ(c.code, 0) << "--y-step " << h << ": " << c.out;
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Cli, FailedRenderLeavesNoFile) {
   // Unknown image format, missing directory, bad scene: no output, non-zero exit.
   Result r = Patchscan("render " + kTeapot + " -o /tmp/patchscan_cli_x.xyz");
