@@ -417,7 +417,11 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
           << xs.walk.nFailures << '\n';
     if (o.mode == "theta")
       err << "theta chains: " << xs.theta.nChains << ", vertices " << xs.theta.nVertices << ", crawl steps "
-          << xs.theta.nSteps << ", turn points " << xs.theta.nTurnPoints << "\nslabs: " << xs.nSlabIntervals
+          << xs.theta.nSteps << ", turn points " << xs.theta.nTurnPoints << ", tilt vertices " << xs.theta.nTilts
+          << "\ntheta trackers: " << xs.theta.nTrackers << " advanced from the line before, Newton iterations per tracker "
+          << (xs.theta.nTrackers ? static_cast<double>(xs.theta.nTrackerIterations) / static_cast<double>(xs.theta.nTrackers) : 0.0)
+          << ", " << xs.theta.nTrackerFailures << " lost; " << xs.theta.nLinkRepairs << " links repaired sideways, "
+          << xs.theta.nLineRepairs << " lines crawled afresh\nslabs: " << xs.nSlabIntervals
           << " intervals as slabs (" << xs.nSlabTriangles << " triangles, " << stats->nTrianglesSetUp
           << " set up), " << xs.nRowIntervals << " row by row\n";
     else
@@ -461,6 +465,10 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
        << ", \"repaired_by_search\": " << xs.silhouettes.nRepaired << ", \"failures\": " << xs.walk.nFailures
        << ", \"theta_chains\": " << xs.theta.nChains << ", \"theta_vertices\": " << xs.theta.nVertices
        << ", \"theta_steps\": " << xs.theta.nSteps << ", \"theta_turn_points\": " << xs.theta.nTurnPoints
+       << ", \"theta_tilts\": " << xs.theta.nTilts << ", \"theta_trackers\": " << xs.theta.nTrackers
+       << ", \"theta_tracker_iterations\": " << xs.theta.nTrackerIterations
+       << ", \"theta_trackers_lost\": " << xs.theta.nTrackerFailures << ", \"theta_link_repairs\": " << xs.theta.nLinkRepairs
+       << ", \"theta_line_repairs\": " << xs.theta.nLineRepairs
        << ", \"slab_intervals\": " << xs.nSlabIntervals << ", \"row_intervals\": " << xs.nRowIntervals
        << ", \"slab_triangles\": " << xs.nSlabTriangles << "}, \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
        << ", \"seconds_render\": " << renderSec << ", \"seconds_output\": " << outputSec << ", \"peak_rss_kib\": " << peakKiB << "}\n";

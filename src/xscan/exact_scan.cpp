@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "patch/screen.h"
 #include "patch/tessellate.h"
@@ -73,6 +74,10 @@ raster::Fragment FragmentAt(const WalkPoint& p, const Surface& surface,
 ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options)
     : surfaces_(surfaces), camera_(camera), eye_(EyePoint(camera)), right_(ViewRight(camera)), forward_(ViewForward(camera)), options_(options) {
   stats_.nSurfaces = static_cast<long>(surfaces.size());
+  for (int i = 0; i < options_.thetaSteps; ++i) {
+    const double a = 2.0 * std::numbers::pi * i / options_.thetaSteps;
+    angles_.emplace_back(std::cos(a), std::sin(a));
+  }
   pending_.reserve(surfaces.size());
   for (std::size_t k = 0; k < surfaces.size(); ++k) {
     const ScreenMap map(camera, surfaces[k].worldFromObject);
@@ -171,33 +176,56 @@ void ExactScan::AdvanceTo(Active& a, double y) {
   if (trace_) TraceTrackers(a, y);
 }
 
-template <class Take>
-void ExactScan::WalkSurface(Active& a, double y, const raster::SampleColumns& columns, raster::FragmentRow& out,
-                            Take&& take) {
+template <class F>
+void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& columns, F&& f) {
   const Surface& surface = surfaces_[a.index];
-  walkEvents_.Clear();
   VisitShape(surface, [&](const auto& shape) {
     using ShapeT = std::decay_t<decltype(shape)>;
-    if (options_.thetaSteps > 0) {
-      const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic};
-      ThetaWalker<ShapeT> walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_, &stats_.theta,
-                                 options_.thetaSteps, frame);
-      walker.SetChainSink(chainSink_);
-      walker.WalkAll(
-          rowTrackers_, &edgeUsed_, &silUsed_, &chain_,
-          [&](const WalkPoint& p) { return FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)); },
-          take);
-      return;
-    }
-    LevelWalker walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_);
-    walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, [&](int column, const WalkPoint& p) {
-      ++stats_.nFragments;
-      out.Add(column, FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)));
+    const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_};
+    ThetaWalker<ShapeT> walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_, &stats_.theta,
+                               options_.thetaSteps, frame);
+    walker.SetChainSink(chainSink_);
+    f(walker, [&](const WalkPoint& p) {
+      return FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index));
     });
   });
+}
+
+void ExactScan::FinishWalk(Active& a) {
   // Silhouettes the walk found without a tracker are tracked from the next row on.
   for (const Vec2d& uv : walkEvents_.untrackedSilhouettes) a.silhouettes->Adopt(uv);
   if (trace_) TraceWalk(a);
+}
+
+template <class Take>
+void ExactScan::WalkSurface(Active& a, double y, const raster::SampleColumns& columns, raster::FragmentRow& out,
+                            Take&& take) {
+  walkEvents_.Clear();
+  if (options_.thetaSteps > 0) {
+    VisitTheta(a, y, columns, [&](auto& walker, auto&& make) {
+      walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, &chain_, make, take);
+    });
+  } else {
+    const Surface& surface = surfaces_[a.index];
+    VisitShape(surface, [&](const auto& shape) {
+      LevelWalker walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_);
+      walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, [&](int column, const WalkPoint& p) {
+        ++stats_.nFragments;
+        out.Add(column, FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)));
+      });
+    });
+  }
+  FinishWalk(a);
+}
+
+bool ExactScan::AdvanceSurface(Active& a, double y, const raster::SampleColumns& columns) {
+  walkEvents_.Clear();
+  bool ok = false;
+  VisitTheta(a, y, columns, [&](auto& walker, auto&& make) {
+    ok = walker.Advance(a.line, rowTrackers_, options_.extrapolate, &edgeUsed_, &silUsed_, &chain_, &a.next, make);
+  });
+  FinishWalk(a);
+  return ok;
 }
 
 bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
@@ -271,11 +299,19 @@ void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, rast
       a.rowTrackers[static_cast<std::size_t>(r)] = rowTrackers_;
     }
     AdvanceTo(a, yBottom);
-    walkLine(a, yBottom, &a.next, &a.nextBroken);
+    bool quiet = !a.lineBroken && EventCount(a) == events;
     for (const auto& st : a.stationary)
-      if (st.second.y() > yTop && st.second.y() <= yBottom) slab = false;
-    slab = slab && !a.lineBroken && !a.nextBroken && EventCount(a) == events &&
-           PairChains(a.line, a.next, &a.pairs, &a.ordered);
+      if (st.second.y() > yTop && st.second.y() <= yBottom) quiet = false;
+    // Between lines with no event the chains of the top line are advanced as θ trackers
+    // (§4.1); a chain that cannot be, or any event, has the bottom line crawled afresh.
+    const long failures = stats_.walk.nFailures + stats_.walk.nUntrackedSilhouettes + stats_.walk.nUntrackedExits;
+    if (quiet && AdvanceSurface(a, yBottom, columns)) {
+      a.nextBroken = failures != stats_.walk.nFailures + stats_.walk.nUntrackedSilhouettes + stats_.walk.nUntrackedExits;
+    } else {
+      if (quiet) ++stats_.theta.nLineRepairs;
+      walkLine(a, yBottom, &a.next, &a.nextBroken);
+    }
+    slab = slab && quiet && !a.nextBroken && PairChains(a.line, a.next, &a.pairs, &a.ordered);
   }
   byRows_ = !slab;
   if (slab) {

@@ -82,6 +82,14 @@ class ExactScan final : public raster::FragmentSource {
   // chain to Take(std::span<const ThetaVertex>, bool closed).
   template <class Take>
   void WalkSurface(Active& a, double y, const raster::SampleColumns& columns, raster::FragmentRow& out, Take&& take);
+  // θ slabs: the chains of a surface's last line advanced to line y (rowTrackers_ its
+  // trackers) as θ trackers into a.next; false if the line must be crawled afresh.
+  bool AdvanceSurface(Active& a, double y, const raster::SampleColumns& columns);
+  // Calls f(walker, make) with the θ walker of a surface on line y and its fragment maker.
+  template <class F>
+  void VisitTheta(Active& a, double y, const raster::SampleColumns& columns, F&& f);
+  // After a surface's X scan: silhouettes found without a tracker are adopted; the trace.
+  void FinishWalk(Active& a);
   // θ slabs: the scan lines around sample rows [j, j + slabRows), their slab or each row's chains.
   void BeginInterval(long j, const raster::SampleColumns& columns, raster::FragmentRow& out);
   bool ScanRowSlabs(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
@@ -92,6 +100,7 @@ class ExactScan final : public raster::FragmentSource {
   std::span<const Surface> surfaces_;
   Camera camera_;
   Vec3 eye_, right_, forward_;  // EyePoint, ViewRight and ViewForward of camera_, for the θ frame
+  std::vector<Vec2d> angles_;   // (cos θ_i, sin θ_i): the θ trackers' table (§4.1)
   ExactScanOptions options_;
   struct Pending {
     double yMin, yMax;

@@ -83,7 +83,7 @@ struct WalkPoint {
   double j = 0.0;   // J = x_u y_v - x_v y_u
   double jn = 0.0;  // J / (|grad x| |grad y|): the sine of the angle, scale-free
   double w = 0.0;   // eye distance
-  SurfaceDerivs object;  // position and first derivatives in object space
+  SurfaceDerivs object;  // position and first derivatives in object space (second on request)
   bool ok = false;
 };
 
@@ -118,11 +118,13 @@ class LevelWalker {
     }
   }
 
-  WalkPoint Eval(const Vec2d& uv) const {
+  // `order` Second also fills in p.object's second derivatives (the θ trackers' G_i needs
+  // the normal's derivatives); the screen quantities are first order either way.
+  WalkPoint Eval(const Vec2d& uv, DerivOrder order = DerivOrder::First) const {
     WalkPoint p;
     p.uv = uv;
     ScreenDerivs d;
-    shape_.Evaluate(uv.x(), uv.y(), DerivOrder::First, &p.object);
+    shape_.Evaluate(uv.x(), uv.y(), order, &p.object);
     map_.FromObject(p.object, DerivOrder::First, &d);
     p.w = d.w;
     p.x = d.p.x();

@@ -6,12 +6,6 @@
 namespace patchscan {
 namespace {
 
-// The side of the domain [0,1]² a boundary point lies on: 0 v = 0, 1 u = 1, 2 v = 1, 3 u = 0.
-int BoundarySide(const Vec2& uv) {
-  const double d[4] = {uv.y(), 1.0 - uv.x(), 1.0 - uv.y(), uv.x()};
-  return static_cast<int>(std::min_element(d, d + 4) - d);
-}
-
 std::size_t CountAnchors(std::span<const ThetaVertex> c) {
   if (c.size() < 2) return c.size();
   std::size_t n = 2;
@@ -64,11 +58,11 @@ bool PairChains(const ChainSet& top, const ChainSet& bottom, std::vector<ChainPa
       if (c.size() < 2 || CountAnchors(c) != anchors) continue;
       if (!top.chains[t].closed) {
         // The same boundary sides at the same ends, one way round or the other.
-        const int s0 = BoundarySide(a.front().f.uv), s1 = BoundarySide(a.back().f.uv);
+        const int s0 = DomainSide(a.front().f.uv), s1 = DomainSide(a.back().f.uv);
         for (const bool reversed : {false, true}) {
           const ThetaVertex& first = reversed ? c.back() : c.front();
           const ThetaVertex& last = reversed ? c.front() : c.back();
-          if (BoundarySide(first.f.uv) != s0 || BoundarySide(last.f.uv) != s1) continue;
+          if (DomainSide(first.f.uv) != s0 || DomainSide(last.f.uv) != s1) continue;
           const double cost = (first.f.uv - a.front().f.uv).norm() + (last.f.uv - a.back().f.uv).norm();
           if (cost < bestCost) bestCost = cost, best = static_cast<int>(b), bestReversed = reversed;
         }

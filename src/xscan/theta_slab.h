@@ -24,24 +24,7 @@
 
 namespace patchscan {
 
-// The chains of one surface on one line: vertices of all chains end to end.
-struct ChainSet {
-  struct Chain {
-    std::uint32_t begin, end;  // into v
-    bool closed;
-  };
-  std::vector<ThetaVertex> v;
-  std::vector<Chain> chains;
-  void Clear() {
-    v.clear();
-    chains.clear();
-  }
-  void Add(std::span<const ThetaVertex> chain, bool closed) {
-    chains.push_back({static_cast<std::uint32_t>(v.size()), static_cast<std::uint32_t>(v.size() + chain.size()), closed});
-    v.insert(v.end(), chain.begin(), chain.end());
-  }
-  std::span<const ThetaVertex> Of(const Chain& c) const { return {v.data() + c.begin, c.end - c.begin}; }
-};
+// ChainSet (the chains of one surface on one line) is in theta_walk.h.
 
 // A chain of the top line and its partner on the bottom line, the partner's vertices in
 // the order that runs along the curve in the same direction from the same anchor.

@@ -15,6 +15,17 @@
 // approximates the section; each sample between two vertices gets a fragment interpolated
 // perspective-correctly along that chord.
 //
+// From one scan line to the next the vertices are θ trackers (§4.1, §3.5): each Table
+// vertex follows its own G_i = 0 by bivariate Newton on (y - ys, G_i) from a start
+// extrapolated from its last two lines, damped where a step would flip the normal's
+// in-plane direction or the sign of T; ends and silhouette vertices are the edge and
+// silhouette trackers of the Y scan. The chain keeps its order (the links of §4.2). Where
+// a link looks suspicious — turn or tilt vertices between its ends on the line before, θ
+// or the tilt turning more than a table step across it, J changing sign, x running the
+// other way, the link stretching — it is repaired sideways: crawled from its first vertex,
+// creating a tracker at each tabulated angle passed, until the existing tracker at its
+// other end is met (§4.2).
+//
 // Chord error: a section of radius of curvature R (pixels) sampled every Δθ = 2π/N is
 // approximated by chords whose largest distance from the arc is R (1 - cos(π/N)) ≈
 // R π² / (2 N²) pixels; with the silhouette points as vertices that error is in depth and
@@ -37,6 +48,11 @@ struct ThetaStats {
   long nChains = 0, nVertices = 0, nSteps = 0;
   long nTurnPoints = 0;  // vertices where θ turned back (§4.3)
   long nTilts = 0;       // vertices where the normal turned out of the scan plane
+  // θ trackers advanced from the line before, and their Newton iterations (§3.5)
+  long nTrackers = 0, nTrackerIterations = 0, nTrackerFailures = 0;
+  long nCrawlIterations = 0;  // Newton iterations placing the crawl's Table vertices
+  long nLinkRepairs = 0;  // links crawled sideways between two advanced vertices (§4.2)
+  long nLineRepairs = 0;  // lines crawled afresh: a chain could not be advanced
 };
 
 // A vertex of a θ chain: its screen x, its surface point, and why it is a vertex: an end
@@ -64,6 +80,10 @@ class ThetaChainSink {
 struct ThetaFrame {
   Vec3 eye, right, forward;
   bool orthographic = false;  // view rays all along `forward`
+  // The surface's object-to-world map (the θ trackers differentiate the world normal),
+  // and (cos θ_i, sin θ_i) for i < N (empty: computed when needed).
+  const Affine3* worldFromObject = nullptr;
+  std::span<const Vec2d> angles;
   // θ of world normal n at world point p, in (-π, π].
   double Theta(const Vec3& p, const Vec3& n) const {
     const Vec3 r = orthographic ? forward : Vec3((p - eye).normalized());
@@ -78,6 +98,64 @@ struct ThetaFrame {
     return std::asin(std::clamp(n.dot(right.cross(r).normalized()), -1.0, 1.0));
   }
 };
+
+// The side of the domain [0,1]² a boundary point lies on: 0 v = 0, 1 u = 1, 2 v = 1, 3 u = 0.
+inline int DomainSide(const Vec2d& uv) {
+  const double d[4] = {uv.y(), 1.0 - uv.x(), 1.0 - uv.y(), uv.x()};
+  return static_cast<int>(std::min_element(d, d + 4) - d);
+}
+
+// The chains of one surface on one line: vertices of all chains end to end, and for each
+// vertex its (u,v) on the line before if it was advanced from there (NaN if it was made
+// on this line), for the next line's extrapolation.
+struct ChainSet {
+  struct Chain {
+    std::uint32_t begin, end;  // into v
+    bool closed;
+  };
+  std::vector<ThetaVertex> v;
+  std::vector<Vec2d> before;
+  std::vector<Chain> chains;
+  void Clear() {
+    v.clear();
+    before.clear();
+    chains.clear();
+  }
+  void Add(std::span<const ThetaVertex> chain, bool closed) {
+    chains.push_back({static_cast<std::uint32_t>(v.size()), static_cast<std::uint32_t>(v.size() + chain.size()), closed});
+    v.insert(v.end(), chain.begin(), chain.end());
+    before.resize(v.size(), Vec2d(NAN, NAN));
+  }
+  std::span<const ThetaVertex> Of(const Chain& c) const { return {v.data() + c.begin, c.end - c.begin}; }
+};
+
+// G_i of a θ tracker at a surface point (§4.1 in the perspective form of DESIGN.md): with
+// N the world normal, r the unit view ray and s the sideways direction in the scan plane,
+// G_i = S sin θ_i - T cos θ_i = N·(s sin θ_i + r cos θ_i), here divided by |N| so that it
+// is the sine of the angle from θ_i times the in-plane part of the unit normal. `grad` is
+// its (u,v) gradient (the normal's derivatives and, in perspective, the turning of r and
+// s along the surface); `along` = (S cos θ_i + T sin θ_i) / |N| is positive on θ_i's own
+// side (negative at θ_i + π, the other root of G_i), and t = T / |N|.
+struct TableResidual {
+  double g = 0.0, along = 0.0, t = 0.0;
+  Vec2d grad = Vec2d::Zero();
+};
+TableResidual TableFunction(const SurfaceDerivs& object, const Affine3& worldFromObject, const ThetaFrame& frame,
+                            const Vec2d& angle);
+
+// A θ tracker's G_i is solved to this: the sine of the angle from θ_i (radians near 0),
+// far below the 1e-3 px a vertex may move for a section of radius 1e4 px.
+constexpr double kThetaTol = 1e-10;
+// A Newton iteration of a θ tracker runs at most this long (a start one line away
+// converges in two or three).
+constexpr int kThetaMaxIterations = 12;
+// A link crawled sideways has reached its end tracker when the crawl makes the same
+// vertex (kind, index) within this many pixels of it: ten times the solves' tolerance.
+constexpr double kLinkMatchPx = 1e-5;
+// A link longer in (u,v) than twice its length on the line before plus this has jumped
+// (a tracker converged onto another stretch of the curve): a ring born at a maximum
+// widens as √(Δy), by at most √2 from its first line to its second.
+constexpr double kLinkStretchUv = 1e-3;
 
 template <class ShapeT>
 class ThetaWalker : public LevelWalker<ShapeT> {
@@ -102,6 +180,26 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // Every chain made is also shown to `sink` (none by default).
   void SetChainSink(ThetaChainSink* sink) { sink_ = sink; }
 
+  // Advances the chains `from` of the line before to this line as θ trackers, in the same
+  // order, into *to (the trackers of this line in `t`): false if a chain cannot be
+  // advanced (a tracker lost, an end or silhouette with no tracker, a link whose sideways
+  // repair does not meet its other end, a tracker of the line left over), and the line
+  // must be crawled afresh. `extrapolate`: start each Newton iteration from the last two
+  // lines' positions (§3.5), else from the last. `scratch` is scratch.
+  template <class Make>
+  bool Advance(const ChainSet& from, const RowTrackers& t, bool extrapolate, std::vector<char>* edgeUsed,
+               std::vector<char>* silUsed, std::vector<Vertex>* scratch, ChainSet* to, Make&& make);
+
+  // The θ tracker of table angle i on this line by damped Newton from `start`: false if
+  // it does not converge (or leaves the domain). Counts the iterations into *iterations.
+  bool SolveTable(int i, const Vec2d& start, WalkPoint* out, long* iterations) const;
+
+  // (cos θ_i, sin θ_i).
+  Vec2d Angle(int i) const {
+    if (static_cast<std::size_t>(i) < frame_.angles.size()) return frame_.angles[static_cast<std::size_t>(i)];
+    return Vec2d(std::cos(i * table_), std::sin(i * table_));
+  }
+
  private:
   template <class Make>
   Vertex MakeVertex(const WalkPoint& p, Make& make, ThetaVertex::Kind kind = ThetaVertex::Kind::End,
@@ -115,9 +213,29 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     return a;
   }
 
-  // Walks one chain from `start` with `sense`, appending its vertices to *chain.
+  // Walks one chain from `start` with `sense`, appending its vertices to *chain. With a
+  // `target`, crawls one link sideways instead: stops at the first vertex that is the
+  // target (true), or fails at any other end or silhouette (false).
   template <class Make>
-  void Crawl(const WalkPoint& start, double sense, bool closed, std::vector<Vertex>* chain, Make& make);
+  bool Crawl(const WalkPoint& start, double sense, bool closed, std::vector<Vertex>* chain, Make& make,
+             const Vertex* target = nullptr);
+  // Whether v lies on the step from a to b: along the chord between its ends, and
+  // within a quarter of its length off it.
+  static bool WithinStep(const WalkPoint& a, const WalkPoint& b, const WalkPoint& v) {
+    const Vec2d d = b.uv - a.uv;
+    const double len2 = d.squaredNorm();
+    if (!(len2 > 0.0)) return (v.uv - a.uv).norm() <= kSameCrossingUv;
+    const double t = (v.uv - a.uv).dot(d) / len2;
+    const double off = std::abs((v.uv - a.uv).x() * d.y() - (v.uv - a.uv).y() * d.x()) / std::sqrt(len2);
+    constexpr double kSlack = 1e-3;  // of the step: rounding at its ends
+    return t >= -kSlack && t <= 1.0 + kSlack && off <= 0.25 * std::sqrt(len2) + kSameCrossingUv;
+  }
+  // Whether crawl vertex v is the link's target.
+  static bool SameVertex(const Vertex& v, const Vertex& target) {
+    return v.kind == target.kind && v.index == target.index && std::abs(v.x - target.x) <= kLinkMatchPx;
+  }
+  // Whether the link a-b advanced from A-B needs a sideways repair (see the top).
+  bool Suspicious(const Vertex& A, const Vertex& B, const Vertex& a, const Vertex& b) const;
 
   ThetaStats* theta_;
   int steps_;
@@ -171,10 +289,27 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
 
 template <class ShapeT>
 template <class Make>
-void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool closed,
-                                std::vector<Vertex>* chain, Make& make) {
-  ++theta_->nChains;
+bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool closed,
+                                std::vector<Vertex>* chain, Make& make, const Vertex* target) {
+  if (!target) ++theta_->nChains;
   chain->push_back(MakeVertex(start, make, closed ? ThetaVertex::Kind::Silhouette : ThetaVertex::Kind::End));
+  // A link's crawl: done at its target, lost at any other anchor.
+  std::size_t checked = chain->size();
+  auto linkEnd = [&](bool* found) {
+    for (; checked < chain->size(); ++checked) {
+      const Vertex& v = (*chain)[checked];
+      if (SameVertex(v, *target)) {
+        chain->resize(checked + 1);
+        *found = true;
+        return true;
+      }
+      if (v.kind == ThetaVertex::Kind::End || v.kind == ThetaVertex::Kind::Silhouette) {
+        *found = false;
+        return true;
+      }
+    }
+    return false;
+  };
   WalkPoint p = start;
   double th = ThetaOf(chain->back().f);
   double lastTurn = 0.0;  // the sign θ last moved with (0: not yet)
@@ -190,10 +325,21 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
     for (double i = std::floor(lo / table_) + 1.0; i * table_ <= hi; i += 1.0) {
       const double angle = Wrap(i * table_);
       if (std::abs(std::sin(angle)) < 1e-12) continue;  // 0 or π: a silhouette
+      // A crawl that starts at a tracker (a link's repair) starts on its angle: that
+      // vertex is the start itself.
+      constexpr double kOnAngleRad = 1e-8;
+      if (std::abs(i * table_ - a) <= kOnAngleRad) continue;
       const double t = (i * table_ - a) / d;
-      const WalkPoint v = this->Correct(from.uv + t * (to.uv - from.uv));
       const long index = static_cast<long>(i) % steps_;
-      if (v.ok) chain->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, static_cast<int>(index < 0 ? index + steps_ : index)));
+      const int k = static_cast<int>(index < 0 ? index + steps_ : index);
+      // The vertex is the θ tracker itself (G_i = 0 on the line), by Newton from the
+      // interpolated point; if that lands outside the step (near a turn point θ_i may be
+      // crossed again close by), the interpolated point.
+      const Vec2d guess = from.uv + t * (to.uv - from.uv);
+      WalkPoint v;
+      if (!SolveTable(k, guess, &v, &theta_->nCrawlIterations) || !WithinStep(from, to, v))
+        v = this->Correct(guess);
+      if (v.ok) chain->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, k));
     }
   };
   // A turn point (§4.3: T = 0, the derivative of θ along the curve vanishes) between two
@@ -237,8 +383,13 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
             passTable(p, th, e, d);
           }
           chain->push_back(ve);
+          bool found = true;
+          if (target) {
+            linkEnd(&found);  // the exit is an anchor: the link ends here or before
+            if (found && chain->back().kind != ThetaVertex::Kind::End) return true;  // before the exit
+          }
           if (!this->UseEdgeTracker(e.uv)) this->Repaired(e.uv, &WalkStats::nUntrackedExits);
-          return;
+          return found;
         }
       }
       h *= 0.5;
@@ -265,7 +416,7 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       ++this->stats_->nSilhouettes;
       if (closed && (s.uv - start.uv).norm() <= kSameCrossingUv) {
         chain->push_back(chain->front());  // round: back at the start
-        return;
+        return true;
       }
       if (!this->UseSilhouetteTracker(s.uv)) {
         this->Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
@@ -288,12 +439,180 @@ void ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       chain->push_back({next.x, fn, ThetaVertex::Kind::Tilt, -1});
       ++theta_->nTilts;
     }
+    bool found = false;
+    if (target && linkEnd(&found)) return found;
     p = next;
     th = thn;
     tilt = tiltNext;
     h = std::min(2.0 * h, kWalkStepMax);
   }
   this->Failed(p.uv);
+  return false;
+}
+
+template <class ShapeT>
+bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2d& start, WalkPoint* out, long* iterations) const {
+  const Vec2d angle = Angle(i);
+  static const Affine3 kIdentity = Affine3::Identity();
+  const Affine3& world = frame_.worldFromObject ? *frame_.worldFromObject : kIdentity;
+  NewtonOptions opt;
+  opt.maxIterations = kThetaMaxIterations;
+  opt.domain = DomainRule::Fail;  // a tracker leaving [0,1]² has left the patch
+  const auto r = SolveNewton2(
+      [&](const Vec2d& uv, Vec2d* f, Mat2d* jac) {
+        *out = this->Eval(uv, DerivOrder::Second);
+        const TableResidual g = TableFunction(out->object, world, frame_, angle);
+        *f = Vec2d(out->y - this->ys_, g.g);
+        jac->row(0) = out->gradY.transpose();
+        jac->row(1) = g.grad.transpose();
+        // Blinn's damping (§4.1): a point where the normal's in-plane direction has
+        // flipped (the other root θ_i + π of G_i) or T has changed sign is no decrease,
+        // so the solver halves the step that reached it.
+        if (!out->ok || !(g.along > 0.0) || !(g.t * angle.y() > 0.0)) *f = Vec2d(NAN, NAN);
+      },
+      start, Vec2d(kEdgeTolPx, kThetaTol), opt);
+  *iterations += r.iterations;
+  if (r.status != NewtonStatus::Converged) return false;
+  if (out->uv != r.uv) *out = this->Eval(r.uv);
+  return out->ok;
+}
+
+template <class ShapeT>
+bool ThetaWalker<ShapeT>::Suspicious(const Vertex& A, const Vertex& B, const Vertex& a, const Vertex& b) const {
+  // θ or the tilt turning more than a table step: a tabulated angle or a tilt vertex between.
+  constexpr double kTurnSlackRad = 1e-9;
+  if (std::abs(Wrap(ThetaOf(b.f) - ThetaOf(a.f))) > table_ + kTurnSlackRad) return true;
+  if (std::abs(frame_.Tilt(b.f.position, b.f.normal) - frame_.Tilt(a.f.position, a.f.normal)) >= table_) return true;
+  // A silhouette between two vertices that are none.
+  const bool silA = a.kind == ThetaVertex::Kind::Silhouette, silB = b.kind == ThetaVertex::Kind::Silhouette;
+  if (!silA && !silB && (a.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(a.f.position - frame_.eye)) > 0.0) !=
+                            (b.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(b.f.position - frame_.eye)) > 0.0))
+    return true;
+  // x running the other way along the link, or the link stretched onto another stretch.
+  const double dxTop = B.x - A.x, dx = b.x - a.x;
+  if (std::abs(dxTop) > kColumnEpsPx && std::abs(dx) > kColumnEpsPx && (dxTop > 0) != (dx > 0)) return true;
+  return (b.f.uv - a.f.uv).norm() > 2.0 * (B.f.uv - A.f.uv).norm() + kLinkStretchUv;
+}
+
+template <class ShapeT>
+template <class Make>
+bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bool extrapolate,
+                                  std::vector<char>* edgeUsed, std::vector<char>* silUsed,
+                                  std::vector<Vertex>* scratch, ChainSet* to, Make&& make) {
+  this->trackers_ = &t;
+  this->edgeUsed_ = edgeUsed;
+  this->silUsed_ = silUsed;
+  edgeUsed->assign(t.edgePoints.size(), 0);
+  silUsed->assign(t.silhouettePoints.size(), 0);
+  to->Clear();
+  // The unused tracker of the line nearest to uv: an edge tracker on the same side of
+  // the domain, or a silhouette tracker.
+  auto nearest = [&](const std::vector<Vec2d>& points, std::vector<char>* used, const Vec2d& uv, int side) {
+    int best = -1;
+    double bestD = INFINITY;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if ((*used)[k] || (side >= 0 && DomainSide(points[k]) != side)) continue;
+      const double d = (points[k] - uv).squaredNorm();
+      if (d < bestD) bestD = d, best = static_cast<int>(k);
+    }
+    if (best >= 0) (*used)[static_cast<std::size_t>(best)] = 1;
+    return best;
+  };
+  for (const ChainSet::Chain& c : from.chains) {
+    const auto A = from.Of(c);
+    if (A.size() < 2) return false;
+    // A ring's last vertex repeats its first.
+    const std::size_t n = c.closed ? A.size() - 1 : A.size();
+    if (c.closed && (A.back().f.uv - A.front().f.uv).norm() > kSameCrossingUv) return false;
+    const auto begin = static_cast<std::uint32_t>(to->v.size());
+    double sense = 1.0;  // along the chain's order (a ring is crawled with sense 1)
+    WalkPoint last;      // the last vertex advanced, and its index in A
+    std::size_t lastK = 0;
+    bool skipped = false;  // turn or tilt vertices of A since lastK
+    // The link from `last` to b, repaired sideways if it looks suspicious; then b.
+    auto link = [&](std::size_t k, const Vertex& b, const WalkPoint& pb) {
+      if (to->v.size() > begin) {
+        const Vertex& a = to->v.back();
+        if (skipped || Suspicious(A[lastK], A[k % A.size()], a, b)) {
+          ++theta_->nLinkRepairs;
+          scratch->clear();
+          if (!Crawl(last, sense, false, scratch, make, &b)) return false;
+          for (std::size_t i = 1; i + 1 < scratch->size(); ++i) {
+            to->v.push_back((*scratch)[i]);
+            to->before.push_back(Vec2d(NAN, NAN));
+          }
+        }
+      }
+      to->v.push_back(b);
+      to->before.push_back(A[k % A.size()].f.uv);
+      last = pb;
+      lastK = k;
+      skipped = false;
+      return true;
+    };
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vertex& V = A[k];
+      WalkPoint p;
+      switch (V.kind) {
+        case ThetaVertex::Kind::Turn:
+        case ThetaVertex::Kind::Tilt:
+          skipped = true;
+          continue;
+        case ThetaVertex::Kind::End: {
+          const int e = nearest(t.edgePoints, edgeUsed, V.f.uv, DomainSide(V.f.uv));
+          if (e < 0) return false;
+          p = this->Eval(t.edgePoints[static_cast<std::size_t>(e)]);
+          if (!p.ok) return false;
+          if (k == 0) sense = Base::InwardSense(p, t.edgeOf[static_cast<std::size_t>(e)]);
+          if (sense == 0.0) return false;
+          break;
+        }
+        case ThetaVertex::Kind::Silhouette: {
+          const int e = nearest(t.silhouettePoints, silUsed, V.f.uv, -1);
+          if (e < 0) return false;
+          p = this->Eval(t.silhouettePoints[static_cast<std::size_t>(e)]);
+          if (!p.ok) return false;
+          p.jn = 0.0;  // on the silhouette whatever rounding says
+          break;
+        }
+        case ThetaVertex::Kind::Table: {
+          const Vec2d& prev = from.before[c.begin + k];
+          const Vec2d start = extrapolate && prev.allFinite() ? Vec2d(2.0 * V.f.uv - prev) : V.f.uv;
+          ++theta_->nTrackers;
+          // A tracker that leaves the patch or does not converge is dropped (§3.2: deleted
+          // when it leaves [0,1]²); the link across its place is repaired sideways.
+          if (!SolveTable(V.index, start, &p, &theta_->nTrackerIterations)) {
+            ++theta_->nTrackerFailures;
+            skipped = true;
+            continue;
+          }
+          break;
+        }
+      }
+      if (!link(k, MakeVertex(p, make, V.kind, V.index), p)) return false;
+    }
+    if (c.closed) {  // back round to the first vertex
+      if (n + 1 > A.size() || to->v.size() == begin) return false;
+      skipped = skipped || A[n - 1].kind == ThetaVertex::Kind::Turn || A[n - 1].kind == ThetaVertex::Kind::Tilt;
+      const Vertex first = to->v[begin];
+      WalkPoint p0 = this->Eval(first.f.uv);
+      p0.jn = 0.0;
+      if (!link(n, first, p0)) return false;
+    }
+    to->chains.push_back({begin, static_cast<std::uint32_t>(to->v.size()), c.closed});
+    theta_->nVertices += static_cast<long>(to->v.size() - begin);
+    if (sink_) sink_->Chain(this->ys_, steps_, to->Of(to->chains.back()));
+  }
+  // Every tracker of the line must be on a chain: one left over starts a chain the line
+  // before did not have.
+  for (char used : *edgeUsed)
+    if (!used) return false;
+  for (std::size_t k = 0; k < t.silhouettePoints.size(); ++k)
+    if (!(*silUsed)[k]) {
+      const WalkPoint p = this->Eval(t.silhouettePoints[k]);
+      if (p.ok && std::abs(p.y - this->ys_) <= 1e3 * kEdgeTolPx) return false;  // a crossing (as WalkAll)
+    }
+  return true;
 }
 
 // The fragments of a chain on its own scan line: one per sample column along its chords,

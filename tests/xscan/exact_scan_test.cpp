@@ -264,7 +264,7 @@ constexpr double kTiltBetweenVerticesTolSteps = 2.0;
 class ChainChecker final : public ThetaChainSink {
  public:
   explicit ChainChecker(const Camera& c)
-      : frame_{EyePoint(c), ViewRight(c), ViewForward(c), c.orthographic} {}
+      : frame_{EyePoint(c), ViewRight(c), ViewForward(c), c.orthographic, nullptr, {}} {}
 
   void Chain(double ys, int steps, std::span<const ThetaVertex> chain) override {
     ++nChains;

@@ -140,7 +140,8 @@ TEST(ThetaSlab, ChainsPairOnlyWhenTheyAgree) {
 
 // Counts, per sample of a lattice, the layers of surface a scan hands over: its fragments
 // and the slab triangles covering the sample (found here by plain point-in-triangle tests
-// in screen space, independently of the back end).
+// in screen space with a tie rule for samples on shared edges, independently of the back
+// end).
 class LayerCounter final : public raster::FragmentRow {
  public:
   LayerCounter(int nx, int ny) : nx_(nx), count_(static_cast<std::size_t>(nx) * ny, 0) {}
@@ -173,9 +174,17 @@ class LayerCounter final : public raster::FragmentRow {
       if (area == 0.0) continue;
       for (int i = 0; i < cols_.n; ++i) {
         const Vec2 q(cols_.At(i), y_);
-        const double e0 = Cross(t.p[1] - q, t.p[2] - q) / area, e1 = Cross(t.p[2] - q, t.p[0] - q) / area,
-                     e2 = Cross(t.p[0] - q, t.p[1] - q) / area;
-        if (e0 >= 0 && e1 >= 0 && e2 >= 0) ++count_[static_cast<std::size_t>(j_) * nx_ + i];
+        bool inside = true;
+        for (int k = 0; k < 3 && inside; ++k) {
+          const Vec2 &a = t.p[(k + 1) % 3], &b = t.p[(k + 2) % 3];
+          const double e = Cross(a - q, b - q) / area;
+          // A sample exactly on an edge shared by two triangles belongs to one of them:
+          // the one the edge's inward normal (a.y - b.y, b.x - a.x) / area points right
+          // (or, on a horizontal edge, down) into.
+          const double nx = (a.y() - b.y()) / area, ny = (b.x() - a.x()) / area;
+          inside = e > 0 || (e == 0 && (nx > 0 || (nx == 0 && ny > 0)));
+        }
+        if (inside) ++count_[static_cast<std::size_t>(j_) * nx_ + i];
       }
     }
   }

@@ -1,0 +1,54 @@
+#include "xscan/theta_walk.h"
+
+namespace patchscan {
+
+TableResidual TableFunction(const SurfaceDerivs& o, const Affine3& worldFromObject, const ThetaFrame& frame,
+                            const Vec2d& angle) {
+  const auto L = worldFromObject.linear();
+  const Vec3 p = worldFromObject * o.p;
+  const Vec3 pu = L * o.dpdu, pv = L * o.dpdv;
+  const Vec3 puu = L * o.d2pdu2, puv = L * o.d2pduv, pvv = L * o.d2pdv2;
+  // (L a) × (L b) = det L · L^-T (a × b): the world normal up to the sign of det L, which
+  // FragmentAt's L^-T (a × b) keeps.
+  const double sign = L.determinant() < 0.0 ? -1.0 : 1.0;
+  const Vec3 n = sign * pu.cross(pv);
+  const Vec3 nu = sign * (puu.cross(pv) + pu.cross(puv));
+  const Vec3 nv = sign * (puv.cross(pv) + pu.cross(pvv));
+  // The view ray r and its derivatives along the surface (zero in orthographic).
+  Vec3 r, ru = Vec3::Zero(), rv = Vec3::Zero();
+  if (frame.orthographic) {
+    r = frame.forward;
+  } else {
+    const Vec3 e = p - frame.eye;
+    const double rho = e.norm();
+    r = e / rho;
+    ru = (pu - r * r.dot(pu)) / rho;
+    rv = (pv - r * r.dot(pv)) / rho;
+  }
+  // The scan plane's unit normal q = right × r / |right × r|, and s = r × q.
+  const Vec3 m = frame.right.cross(r);
+  const double mu = m.norm();
+  const Vec3 q = m / mu;
+  auto dq = [&](const Vec3& dr) {
+    const Vec3 dm = frame.right.cross(dr);
+    return Vec3((dm - q * q.dot(dm)) / mu);
+  };
+  const Vec3 qu = dq(ru), qv = dq(rv);
+  const Vec3 s = r.cross(q);
+  const Vec3 su = ru.cross(q) + r.cross(qu), sv = rv.cross(q) + r.cross(qv);
+  const double c = angle.x(), sn = angle.y();
+  const Vec3 d = sn * s + c * r;
+  const Vec3 du = sn * su + c * ru, dv = sn * sv + c * rv;
+  const double len = n.norm();
+  const double G = n.dot(d);
+  const double Gu = nu.dot(d) + n.dot(du), Gv = nv.dot(d) + n.dot(dv);
+  // d(G/|N|) = dG/|N| - G (N·dN)/|N|³.
+  TableResidual out;
+  out.g = G / len;
+  out.grad = Vec2d(Gu / len - G * n.dot(nu) / (len * len * len), Gv / len - G * n.dot(nv) / (len * len * len));
+  out.along = n.dot(c * s - sn * r) / len;
+  out.t = -n.dot(r) / len;
+  return out;
+}
+
+}  // namespace patchscan
