@@ -420,7 +420,10 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
           << xs.theta.nSteps << ", turn points " << xs.theta.nTurnPoints << ", tilt vertices " << xs.theta.nTilts
           << "\ntheta trackers: " << xs.theta.nTrackers << " advanced from the line before, Newton iterations per tracker "
           << (xs.theta.nTrackers ? static_cast<double>(xs.theta.nTrackerIterations) / static_cast<double>(xs.theta.nTrackers) : 0.0)
-          << ", " << xs.theta.nTrackerFailures << " lost; " << xs.theta.nLinkRepairs << " links repaired sideways, "
+          << ", " << xs.theta.nTrackerFailures << " lost; " << xs.theta.nTurnTrackers << " turn points advanced, "
+          << "Newton iterations per turn point "
+          << (xs.theta.nTurnTrackers ? static_cast<double>(xs.theta.nTurnIterations) / static_cast<double>(xs.theta.nTurnTrackers) : 0.0)
+          << ", " << xs.theta.nTurnFailures << " lost; " << xs.theta.nLinkRepairs << " links repaired sideways, "
           << xs.theta.nLineRepairs << " lines crawled afresh\nslabs: " << xs.nSlabIntervals
           << " intervals as slabs (" << xs.nSlabTriangles << " triangles, " << stats->nTrianglesSetUp
           << " set up), " << xs.nRowIntervals << " row by row\n";
@@ -467,7 +470,9 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
        << ", \"theta_steps\": " << xs.theta.nSteps << ", \"theta_turn_points\": " << xs.theta.nTurnPoints
        << ", \"theta_tilts\": " << xs.theta.nTilts << ", \"theta_trackers\": " << xs.theta.nTrackers
        << ", \"theta_tracker_iterations\": " << xs.theta.nTrackerIterations
-       << ", \"theta_trackers_lost\": " << xs.theta.nTrackerFailures << ", \"theta_link_repairs\": " << xs.theta.nLinkRepairs
+       << ", \"theta_trackers_lost\": " << xs.theta.nTrackerFailures << ", \"theta_turn_trackers\": " << xs.theta.nTurnTrackers
+       << ", \"theta_turn_iterations\": " << xs.theta.nTurnIterations << ", \"theta_turns_lost\": " << xs.theta.nTurnFailures
+       << ", \"theta_link_repairs\": " << xs.theta.nLinkRepairs
        << ", \"theta_line_repairs\": " << xs.theta.nLineRepairs
        << ", \"slab_intervals\": " << xs.nSlabIntervals << ", \"row_intervals\": " << xs.nRowIntervals
        << ", \"slab_triangles\": " << xs.nSlabTriangles << "}, \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec

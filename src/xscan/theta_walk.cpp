@@ -51,4 +51,17 @@ TableResidual TableFunction(const SurfaceDerivs& o, const Affine3& worldFromObje
   return out;
 }
 
+double TurnFunction(const SurfaceDerivs& object, const Vec2d& gradY, const Affine3& worldFromObject,
+                    const ThetaFrame& frame) {
+  // At the point's own angle θ, G_θ = 0 and G_φ/|N| = ρ sin(φ - θ) with ρ the in-plane part
+  // of the unit normal, so G_θ's gradient at fixed φ = θ is -ρ ∇θ.
+  const auto L = worldFromObject.linear();
+  const Vec3 n = (L.determinant() < 0.0 ? -1.0 : 1.0) * (L * object.dpdu).cross(L * object.dpdv);
+  const double theta = frame.Theta(worldFromObject * object.p, n);
+  const TableResidual g = TableFunction(object, worldFromObject, frame, Vec2d(std::cos(theta), std::sin(theta)));
+  const double len = gradY.norm();
+  if (!(g.along > 0.0) || !(len > 0.0)) return NAN;  // the normal is across the scan plane
+  return -g.grad.dot(Vec2d(-gradY.y(), gradY.x())) / (len * g.along);
+}
+
 }  // namespace patchscan

@@ -19,12 +19,17 @@
 // vertex follows its own G_i = 0 by bivariate Newton on (y - ys, G_i) from a start
 // extrapolated from its last two lines, damped where a step would flip the normal's
 // in-plane direction or the sign of T; ends and silhouette vertices are the edge and
-// silhouette trackers of the Y scan. The chain keeps its order (the links of §4.2). Where
-// a link looks suspicious — turn or tilt vertices between its ends on the line before, θ
-// or the tilt turning more than a table step across it, J changing sign, x running the
-// other way, the link stretching — it is repaired sideways: crawled from its first vertex,
-// creating a tracker at each tabulated angle passed, until the existing tracker at its
-// other end is met (§4.2).
+// silhouette trackers of the Y scan; a turn vertex follows the zeros of §4.3's turn
+// function (θ's derivative along the level curve) by Newton on (y - ys, T). The chain
+// keeps its order (the links of §4.2). Where a link looks suspicious — tilt vertices or a
+// lost tracker between its ends on the line before, θ or the tilt turning more than a
+// table step across it, θ's sense of rotation not reversing at a turn or reversing
+// elsewhere, θ's rate at an end against the link (a turn pair born across a vertex), J
+// changing sign, x running the other way, the link stretching — it is repaired sideways:
+// crawled from its first vertex, creating a tracker at each tabulated angle passed, until
+// the existing tracker at its other end is met (§4.2). A turn pair born inside a link and
+// not yet reaching a vertex is not seen (nor by Blinn): θ wiggles there by less than the
+// angles to the link's ends.
 //
 // Chord error: a section of radius of curvature R (pixels) sampled every Δθ = 2π/N is
 // approximated by chords whose largest distance from the arc is R (1 - cos(π/N)) ≈
@@ -51,6 +56,7 @@ struct ThetaStats {
   // θ trackers advanced from the line before, and their Newton iterations (§3.5)
   long nTrackers = 0, nTrackerIterations = 0, nTrackerFailures = 0;
   long nCrawlIterations = 0;  // Newton iterations placing the crawl's Table vertices
+  long nTurnTrackers = 0, nTurnIterations = 0, nTurnFailures = 0;  // turn points advanced (§4.3)
   long nLinkRepairs = 0;  // links crawled sideways between two advanced vertices (§4.2)
   long nLineRepairs = 0;  // lines crawled afresh: a chain could not be advanced
 };
@@ -143,12 +149,30 @@ struct TableResidual {
 TableResidual TableFunction(const SurfaceDerivs& object, const Affine3& worldFromObject, const ThetaFrame& frame,
                             const Vec2d& angle);
 
+// §4.3's turn function: θ's derivative along the level curve y = const at a surface
+// point, per unit (u,v) length along the curve's tangent (-y_v, y_u)/|∇y| (radians per
+// unit of (u,v)); zero at a turn point. NaN where the normal is perpendicular to the scan
+// plane (θ undefined). `gradY` is screen y's (u,v) gradient there.
+double TurnFunction(const SurfaceDerivs& object, const Vec2d& gradY, const Affine3& worldFromObject,
+                    const ThetaFrame& frame);
+
+// A turn tracker's turn function is solved to this (radians per unit of (u,v)): where θ
+// turns at a rate of 1 per unit² of (u,v) (a gentle crinkle), the point is within 1e-7 of
+// (u,v) of the turn.
+constexpr double kTurnTol = 1e-7;
+// The turn function's (u,v) gradient is taken by central differences this wide (it would
+// need the surface's third derivatives): truncation ~h² and rounding ~1e-16/h, both far
+// below kTurnTol for a turn function of order 1.
+constexpr double kTurnDiffUv = 1e-5;
+
 // A θ tracker's G_i is solved to this: the sine of the angle from θ_i (radians near 0),
 // far below the 1e-3 px a vertex may move for a section of radius 1e4 px.
 constexpr double kThetaTol = 1e-10;
 // A Newton iteration of a θ tracker runs at most this long (a start one line away
 // converges in two or three).
 constexpr int kThetaMaxIterations = 12;
+// Below this θ did not move (a step, or a link between two vertices).
+constexpr double kTurnRad = 1e-9;
 // A link crawled sideways has reached its end tracker when the crawl makes the same
 // vertex (kind, index) within this many pixels of it: ten times the solves' tolerance.
 constexpr double kLinkMatchPx = 1e-5;
@@ -194,6 +218,11 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // it does not converge (or leaves the domain). Counts the iterations into *iterations.
   bool SolveTable(int i, const Vec2d& start, WalkPoint* out, long* iterations) const;
 
+  // The turn tracker of this line (§4.3: y = ys and the turn function zero) by Newton from
+  // `start`: false if it does not converge (a turn pair has met and gone) or leaves the
+  // domain. Counts the iterations into *iterations.
+  bool SolveTurn(const Vec2d& start, WalkPoint* out, long* iterations) const;
+
   // (cos θ_i, sin θ_i).
   Vec2d Angle(int i) const {
     if (static_cast<std::size_t>(i) < frame_.angles.size()) return frame_.angles[static_cast<std::size_t>(i)];
@@ -207,6 +236,10 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     return {p.x, make(p), kind, index};
   }
   double ThetaOf(const raster::Fragment& f) const { return frame_.Theta(f.position, f.normal); }
+  const Affine3& World() const {
+    static const Affine3 kIdentity = Affine3::Identity();
+    return frame_.worldFromObject ? *frame_.worldFromObject : kIdentity;
+  }
   static double Wrap(double a) {  // into (-π, π]
     while (a > std::numbers::pi) a -= 2.0 * std::numbers::pi;
     while (a <= -std::numbers::pi) a += 2.0 * std::numbers::pi;
@@ -217,8 +250,10 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // `target`, crawls one link sideways instead: stops at the first vertex that is the
   // target (true), or fails at any other end or silhouette (false).
   template <class Make>
+  // `turning`: the sense θ was turning in on arrival at `start` (0: unknown), so that a
+  // turn point within the first step is seen.
   bool Crawl(const WalkPoint& start, double sense, bool closed, std::vector<Vertex>* chain, Make& make,
-             const Vertex* target = nullptr);
+             const Vertex* target = nullptr, double turning = 0.0);
   // Whether v lies on the step from a to b: along the chord between its ends, and
   // within a quarter of its length off it.
   static bool WithinStep(const WalkPoint& a, const WalkPoint& b, const WalkPoint& v) {
@@ -230,6 +265,9 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     constexpr double kSlack = 1e-3;  // of the step: rounding at its ends
     return t >= -kSlack && t <= 1.0 + kSlack && off <= 0.25 * std::sqrt(len2) + kSameCrossingUv;
   }
+  // Whether x lies strictly between a and b (the vertices of a chain between anchors
+  // run one way in x).
+  static bool Between(double x, double a, double b) { return (x - a) * (b - x) > 0.0; }
   // Whether crawl vertex v is the link's target.
   static bool SameVertex(const Vertex& v, const Vertex& target) {
     return v.kind == target.kind && v.index == target.index && std::abs(v.x - target.x) <= kLinkMatchPx;
@@ -290,7 +328,8 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
 template <class ShapeT>
 template <class Make>
 bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool closed,
-                                std::vector<Vertex>* chain, Make& make, const Vertex* target) {
+                                std::vector<Vertex>* chain, Make& make, const Vertex* target,
+                                double turning) {
   if (!target) ++theta_->nChains;
   chain->push_back(MakeVertex(start, make, closed ? ThetaVertex::Kind::Silhouette : ThetaVertex::Kind::End));
   // A link's crawl: done at its target, lost at any other anchor.
@@ -312,7 +351,6 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
   };
   WalkPoint p = start;
   double th = ThetaOf(chain->back().f);
-  double lastTurn = 0.0;  // the sign θ last moved with (0: not yet)
   double tilt = frame_.Tilt(chain->back().f.position, chain->back().f.normal);  // at p
   std::size_t tiltCount = chain->size();  // chain size when tiltAtVertex was taken
   double tiltAtVertex = tilt;             // the tilt of the chain's last vertex
@@ -337,23 +375,64 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       // crossed again close by), the interpolated point.
       const Vec2d guess = from.uv + t * (to.uv - from.uv);
       WalkPoint v;
-      if (!SolveTable(k, guess, &v, &theta_->nCrawlIterations) || !WithinStep(from, to, v))
+      // It must also lie on from's side of `to` after the chain's last vertex (x runs one
+      // way between anchors; a turn just placed beyond `from` may have passed it).
+      auto inOrder = [&](const WalkPoint& w) { return w.ok && (w.x == chain->back().x || Between(w.x, chain->back().x, to.x)); };
+      if (!SolveTable(k, guess, &v, &theta_->nCrawlIterations) || !WithinStep(from, to, v) || !inOrder(v))
         v = this->Correct(guess);
-      if (v.ok) chain->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, k));
+      if (inOrder(v)) chain->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, k));
     }
   };
   // A turn point (§4.3: T = 0, the derivative of θ along the curve vanishes) between two
   // steps: the crawl point there is a vertex, within one step of it, so the chain follows
   // the crinkle even when no tabulated angle is passed. Every step that passes table
   // angles notes its change of θ, d, here first.
-  auto noteTurn = [&](const WalkPoint& at, double d) {
-    constexpr double kTurnRad = 1e-9;  // below this θ did not move
+  // θ's rate along the curve at a crawl point (its sign; NaN where undefined).
+  auto rate = [&](const WalkPoint& at) {
+    const WalkPoint q = this->Eval(at.uv, DerivOrder::Second);
+    return q.ok ? TurnFunction(q.object, q.gradY, World(), frame_) : NAN;
+  };
+  // The sense θ last moved in (0: not known), at the start θ's rate along the walk, so that
+  // a turn within the first step is seen.
+  double lastTurn = turning;
+  if (lastTurn == 0.0) {
+    const double r = sense * rate(start);
+    if (std::isfinite(r)) lastTurn = r;
+  }
+  // The vertex is the turn tracker itself (the turn function zero on the line), by Newton
+  // from the crawl point; if that lands off the two steps around it, the crawl point.
+  WalkPoint before = start;  // the crawl point before p
+  auto noteTurn = [&](const WalkPoint& at, const WalkPoint& to, double d) {
     if (std::abs(d) <= kTurnRad) return;
     if (lastTurn != 0.0 && (d > 0) != (lastTurn > 0) && std::abs(at.jn) > 1e-9) {
-      chain->push_back(MakeVertex(at, make, ThetaVertex::Kind::Turn));
+      // A tilt vertex made at `at` gives way to the turn.
+      const bool tiltAt = chain->size() > 1 && chain->back().kind == ThetaVertex::Kind::Tilt && chain->back().f.uv == at.uv;
+      if (tiltAt) {
+        chain->pop_back();
+        --theta_->nTilts;
+        checked = std::min(checked, chain->size());
+      }
+      // x runs one way between anchors: the turn tracker must lie between the chain's last
+      // vertex and the next crawl point (else it is another turn, and the crawl point is
+      // taken).
+      WalkPoint v;
+      if (!SolveTurn(at.uv, &v, &theta_->nCrawlIterations) || !WithinStep(before, to, v) || std::abs(v.jn) <= 1e-9 ||
+          !Between(v.x, chain->back().x, to.x))
+        v = at;
+      chain->push_back(MakeVertex(v, make, ThetaVertex::Kind::Turn));
       ++theta_->nTurnPoints;
     }
     lastTurn = d;
+  };
+  // A link ending at a turn tracker ends on the step that passes it: θ may turn back
+  // within a step and the crawl not see it (a turn point one step from the boundary).
+  WalkPoint turnTarget;
+  if (target && target->kind == ThetaVertex::Kind::Turn) turnTarget = this->Eval(target->f.uv);
+  auto endsAtTurn = [&](const WalkPoint& to) {
+    if (!turnTarget.ok || !WithinStep(p, to, turnTarget)) return false;
+    passTable(p, th, turnTarget, Wrap(ThetaOf(target->f) - th));
+    chain->push_back(*target);
+    return true;
   };
   for (long k = 0; k < this->MaxSteps(); ++k) {
     if (h < kWalkStepMin) break;
@@ -374,13 +453,28 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
         const double d = Wrap(ThetaOf(ve.f) - th);
         const double dTilt = frame_.Tilt(ve.f.position, ve.f.normal) - tilt;
         if ((std::abs(d) <= table_ && std::abs(dTilt) <= table_) || h <= 4.0 * kWalkStepMin) {
+          if (endsAtTurn(e)) return true;
           WalkPoint s;
           if (std::abs(p.jn) > 1e-9 && (p.j > 0) != (e.j > 0) && this->LocateSilhouette(p, e, &s)) {
             if (!this->UseSilhouetteTracker(s.uv)) this->Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
             chain->push_back(MakeVertex(s, make, ThetaVertex::Kind::Silhouette));
           } else {
-            noteTurn(p, d);
-            passTable(p, th, e, d);
+            noteTurn(p, e, d);
+            // A turn within the last step, before the boundary (θ's rate along the curve
+            // changes sign between p and e): the steps are not continued to see it.
+            WalkPoint v;
+            const double rp = rate(p), re = rate(e);
+            if (rp * re < 0.0 && SolveTurn(0.5 * (p.uv + e.uv), &v, &theta_->nCrawlIterations) &&
+                WithinStep(p, e, v) && std::abs(v.jn) > 1e-9 && Between(v.x, chain->back().x, e.x)) {
+              const Vertex vt = MakeVertex(v, make, ThetaVertex::Kind::Turn);
+              const double tv = ThetaOf(vt.f);
+              passTable(p, th, v, Wrap(tv - th));
+              chain->push_back(vt);
+              ++theta_->nTurnPoints;
+              passTable(v, tv, e, Wrap(ThetaOf(ve.f) - tv));
+            } else {
+              passTable(p, th, e, d);
+            }
           }
           chain->push_back(ve);
           bool found = true;
@@ -409,6 +503,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       h *= 0.5;
       continue;
     }
+    if (endsAtTurn(next)) return true;
     const bool onSil = std::abs(p.jn) <= 1e-9;
     WalkPoint s;
     if (!onSil && (p.j > 0) != (next.j > 0) && std::abs(next.jn) > 1e-9 && this->LocateSilhouette(p, next, &s)) {
@@ -424,7 +519,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       }
       chain->push_back(MakeVertex(s, make, ThetaVertex::Kind::Silhouette));
     } else {
-      noteTurn(p, d);
+      noteTurn(p, next, d);
       passTable(p, th, next, d);
     }
     // The chord interpolates normals between its vertices: where θ stays within a table
@@ -441,6 +536,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
     }
     bool found = false;
     if (target && linkEnd(&found)) return found;
+    before = p;
     p = next;
     th = thn;
     tilt = tiltNext;
@@ -453,8 +549,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
 template <class ShapeT>
 bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2d& start, WalkPoint* out, long* iterations) const {
   const Vec2d angle = Angle(i);
-  static const Affine3 kIdentity = Affine3::Identity();
-  const Affine3& world = frame_.worldFromObject ? *frame_.worldFromObject : kIdentity;
+  const Affine3& world = World();
   NewtonOptions opt;
   opt.maxIterations = kThetaMaxIterations;
   opt.domain = DomainRule::Fail;  // a tracker leaving [0,1]² has left the patch
@@ -471,6 +566,36 @@ bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2d& start, WalkPoint* out, 
         if (!out->ok || !(g.along > 0.0) || !(g.t * angle.y() > 0.0)) *f = Vec2d(NAN, NAN);
       },
       start, Vec2d(kEdgeTolPx, kThetaTol), opt);
+  *iterations += r.iterations;
+  if (r.status != NewtonStatus::Converged) return false;
+  if (out->uv != r.uv) *out = this->Eval(r.uv, DerivOrder::Second);
+  return out->ok;
+}
+
+template <class ShapeT>
+bool ThetaWalker<ShapeT>::SolveTurn(const Vec2d& start, WalkPoint* out, long* iterations) const {
+  const Affine3& world = World();
+  auto turn = [&](const Vec2d& uv) {
+    const WalkPoint p = this->Eval(uv, DerivOrder::Second);
+    return p.ok ? TurnFunction(p.object, p.gradY, world, frame_) : NAN;
+  };
+  NewtonOptions opt;
+  opt.maxIterations = kThetaMaxIterations;
+  opt.domain = DomainRule::Fail;
+  const auto r = SolveNewton2(
+      [&](const Vec2d& uv, Vec2d* f, Mat2d* jac) {
+        *out = this->Eval(uv, DerivOrder::Second);
+        const double tau = out->ok ? TurnFunction(out->object, out->gradY, world, frame_) : NAN;
+        *f = Vec2d(out->y - this->ys_, tau);
+        jac->row(0) = out->gradY.transpose();
+        // Central differences about a centre kept inside the domain.
+        const Vec2d c = uv.cwiseMax(kTurnDiffUv).cwiseMin(1.0 - kTurnDiffUv);
+        const Vec2d du(kTurnDiffUv, 0.0), dv(0.0, kTurnDiffUv);
+        (*jac)(1, 0) = (turn(c + du) - turn(c - du)) / (2.0 * kTurnDiffUv);
+        (*jac)(1, 1) = (turn(c + dv) - turn(c - dv)) / (2.0 * kTurnDiffUv);
+        if (!out->ok) *f = Vec2d(NAN, NAN);
+      },
+      start, Vec2d(kEdgeTolPx, kTurnTol), opt);
   *iterations += r.iterations;
   if (r.status != NewtonStatus::Converged) return false;
   if (out->uv != r.uv) *out = this->Eval(r.uv);
@@ -533,15 +658,39 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
     double sense = 1.0;  // along the chain's order (a ring is crawled with sense 1)
     WalkPoint last;      // the last vertex advanced, and its index in A
     std::size_t lastK = 0;
-    bool skipped = false;  // turn or tilt vertices of A since lastK
+    bool skipped = false;  // tilt vertices or lost trackers of A since lastK
+    double lastD = 0.0;    // θ's change along the chain's last link (0: none yet)
+    // θ keeps its sense of rotation through a Table or Tilt vertex and reverses it at a
+    // Turn (§4.3): the link from a to b breaks that rule.
+    auto turnsWrong = [&](const Vertex& a, const Vertex& b) {
+      const double d = Wrap(ThetaOf(b.f) - ThetaOf(a.f));
+      if (std::abs(d) <= kTurnRad || lastD == 0.0) return false;
+      const bool flips = (d > 0.0) != (lastD > 0.0);
+      if (a.kind == ThetaVertex::Kind::Turn) return !flips;
+      return (a.kind == ThetaVertex::Kind::Table || a.kind == ThetaVertex::Kind::Tilt) && flips;
+    };
+    // θ's rate along the chain at a vertex other than a turn must have the sense of the
+    // links on both sides: against it, a turn has been born between (a pair across a
+    // Table vertex, or one come in across the boundary beside an end).
+    double lastRate = NAN;  // at `last` (NaN: a turn)
+    auto againstRate = [&](const Vertex& a, const Vertex& b, double rateB) {
+      const double d = Wrap(ThetaOf(b.f) - ThetaOf(a.f));
+      return std::abs(d) > kTurnRad && (lastRate * d < 0.0 || rateB * d < 0.0);
+    };
     // The link from `last` to b, repaired sideways if it looks suspicious; then b.
-    auto link = [&](std::size_t k, const Vertex& b, const WalkPoint& pb) {
+    auto link = [&](std::size_t k, const Vertex& b, const WalkPoint& pb, double rateB) {
       if (to->v.size() > begin) {
         const Vertex& a = to->v.back();
-        if (skipped || Suspicious(A[lastK], A[k % A.size()], a, b)) {
+        // x runs one way through a vertex that is not an anchor.
+        const bool xBack = to->v.size() >= begin + 2 && a.kind != ThetaVertex::Kind::End &&
+                           a.kind != ThetaVertex::Kind::Silhouette &&
+                           (a.x - to->v[to->v.size() - 2].x) * (b.x - a.x) < 0.0;
+        if (skipped || xBack || turnsWrong(a, b) || againstRate(a, b, rateB) ||
+            Suspicious(A[lastK], A[k % A.size()], a, b)) {
           ++theta_->nLinkRepairs;
           scratch->clear();
-          if (!Crawl(last, sense, false, scratch, make, &b)) return false;
+          if (!Crawl(last, sense, false, scratch, make, &b,
+                     a.kind == ThetaVertex::Kind::Turn ? -lastD : lastD)) return false;
           for (std::size_t i = 1; i + 1 < scratch->size(); ++i) {
             to->v.push_back((*scratch)[i]);
             to->before.push_back(Vec2d(NAN, NAN));
@@ -550,7 +699,12 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
       }
       to->v.push_back(b);
       to->before.push_back(A[k % A.size()].f.uv);
+      if (to->v.size() >= begin + 2) {
+        const double d = Wrap(ThetaOf(b.f) - ThetaOf(to->v[to->v.size() - 2].f));
+        if (std::abs(d) > kTurnRad) lastD = d;
+      }
       last = pb;
+      lastRate = rateB;
       lastK = k;
       skipped = false;
       return true;
@@ -559,10 +713,22 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
       const Vertex& V = A[k];
       WalkPoint p;
       switch (V.kind) {
-        case ThetaVertex::Kind::Turn:
         case ThetaVertex::Kind::Tilt:
           skipped = true;
           continue;
+        case ThetaVertex::Kind::Turn: {
+          const Vec2d& prev = from.before[c.begin + k];
+          const Vec2d start = extrapolate && prev.allFinite() ? Vec2d(2.0 * V.f.uv - prev) : V.f.uv;
+          ++theta_->nTurnTrackers;
+          // A turn tracker with no root near (its pair has met it and both are gone) is
+          // dropped, and the link across its place repaired sideways.
+          if (!SolveTurn(start, &p, &theta_->nTurnIterations)) {
+            ++theta_->nTurnFailures;
+            skipped = true;
+            continue;
+          }
+          break;
+        }
         case ThetaVertex::Kind::End: {
           const int e = nearest(t.edgePoints, edgeUsed, V.f.uv, DomainSide(V.f.uv));
           if (e < 0) return false;
@@ -594,15 +760,22 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
           break;
         }
       }
-      if (!link(k, MakeVertex(p, make, V.kind, V.index), p)) return false;
+      // θ's rate along the chain (the sense it is walked in), but at a turn.
+      double rate = NAN;
+      if (V.kind == ThetaVertex::Kind::Table) {
+        rate = sense * TurnFunction(p.object, p.gradY, World(), frame_);
+      } else if (V.kind != ThetaVertex::Kind::Turn) {
+        const WalkPoint q = this->Eval(p.uv, DerivOrder::Second);
+        rate = sense * TurnFunction(q.object, q.gradY, World(), frame_);
+      }
+      if (!link(k, MakeVertex(p, make, V.kind, V.index), p, rate)) return false;
     }
     if (c.closed) {  // back round to the first vertex
       if (n + 1 > A.size() || to->v.size() == begin) return false;
-      skipped = skipped || A[n - 1].kind == ThetaVertex::Kind::Turn || A[n - 1].kind == ThetaVertex::Kind::Tilt;
       const Vertex first = to->v[begin];
       WalkPoint p0 = this->Eval(first.f.uv);
       p0.jn = 0.0;
-      if (!link(n, first, p0)) return false;
+      if (!link(n, first, p0, NAN)) return false;
     }
     to->chains.push_back({begin, static_cast<std::uint32_t>(to->v.size()), c.closed});
     theta_->nVertices += static_cast<long>(to->v.size() - begin);

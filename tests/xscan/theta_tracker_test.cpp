@@ -1,8 +1,9 @@
-// θ trackers (paper 001 §4.1): G_i's analytic gradient against finite differences; a
+// θ trackers (paper 001 §4.1, §4.3): G_i's analytic gradient against finite differences; a
 // tracker solved by damped Newton sits on its scan line at its tabulated angle and never
-// on the other root θ_i + π; and chains advanced from line to line as trackers (with
-// their links repaired sideways where suspicious) have the same vertices, at the same
-// places, as chains crawled afresh on the same lines.
+// on the other root θ_i + π; the turn function is θ's derivative along the level curve,
+// and a turn tracker solved by Newton sits where θ turns back; and chains advanced from
+// line to line as trackers (with their links repaired sideways where suspicious) have the
+// same vertices, at the same places, as chains crawled afresh on the same lines.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -64,41 +65,93 @@ double TableG(const Surface& s, const ThetaFrame& frame, double u, double v, con
   return TableFunction(d, s.worldFromObject, frame, angle).g;
 }
 
-TEST(ThetaTracker, GradientOfGMatchesFiniteDifferences) {
-  // Central differences with step 1e-5 in (u,v): truncation error about h^2 |g'''| / 6 and
-  // rounding about 1e-16 / h, both below 1e-8 for these surfaces' derivatives; relative to
-  // the gradient's own size (at least 1e-2 at the points compared) that is 1e-6.
-  constexpr double kStep = 1e-5, kRelTol = 1e-5;
-  std::mt19937 rng(7);
+// Calls compare(case, frame, uv, k) at 200 random points of (0.05, 0.95)² on each case: it
+// returns whether it compared there (not at a collapsed edge, say); each case must compare
+// at more than 50.
+template <class Compare>
+void AtRandomPoints(unsigned seed, Compare&& compare) {
+  std::mt19937 rng(seed);
   std::uniform_real_distribution<double> in(0.05, 0.95);
   for (const TrackerCase& c : Cases()) {
     const ThetaFrame frame = FrameOf(c.camera, c.surface);
     int compared = 0;
     for (int k = 0; k < 200; ++k) {
-      const double u = in(rng), v = in(rng);
-      const int i = 1 + k % 15;
-      const Vec2d angle(std::cos(2 * std::numbers::pi * i / 16), std::sin(2 * std::numbers::pi * i / 16));
-      SurfaceDerivs d;
-      VisitShape(c.surface, [&](const auto& shape) { shape.Evaluate(u, v, DerivOrder::Second, &d); });
-      if (d.dpdu.cross(d.dpdv).norm() < 1e-6) continue;  // a collapsed edge
-      const TableResidual g = TableFunction(d, c.surface.worldFromObject, frame, angle);
-      const Vec2d fd((TableG(c.surface, frame, u + kStep, v, angle) - TableG(c.surface, frame, u - kStep, v, angle)) / (2 * kStep),
-                     (TableG(c.surface, frame, u, v + kStep, angle) - TableG(c.surface, frame, u, v - kStep, angle)) / (2 * kStep));
-      if (fd.norm() < 1e-2) continue;
-      ++compared;
-      EXPECT_LE((g.grad - fd).norm(), kRelTol * fd.norm()) << c.name << " at (" << u << ", " << v << "), i " << i
-                                                           << ": analytic " << g.grad.transpose() << ", differences "
-                                                           << fd.transpose();
-      // θ of the fragment's normal agrees with G's sign convention: along = cos(θ - θ_i)
-      // and g = sin(θ_i - θ) times the in-plane part of the unit normal.
-      const Vec3 n = (c.surface.worldFromObject.linear().inverse().transpose() * d.dpdu.cross(d.dpdv)).normalized();
-      const double theta = frame.Theta(c.surface.worldFromObject * d.p, n);
-      const double inPlane = std::hypot(g.along, g.g);
-      EXPECT_NEAR(g.g, inPlane * std::sin(2 * std::numbers::pi * i / 16 - theta), 1e-12) << c.name;
-      EXPECT_NEAR(g.along, inPlane * std::cos(2 * std::numbers::pi * i / 16 - theta), 1e-12) << c.name;
+      const Vec2d uv(in(rng), in(rng));
+      compared += compare(c, frame, uv, k);
     }
     EXPECT_GT(compared, 50) << c.name;
   }
+}
+
+TEST(ThetaTracker, GradientOfGMatchesFiniteDifferences) {
+  // Central differences with step 1e-5 in (u,v): truncation error about h^2 |g'''| / 6 and
+  // rounding about 1e-16 / h, both below 1e-8 for these surfaces' derivatives; relative to
+  // the gradient's own size (at least 1e-2 at the points compared) that is 1e-6.
+  constexpr double kStep = 1e-5, kRelTol = 1e-5;
+  AtRandomPoints(7, [&](const TrackerCase& c, const ThetaFrame& frame, const Vec2d& uv, int k) {
+    const double u = uv.x(), v = uv.y();
+    const int i = 1 + k % 15;
+    const Vec2d angle(std::cos(2 * std::numbers::pi * i / 16), std::sin(2 * std::numbers::pi * i / 16));
+    SurfaceDerivs d;
+    VisitShape(c.surface, [&](const auto& shape) { shape.Evaluate(u, v, DerivOrder::Second, &d); });
+    if (d.dpdu.cross(d.dpdv).norm() < 1e-6) return false;  // a collapsed edge
+    const TableResidual g = TableFunction(d, c.surface.worldFromObject, frame, angle);
+    const Vec2d fd((TableG(c.surface, frame, u + kStep, v, angle) - TableG(c.surface, frame, u - kStep, v, angle)) / (2 * kStep),
+                   (TableG(c.surface, frame, u, v + kStep, angle) - TableG(c.surface, frame, u, v - kStep, angle)) / (2 * kStep));
+    if (fd.norm() < 1e-2) return false;
+    EXPECT_LE((g.grad - fd).norm(), kRelTol * fd.norm()) << c.name << " at (" << u << ", " << v << "), i " << i
+                                                         << ": analytic " << g.grad.transpose() << ", differences "
+                                                         << fd.transpose();
+    // θ of the fragment's normal agrees with G's sign convention: along = cos(θ - θ_i)
+    // and g = sin(θ_i - θ) times the in-plane part of the unit normal.
+    const Vec3 n = (c.surface.worldFromObject.linear().inverse().transpose() * d.dpdu.cross(d.dpdv)).normalized();
+    const double theta = frame.Theta(c.surface.worldFromObject * d.p, n);
+    const double inPlane = std::hypot(g.along, g.g);
+    EXPECT_NEAR(g.g, inPlane * std::sin(2 * std::numbers::pi * i / 16 - theta), 1e-12) << c.name;
+    EXPECT_NEAR(g.along, inPlane * std::cos(2 * std::numbers::pi * i / 16 - theta), 1e-12) << c.name;
+    return true;
+  });
+}
+
+// θ of the surface's normal at (u,v) (by atan2 of the world normal), screen y's (u,v)
+// gradient there, and the surface's derivatives.
+struct ThetaAt {
+  double theta = 0.0;
+  Vec2d gradY;
+  SurfaceDerivs d;
+};
+ThetaAt ThetaOfPoint(const Surface& s, const Camera& c, const ThetaFrame& frame, const Vec2d& uv) {
+  ThetaAt out;
+  VisitShape(s, [&](const auto& shape) { shape.Evaluate(uv.x(), uv.y(), DerivOrder::Second, &out.d); });
+  const Vec3 n = (s.worldFromObject.linear().inverse().transpose() * out.d.dpdu.cross(out.d.dpdv)).normalized();
+  out.theta = frame.Theta(s.worldFromObject * out.d.p, n);
+  ScreenDerivs sd;
+  ScreenMap(c, s.worldFromObject).FromObject(out.d, DerivOrder::First, &sd);
+  out.gradY = Vec2d(sd.dpdu.y(), sd.dpdv.y());
+  return out;
+}
+
+TEST(ThetaTracker, TurnFunctionIsThetasDerivativeAlongTheLevelCurve) {
+  // §4.3's T(u,v) in this project's form: θ's derivative along the level curve's unit
+  // tangent (-y_v, y_u)/|∇y|, against central differences of θ itself (atan2 of the
+  // normal, independent of TableFunction) along that tangent. Step 1e-5: truncation
+  // h^2 |θ'''| / 6 and rounding 1e-16 / h stay below 1e-7 where |θ'| < 1e3; compared at
+  // 1e-5 relative to max(|θ'|, 1).
+  constexpr double kStep = 1e-5, kRelTol = 1e-5;
+  AtRandomPoints(11, [&](const TrackerCase& c, const ThetaFrame& frame, const Vec2d& uv, int) {
+    const ThetaAt at = ThetaOfPoint(c.surface, c.camera, frame, uv);
+    if (at.d.dpdu.cross(at.d.dpdv).norm() < 1e-6 || at.gradY.norm() < 1e-6) return false;  // a collapsed edge
+    const double tau = TurnFunction(at.d, at.gradY, c.surface.worldFromObject, frame);
+    if (!std::isfinite(tau)) return false;  // the normal across the scan plane
+    const Vec2d t = Vec2d(-at.gradY.y(), at.gradY.x()).normalized();
+    const double fd = std::remainder(ThetaOfPoint(c.surface, c.camera, frame, uv + kStep * t).theta -
+                                         ThetaOfPoint(c.surface, c.camera, frame, uv - kStep * t).theta,
+                                     2 * std::numbers::pi) /
+                      (2 * kStep);
+    if (std::abs(fd) > 1e3) return false;  // near a pole of θ (normal almost across the plane)
+    EXPECT_NEAR(tau, fd, kRelTol * std::max(std::abs(fd), 1.0)) << c.name << " at " << uv.transpose();
+    return true;
+  });
 }
 
 // A surface's Y scan, line by line from the top of its screen box, with its θ walker: as
@@ -173,8 +226,8 @@ class LineScan {
   std::vector<ThetaVertex> scratch_;
 };
 
-// The vertices of a chain set that are trackers (ends, silhouettes, tabulated angles),
-// less the tabulated angles next to a silhouette vertex: the crawl does not place those in
+// The vertices of a chain set that are trackers (ends, silhouettes, tabulated angles,
+// turn points), less the tabulated angles next to a silhouette vertex: the crawl does not place those in
 // the step that finds the silhouette (they are within that step of it), while an advanced
 // chain keeps those it had.
 std::vector<ThetaVertex> Trackers(const ChainSet& set) {
@@ -183,7 +236,7 @@ std::vector<ThetaVertex> Trackers(const ChainSet& set) {
     const auto v = set.Of(c);
     for (std::size_t k = 0; k < v.size(); ++k) {
       const ThetaVertex::Kind kind = v[k].kind;
-      if (kind == ThetaVertex::Kind::Turn || kind == ThetaVertex::Kind::Tilt) continue;
+      if (kind == ThetaVertex::Kind::Tilt) continue;
       if (kind == ThetaVertex::Kind::Table) {
         const bool nextToSilhouette = (k > 0 && v[k - 1].kind == ThetaVertex::Kind::Silhouette) ||
                                       (k + 1 < v.size() && v[k + 1].kind == ThetaVertex::Kind::Silhouette);
@@ -251,13 +304,78 @@ TEST(ThetaTracker, SolvedTrackersSitAtTheirAnglesOnTheirLines) {
   }
 }
 
+TEST(ThetaTracker, SolvedTurnTrackersSitAtTurnPoints) {
+  // From the crawl's turn vertex on one line, Newton on (y - ys, T) to the next line must
+  // land on that line where θ turns back along the curve: the points of the line a
+  // distance δ either way along the curve (projected onto the line by Newton in y) both
+  // have θ on the same side of the turn's. δ = 1e-3 of (u,v): θ moves by θ'' δ²/2 there,
+  // far above the turn's own error (kTurnTol δ = 1e-10) wherever θ'' > 1e-3.
+  constexpr double kDelta = 1e-3, kFlatRad = 1e-9;
+  long solved = 0, lost = 0, flat = 0;
+  for (const TrackerCase& c : Cases()) {
+    LineScan scan(c.surface, c.camera, 16);
+    const ThetaFrame frame = FrameOf(c.camera, c.surface);
+    const ScreenMap map(c.camera, c.surface.worldFromObject);
+    auto yAt = [&](const Vec2d& uv, Vec2d* grad) {
+      ScreenDerivs sd;
+      EvaluateScreen(c.surface, map, uv.x(), uv.y(), DerivOrder::First, &sd);
+      *grad = Vec2d(sd.dpdu.y(), sd.dpdv.y());
+      return sd.p.y();
+    };
+    // The point of line ys nearest uv along screen y's gradient.
+    auto onLine = [&](Vec2d uv, double ys) {
+      for (int k = 0; k < 20; ++k) {
+        Vec2d g;
+        const double y = yAt(uv, &g);
+        if (std::abs(y - ys) <= 1e-10) break;
+        uv -= (y - ys) * g / g.squaredNorm();
+      }
+      return uv;
+    };
+    ChainSet line;
+    for (double y = std::ceil(scan.Top()) + 0.5; y < c.camera.height; y += 1.0) {
+      scan.AdvanceTo(y);
+      const raster::SampleColumns cols{0.0, 1.0, c.camera.width};
+      VisitShape(c.surface, [&](const auto& shape) {
+        ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, map, y, cols, &scan.walk, nullptr, &scan.theta, 16, frame);
+        for (const ThetaVertex& v : line.v) {
+          if (v.kind != ThetaVertex::Kind::Turn) continue;
+          WalkPoint p;
+          long iterations = 0;
+          if (!walker.SolveTurn(v.f.uv, &p, &iterations)) {
+            ++lost;  // the turn pair met, or the turn left the patch: repaired sideways
+            continue;
+          }
+          ++solved;
+          EXPECT_NEAR(p.y, y, kEdgeTolPx) << c.name;
+          EXPECT_LE(iterations, kThetaMaxIterations);
+          const Vec2d t = Vec2d(-p.gradY.y(), p.gradY.x()).normalized();
+          const double at = ThetaOfPoint(c.surface, c.camera, frame, p.uv).theta;
+          const double ahead = std::remainder(ThetaOfPoint(c.surface, c.camera, frame, onLine(p.uv + kDelta * t, y)).theta - at, 2 * std::numbers::pi);
+          const double behind = std::remainder(ThetaOfPoint(c.surface, c.camera, frame, onLine(p.uv - kDelta * t, y)).theta - at, 2 * std::numbers::pi);
+          if (std::abs(ahead) <= kFlatRad || std::abs(behind) <= kFlatRad) {
+            ++flat;  // θ'' vanishes too: a turn pair being born or meeting
+            continue;
+          }
+          EXPECT_EQ(ahead > 0.0, behind > 0.0) << c.name << " line " << y << " at " << p.uv.transpose() << ": θ "
+                                               << at << ", +δ " << ahead << ", -δ " << behind;
+        }
+      });
+      scan.Crawl(y, &line);
+    }
+  }
+  std::cout << solved << " turn trackers solved one line on (" << flat << " flat), " << lost << " lost\n";
+  EXPECT_GT(solved, 100);
+  EXPECT_LT(flat, solved / 20);
+}
+
 TEST(ThetaTracker, AdvancedChainsHaveTheCrawledChainsVertices) {
   // Between lines with no Y-scan event the chains advanced as trackers must have, in
   // order, the same ends, silhouettes and tabulated-angle vertices as chains crawled
   // afresh on the same line, at the same places (the solves' tolerance, and the
   // advance's starting guesses' differences, are far below kSameVertexPx).
   constexpr double kSameVertexPx = 1e-5;
-  long linesCompared = 0, linesAdvanced = 0, linesWithTurns = 0, trackersWithoutExtrapolation = 0, iterationsWithout = 0;
+  long linesCompared = 0, linesAdvanced = 0, linesWithTurns = 0, turnLinesDiffering = 0, trackersWithoutExtrapolation = 0, iterationsWithout = 0;
   ThetaStats total;
   for (const TrackerCase& c : Cases()) {
     // Not compared: the orthographic torus, whose crawled chains near the inner silhouette
@@ -276,19 +394,22 @@ TEST(ThetaTracker, AdvancedChainsHaveTheCrawledChainsVertices) {
           ++linesCompared;
           if (scan.Advance(y, advanced, extrapolate, &next)) {
             ++linesAdvanced;
-            // Where a section has a turn point, θ is flat near it and the crossings of a
-            // tabulated angle there are ill-conditioned (a wiggle of θ about θ_i can add
-            // or remove a pair between lines): such lines are counted, not compared.
+            const std::vector<ThetaVertex> a = Trackers(next), b = Trackers(crawled);
+            // Where a section has turn points, the crawl itself misses a turn pair that
+            // fits inside one of its steps (θ turning back by less than half a table
+            // step), which the trackers of the line before still follow, and a turn
+            // pair born inside a link between lines is seen by neither until it reaches a
+            // vertex: such lines may differ, and are counted.
             auto turns = [](const ChainSet& s) {
               return std::any_of(s.v.begin(), s.v.end(), [](const ThetaVertex& v) { return v.kind == ThetaVertex::Kind::Turn; });
             };
             if (turns(crawled) || turns(next)) {
               ++linesWithTurns;
+              turnLinesDiffering += Unmatched(a, b, kSameVertexPx) + Unmatched(b, a, kSameVertexPx) > 0;
               std::swap(advanced, next);
               events = e;
               continue;
             }
-            const std::vector<ThetaVertex> a = Trackers(next), b = Trackers(crawled);
             ASSERT_EQ(next.chains.size(), crawled.chains.size()) << c.name << " line " << y;
             auto dump = [](const ChainSet& s) {
               std::ostringstream o;
@@ -327,13 +448,14 @@ TEST(ThetaTracker, AdvancedChainsHaveTheCrawledChainsVertices) {
   const double with = static_cast<double>(total.nTrackerIterations) / static_cast<double>(total.nTrackers);
   const double without = static_cast<double>(iterationsWithout) / static_cast<double>(trackersWithoutExtrapolation);
   std::cout << linesAdvanced << " of " << linesCompared << " quiet lines advanced (" << linesWithTurns
-            << " with turn points not compared); " << total.nTrackers
+            << " with turn points, " << turnLinesDiffering << " of them differing); " << total.nTrackers
             << " trackers, Newton iterations per tracker " << with << " extrapolated, " << without
             << " from the last position; " << total.nLinkRepairs << " links repaired, " << total.nTrackerFailures
             << " trackers lost\n";
   // Most quiet lines advance; extrapolation (§3.5) saves iterations.
   EXPECT_GT(linesAdvanced, linesCompared * 9 / 10);
   EXPECT_LT(linesWithTurns, linesAdvanced / 4);
+  EXPECT_LT(turnLinesDiffering, linesWithTurns / 10);
   EXPECT_LT(with, without);
 }
 
