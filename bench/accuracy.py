@@ -135,8 +135,9 @@ def write_report(rows, path, size, povray_line):
                         cells.append("–")
                 lines.append(f"| ≤ {level} px | " + " | ".join(cells) + f" | {winner[0] if winner else '–'} |")
             lines += ["", "Fastest setting per mode reaching each colour accuracy (RMSE against exact; "
-                      "θ mode's coverage is exact on every sample row, so its error is all in depth, "
-                      "normal and colour):", "",
+                      "θ mode's coverage is exact on the scan lines its chains are made on and within "
+                      "h/4 + h²/(8R) px between them for --y-step h, so its error is mostly in "
+                      "depth, normal and colour):", "",
                       "| colour RMSE | " + " | ".join(MODES[:3]) + " | fastest |", "|---" * 5 + "|"]
             for level in RMSE_LEVELS:
                 cells, winner = [], None
