@@ -58,7 +58,10 @@ double TurnFunction(const SurfaceDerivs& object, const Vec2d& gradY, const Affin
   const auto L = worldFromObject.linear();
   const Vec3 n = (L.determinant() < 0.0 ? -1.0 : 1.0) * (L * object.dpdu).cross(L * object.dpdv);
   const double theta = frame.Theta(worldFromObject * object.p, n);
-  const TableResidual g = TableFunction(object, worldFromObject, frame, Vec2d(std::cos(theta), std::sin(theta)));
+  return TurnRate(TableFunction(object, worldFromObject, frame, Vec2d(std::cos(theta), std::sin(theta))), gradY);
+}
+
+double TurnRate(const TableResidual& g, const Vec2d& gradY) {
   const double len = gradY.norm();
   if (!(g.along > 0.0) || !(len > 0.0)) return NAN;  // the normal is across the scan plane
   return -g.grad.dot(Vec2d(-gradY.y(), gradY.x())) / (len * g.along);

@@ -155,15 +155,19 @@ TableResidual TableFunction(const SurfaceDerivs& object, const Affine3& worldFro
 // plane (θ undefined). `gradY` is screen y's (u,v) gradient there.
 double TurnFunction(const SurfaceDerivs& object, const Vec2d& gradY, const Affine3& worldFromObject,
                     const ThetaFrame& frame);
+// The same from G_i's residual at a point where θ = θ_i (a solved θ tracker): there G_i's
+// gradient is -ρ ∇θ, with ρ = `along`.
+double TurnRate(const TableResidual& atOwnAngle, const Vec2d& gradY);
 
 // A turn tracker's turn function is solved to this (radians per unit of (u,v)): where θ
 // turns at a rate of 1 per unit² of (u,v) (a gentle crinkle), the point is within 1e-7 of
 // (u,v) of the turn.
 constexpr double kTurnTol = 1e-7;
-// The turn function's (u,v) gradient is taken by central differences this wide (it would
-// need the surface's third derivatives): truncation ~h² and rounding ~1e-16/h, both far
-// below kTurnTol for a turn function of order 1.
-constexpr double kTurnDiffUv = 1e-5;
+// The turn function's (u,v) gradient is taken by forward differences this wide (it would
+// need the surface's third derivatives): truncation ~h |T''| / 2 and rounding ~1e-16 / h
+// make its relative error about 1e-6, which slows Newton's convergence by as little (the
+// residual, not the Jacobian, decides where it ends).
+constexpr double kTurnDiffUv = 1e-6;
 
 // A θ tracker's G_i is solved to this: the sine of the angle from θ_i (radians near 0),
 // far below the 1e-3 px a vertex may move for a section of radius 1e4 px.
@@ -216,7 +220,9 @@ class ThetaWalker : public LevelWalker<ShapeT> {
 
   // The θ tracker of table angle i on this line by damped Newton from `start`: false if
   // it does not converge (or leaves the domain). Counts the iterations into *iterations.
-  bool SolveTable(int i, const Vec2d& start, WalkPoint* out, long* iterations) const;
+  // `residual`, if given, receives G_i's residual at the solution.
+  bool SolveTable(int i, const Vec2d& start, WalkPoint* out, long* iterations,
+                  TableResidual* residual = nullptr) const;
 
   // The turn tracker of this line (§4.3: y = ys and the turn function zero) by Newton from
   // `start`: false if it does not converge (a turn pair has met and gone) or leaves the
@@ -547,7 +553,8 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
 }
 
 template <class ShapeT>
-bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2d& start, WalkPoint* out, long* iterations) const {
+bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2d& start, WalkPoint* out, long* iterations,
+                                     TableResidual* residual) const {
   const Vec2d angle = Angle(i);
   const Affine3& world = World();
   NewtonOptions opt;
@@ -557,6 +564,7 @@ bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2d& start, WalkPoint* out, 
       [&](const Vec2d& uv, Vec2d* f, Mat2d* jac) {
         *out = this->Eval(uv, DerivOrder::Second);
         const TableResidual g = TableFunction(out->object, world, frame_, angle);
+        if (residual) *residual = g;
         *f = Vec2d(out->y - this->ys_, g.g);
         jac->row(0) = out->gradY.transpose();
         jac->row(1) = g.grad.transpose();
@@ -568,7 +576,10 @@ bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2d& start, WalkPoint* out, 
       start, Vec2d(kEdgeTolPx, kThetaTol), opt);
   *iterations += r.iterations;
   if (r.status != NewtonStatus::Converged) return false;
-  if (out->uv != r.uv) *out = this->Eval(r.uv, DerivOrder::Second);
+  if (out->uv != r.uv) {
+    *out = this->Eval(r.uv, DerivOrder::Second);
+    if (residual && out->ok) *residual = TableFunction(out->object, world, frame_, angle);
+  }
   return out->ok;
 }
 
@@ -588,11 +599,11 @@ bool ThetaWalker<ShapeT>::SolveTurn(const Vec2d& start, WalkPoint* out, long* it
         const double tau = out->ok ? TurnFunction(out->object, out->gradY, world, frame_) : NAN;
         *f = Vec2d(out->y - this->ys_, tau);
         jac->row(0) = out->gradY.transpose();
-        // Central differences about a centre kept inside the domain.
-        const Vec2d c = uv.cwiseMax(kTurnDiffUv).cwiseMin(1.0 - kTurnDiffUv);
-        const Vec2d du(kTurnDiffUv, 0.0), dv(0.0, kTurnDiffUv);
-        (*jac)(1, 0) = (turn(c + du) - turn(c - du)) / (2.0 * kTurnDiffUv);
-        (*jac)(1, 1) = (turn(c + dv) - turn(c - dv)) / (2.0 * kTurnDiffUv);
+        // Forward differences, stepping back from the domain's far edges.
+        const double hu = uv.x() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
+        const double hv = uv.y() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
+        (*jac)(1, 0) = (turn(uv + Vec2d(hu, 0.0)) - tau) / hu;
+        (*jac)(1, 1) = (turn(uv + Vec2d(0.0, hv)) - tau) / hv;
         if (!out->ok) *f = Vec2d(NAN, NAN);
       },
       start, Vec2d(kEdgeTolPx, kTurnTol), opt);
@@ -712,6 +723,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
     for (std::size_t k = 0; k < n; ++k) {
       const Vertex& V = A[k];
       WalkPoint p;
+      TableResidual residual;  // a Table vertex's G_i at its solution
       switch (V.kind) {
         case ThetaVertex::Kind::Tilt:
           skipped = true;
@@ -752,7 +764,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
           ++theta_->nTrackers;
           // A tracker that leaves the patch or does not converge is dropped (§3.2: deleted
           // when it leaves [0,1]²); the link across its place is repaired sideways.
-          if (!SolveTable(V.index, start, &p, &theta_->nTrackerIterations)) {
+          if (!SolveTable(V.index, start, &p, &theta_->nTrackerIterations, &residual)) {
             ++theta_->nTrackerFailures;
             skipped = true;
             continue;
@@ -763,7 +775,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
       // θ's rate along the chain (the sense it is walked in), but at a turn.
       double rate = NAN;
       if (V.kind == ThetaVertex::Kind::Table) {
-        rate = sense * TurnFunction(p.object, p.gradY, World(), frame_);
+        rate = sense * TurnRate(residual, p.gradY);
       } else if (V.kind != ThetaVertex::Kind::Turn) {
         const WalkPoint q = this->Eval(p.uv, DerivOrder::Second);
         rate = sense * TurnFunction(q.object, q.gradY, World(), frame_);
