@@ -242,6 +242,11 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     return {p.x, make(p), kind, index};
   }
   double ThetaOf(const raster::Fragment& f) const { return frame_.Theta(f.position, f.normal); }
+  // The turn function at (u,v) (NaN where undefined).
+  double TurnAt(const Vec2d& uv) const {
+    const WalkPoint p = this->Eval(uv, DerivOrder::Second);
+    return p.ok ? TurnFunction(p.object, p.gradY, World(), frame_) : NAN;
+  }
   const Affine3& World() const {
     static const Affine3 kIdentity = Affine3::Identity();
     return frame_.worldFromObject ? *frame_.worldFromObject : kIdentity;
@@ -389,25 +394,19 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       if (inOrder(v)) chain->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, k));
     }
   };
-  // A turn point (§4.3: T = 0, the derivative of θ along the curve vanishes) between two
-  // steps: the crawl point there is a vertex, within one step of it, so the chain follows
-  // the crinkle even when no tabulated angle is passed. Every step that passes table
-  // angles notes its change of θ, d, here first.
-  // θ's rate along the curve at a crawl point (its sign; NaN where undefined).
-  auto rate = [&](const WalkPoint& at) {
-    const WalkPoint q = this->Eval(at.uv, DerivOrder::Second);
-    return q.ok ? TurnFunction(q.object, q.gradY, World(), frame_) : NAN;
-  };
   // The sense θ last moved in (0: not known), at the start θ's rate along the walk, so that
   // a turn within the first step is seen.
   double lastTurn = turning;
   if (lastTurn == 0.0) {
-    const double r = sense * rate(start);
+    const double r = sense * TurnAt(start.uv);
     if (std::isfinite(r)) lastTurn = r;
   }
-  // The vertex is the turn tracker itself (the turn function zero on the line), by Newton
-  // from the crawl point; if that lands off the two steps around it, the crawl point.
   WalkPoint before = start;  // the crawl point before p
+  // A turn point (§4.3: T = 0, the derivative of θ along the curve vanishes) between two
+  // steps is a vertex, so the chain follows the crinkle even when no tabulated angle is
+  // passed: the turn tracker itself, by Newton from the crawl point (if that lands off the
+  // two steps around it, the crawl point). Every step that passes table angles notes its
+  // change of θ, d, here first.
   auto noteTurn = [&](const WalkPoint& at, const WalkPoint& to, double d) {
     if (std::abs(d) <= kTurnRad) return;
     if (lastTurn != 0.0 && (d > 0) != (lastTurn > 0) && std::abs(at.jn) > 1e-9) {
@@ -469,7 +468,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
             // A turn within the last step, before the boundary (θ's rate along the curve
             // changes sign between p and e): the steps are not continued to see it.
             WalkPoint v;
-            const double rp = rate(p), re = rate(e);
+            const double rp = TurnAt(p.uv), re = TurnAt(e.uv);
             if (rp * re < 0.0 && SolveTurn(0.5 * (p.uv + e.uv), &v, &theta_->nCrawlIterations) &&
                 WithinStep(p, e, v) && std::abs(v.jn) > 1e-9 && Between(v.x, chain->back().x, e.x)) {
               const Vertex vt = MakeVertex(v, make, ThetaVertex::Kind::Turn);
@@ -586,10 +585,6 @@ bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2d& start, WalkPoint* out, 
 template <class ShapeT>
 bool ThetaWalker<ShapeT>::SolveTurn(const Vec2d& start, WalkPoint* out, long* iterations) const {
   const Affine3& world = World();
-  auto turn = [&](const Vec2d& uv) {
-    const WalkPoint p = this->Eval(uv, DerivOrder::Second);
-    return p.ok ? TurnFunction(p.object, p.gradY, world, frame_) : NAN;
-  };
   NewtonOptions opt;
   opt.maxIterations = kThetaMaxIterations;
   opt.domain = DomainRule::Fail;
@@ -602,8 +597,8 @@ bool ThetaWalker<ShapeT>::SolveTurn(const Vec2d& start, WalkPoint* out, long* it
         // Forward differences, stepping back from the domain's far edges.
         const double hu = uv.x() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
         const double hv = uv.y() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
-        (*jac)(1, 0) = (turn(uv + Vec2d(hu, 0.0)) - tau) / hu;
-        (*jac)(1, 1) = (turn(uv + Vec2d(0.0, hv)) - tau) / hv;
+        (*jac)(1, 0) = (TurnAt(uv + Vec2d(hu, 0.0)) - tau) / hu;
+        (*jac)(1, 1) = (TurnAt(uv + Vec2d(0.0, hv)) - tau) / hv;
         if (!out->ok) *f = Vec2d(NAN, NAN);
       },
       start, Vec2d(kEdgeTolPx, kTurnTol), opt);
@@ -777,8 +772,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
       if (V.kind == ThetaVertex::Kind::Table) {
         rate = sense * TurnRate(residual, p.gradY);
       } else if (V.kind != ThetaVertex::Kind::Turn) {
-        const WalkPoint q = this->Eval(p.uv, DerivOrder::Second);
-        rate = sense * TurnFunction(q.object, q.gradY, World(), frame_);
+        rate = sense * TurnAt(p.uv);
       }
       if (!link(k, MakeVertex(p, make, V.kind, V.index), p, rate)) return false;
     }
