@@ -1,17 +1,13 @@
-// Small geometric vocabulary shared by every layer: vectors and axis-aligned boxes.
+// Axis-aligned boxes in any space (the vectors are core/vec.h's).
 #pragma once
 
-#include <Eigen/Core>
 #include <algorithm>
 #include <array>
 #include <limits>
 
-namespace patchscan {
+#include "core/vec.h"
 
-using Vec2 = Eigen::Vector2d;
-using Vec3 = Eigen::Vector3d;
-using Vec4 = Eigen::Vector4d;
-using Mat4 = Eigen::Matrix4d;
+namespace patchscan {
 
 // An axis-aligned box in any space; empty until a point is added. Never allocates.
 template <int N>

@@ -12,7 +12,7 @@ namespace patchscan {
 namespace Bfr = OpenSubdiv::Bfr;
 
 Vec3 WorldNormal(const Surface& s, double u, double v) {
-  const Eigen::Matrix3d normalFromObject = s.worldFromObject.linear().inverse().transpose();
+  const Mat3 normalFromObject = s.worldFromObject.linear().inverse().transpose();
   SurfaceDerivs d;
   EvaluateObject(s, u, v, DerivOrder::First, &d);
   Vec3 n = d.dpdu.cross(d.dpdv);

@@ -77,14 +77,14 @@ CoverageContour CoverageEdges(const std::vector<float>& alpha, int width, int he
         if (v[k] >= kLevel) mask |= 1 << k;
       }
       if (mask == 0 || mask == 15) continue;
-      Eigen::Vector2d cross[4];
+      Vec2 cross[4];
       bool crossed[4];
       for (int k = 0; k < 4; ++k) {
         const int l = (k + 1) % 4;
         crossed[k] = ((mask >> k) & 1) != ((mask >> l) & 1);
         if (!crossed[k]) continue;
         const double t = (kLevel - v[k]) / (v[l] - v[k]);
-        cross[k] = Eigen::Vector2d(xs[k] + 0.5 + t * (xs[l] - xs[k]), ys[k] + 0.5 + t * (ys[l] - ys[k]));
+        cross[k] = Vec2(xs[k] + 0.5 + t * (xs[l] - xs[k]), ys[k] + 0.5 + t * (ys[l] - ys[k]));
       }
       auto add = [&](int e, int f) {
         c.from.push_back(cross[e]);
@@ -114,8 +114,8 @@ CoverageContour CoverageEdges(const std::vector<float>& alpha, int width, int he
 
 namespace {
 
-double DistanceToSegment(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  const Eigen::Vector2d d = b - a;
+double DistanceToSegment(const Vec2& p, const Vec2& a, const Vec2& b) {
+  const Vec2 d = b - a;
   const double len2 = d.squaredNorm();
   const double t = len2 > 0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
   return (p - (a + t * d)).norm();
@@ -130,7 +130,7 @@ std::vector<double> DistancesToContour(const CoverageContour& a, const CoverageC
   // Each segment of b lies in one marching-squares cell (cx, cy) ∈ [-1, width) × [-1, height):
   // bucket them by cell (compressed rows).
   const int cw = width + 1, ch = height + 1;
-  auto cellOf = [&](const Eigen::Vector2d& p, int& x, int& y) {
+  auto cellOf = [&](const Vec2& p, int& x, int& y) {
     x = std::clamp(static_cast<int>(std::floor(p.x() - 0.5)), -1, width - 1) + 1;
     y = std::clamp(static_cast<int>(std::floor(p.y() - 0.5)), -1, height - 1) + 1;
   };
@@ -146,7 +146,7 @@ std::vector<double> DistancesToContour(const CoverageContour& a, const CoverageC
   std::vector<int> fill(start.begin(), start.end() - 1);
   for (std::size_t s = 0; s < b.from.size(); ++s) seg[static_cast<std::size_t>(fill[static_cast<std::size_t>(cellIndex[s])]++)] = static_cast<int>(s);
 
-  auto nearest = [&](const Eigen::Vector2d& p) {
+  auto nearest = [&](const Vec2& p) {
     int px, py;
     cellOf(p, px, py);
     double best = std::numeric_limits<double>::infinity();

@@ -4,11 +4,12 @@
 // images by hand; ReadComparable reads any image OpenImageIO reads.
 #pragma once
 
-#include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <variant>
 #include <vector>
+
+#include "core/vec.h"
 
 namespace patchscan::raster {
 
@@ -30,7 +31,7 @@ std::variant<ComparableImage, std::string> ReadComparable(const std::string& pat
 // (pixel (x, y) has its centre at (x + 1/2, y + 1/2)), with alpha taken as 0 outside the
 // image so that contours close. Segments in image coordinates; allocates.
 struct CoverageContour {
-  std::vector<Eigen::Vector2d> from, to;
+  std::vector<Vec2> from, to;
 };
 CoverageContour CoverageEdges(const std::vector<float>& alpha, int width, int height);
 

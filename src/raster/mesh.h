@@ -9,10 +9,9 @@
 #include <cstdint>
 #include <vector>
 
-namespace patchscan::raster {
+#include "core/vec.h"
 
-using Vec2 = Eigen::Vector2d;
-using Vec3 = Eigen::Vector3d;
+namespace patchscan::raster {
 
 struct RasterVertex {
   Vec3 h;         // homogeneous screen position (X, Y, W): x = X/W, y = Y/W pixels, W = eye depth

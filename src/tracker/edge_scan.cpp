@@ -13,7 +13,7 @@ struct EdgeSample {
 
 template <class ShapeT>
 EdgeSample SampleEdge(const ShapeT& shape, const ScreenMap& map, PatchEdge e, double t) {
-  const Vec2d uv = EdgePoint(e, t);
+  const Vec2 uv = EdgePoint(e, t);
   ScreenDerivs d;
   EvaluateScreen(shape, map, uv.x(), uv.y(), DerivOrder::Second, &d);
   const bool alongV = e == PatchEdge::U0 || e == PatchEdge::U1;

@@ -20,7 +20,7 @@ namespace patchscan {
 
 // The boundary edge e as a curve in the domain: U0 = (0, t), U1 = (1, t), V0 = (t, 0),
 // V1 = (t, 1), t in [0, 1].
-inline Vec2d EdgePoint(PatchEdge e, double t) {
+inline Vec2 EdgePoint(PatchEdge e, double t) {
   switch (e) {
     case PatchEdge::U0: return {0.0, t};
     case PatchEdge::U1: return {1.0, t};
@@ -80,10 +80,10 @@ class EdgeScan {
   // Where a silhouette crossed a boundary edge since the previous scan line (§3.2.2.3):
   // a tracker whose J changed sign (its position), or a tracker deleted at the bottom of
   // its piece after J changed sign on the way there (that end). Refilled by Advance.
-  const std::vector<Vec2d>& Folds() const { return folds_; }
+  const std::vector<Vec2>& Folds() const { return folds_; }
   // Where trackers died (their last position) at the latest Advance.
-  const std::vector<Vec2d>& Deaths() const { return deaths_; }
-  Vec2d Uv(const EdgeTracker& t) const { return EdgePoint(pieces_[t.piece].edge, t.t); }
+  const std::vector<Vec2>& Deaths() const { return deaths_; }
+  Vec2 Uv(const EdgeTracker& t) const { return EdgePoint(pieces_[t.piece].edge, t.t); }
 
  private:
   const Surface& surface_;
@@ -92,7 +92,7 @@ class EdgeScan {
   double tolerancePx_;
   std::vector<EdgePiece> pieces_;   // sorted by yTop
   std::vector<EdgeTracker> trackers_;
-  std::vector<Vec2d> folds_, deaths_;
+  std::vector<Vec2> folds_, deaths_;
   size_t nextPiece_ = 0;
   EdgeScanStats stats_;
 };

@@ -20,18 +20,18 @@ namespace {
 // h = -y and its derivatives at (u,v).
 struct Height {
   double h;
-  Vec2d g;   // h_u, h_v
-  Mat2d H;   // h_uu h_uv; h_uv h_vv
+  Vec2 g;   // h_u, h_v
+  Mat2 H;   // h_uu h_uv; h_uv h_vv
   Vec3 pu, pv;  // screen tangents, to recognize collapsed edges
 };
 
 template <class ShapeT>
-Height EvalHeight(const ShapeT& shape, const ScreenMap& map, const Vec2d& uv) {
+Height EvalHeight(const ShapeT& shape, const ScreenMap& map, const Vec2& uv) {
   ScreenDerivs d;
   EvaluateScreen(shape, map, uv.x(), uv.y(), DerivOrder::Second, &d);
   Height r;
   r.h = -d.p.y();
-  r.g = Vec2d(-d.dpdu.y(), -d.dpdv.y());
+  r.g = Vec2(-d.dpdu.y(), -d.dpdv.y());
   r.H << -d.d2pdu2.y(), -d.d2pduv.y(), -d.d2pduv.y(), -d.d2pdv2.y();
   r.pu = d.dpdu;
   r.pv = d.dpdv;
@@ -63,7 +63,7 @@ bool PushesOut(double t, double g) { return (t <= 0.0 && g < 0.0) || (t >= 1.0 &
 // derivative) from which h rises into the domain somewhere along the edge: then the
 // single surface point of that edge is no maximum.
 template <class ShapeT>
-bool OnCollapsedEdgeThatIsNoMaximum(const ShapeT& shape, const ScreenMap& map, const Vec2d& uv,
+bool OnCollapsedEdgeThatIsNoMaximum(const ShapeT& shape, const ScreenMap& map, const Vec2& uv,
                                     const Height& at) {
   for (int fixedParam = 0; fixedParam < 2; ++fixedParam) {
     if (!(uv[fixedParam] <= 0.0 || uv[fixedParam] >= 1.0)) continue;
@@ -72,7 +72,7 @@ bool OnCollapsedEdgeThatIsNoMaximum(const ShapeT& shape, const ScreenMap& map, c
     const Vec3& across = fixedParam == 0 ? at.pu : at.pv;
     if (tangent.norm() > kCollapsedRelTangent * std::max(across.norm(), 1e-300)) continue;
     for (int k = 0; k < kCollapsedEdgeSamples; ++k) {
-      Vec2d q = uv;
+      Vec2 q = uv;
       q[1 - fixedParam] = (k + 0.5) / kCollapsedEdgeSamples;
       const Height e = EvalHeight(shape, map, q);
       if (!PushesOut(q[fixedParam], e.g[fixedParam]) && e.g[fixedParam] != 0.0) return true;
@@ -84,7 +84,7 @@ bool OnCollapsedEdgeThatIsNoMaximum(const ShapeT& shape, const ScreenMap& map, c
 template <class ShapeT>
 std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, MaximaStats& st) {
   std::vector<Stationary> found;
-  auto classifyInterior = [](const Mat2d& H) {
+  auto classifyInterior = [](const Mat2& H) {
     const double det = H.determinant(), scale = H.squaredNorm();
     if (std::abs(det) <= kCylinderRelDet * scale) return StationaryKind::LineOfMaxima;
     if (det < 0) return StationaryKind::Saddle;
@@ -94,10 +94,10 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Maxi
   for (int sj = 0; sj < kMaximaSeedGrid; ++sj)
     for (int si = 0; si < kMaximaSeedGrid; ++si) {
       ++st.nSeeds;
-      const Vec2d seed(si / double(kMaximaSeedGrid - 1), sj / double(kMaximaSeedGrid - 1));
+      const Vec2 seed(si / double(kMaximaSeedGrid - 1), sj / double(kMaximaSeedGrid - 1));
 
       // Step 1: constrained hill climbing (projected gradient, Newton when concave).
-      Vec2d uv = seed;
+      Vec2 uv = seed;
       Height at = EvalHeight(shape, map, uv);
       double stepLen = 0.25;  // gradient step length in parameter units, adapted
       bool fixed[2] = {false, false};
@@ -105,10 +105,10 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Maxi
         ++st.nClimbIterations;
         for (int k = 0; k < 2; ++k) fixed[k] = PushesOut(uv[k], at.g[k]);
         if (fixed[0] && fixed[1]) break;
-        Vec2d step = Vec2d::Zero();
+        Vec2 step = Vec2::Zero();
         if (!fixed[0] && !fixed[1]) {
           const bool concave = at.H(0, 0) < 0 && at.H.determinant() > 0;
-          step = concave ? Vec2d(-at.H.inverse() * at.g) : Vec2d(at.g.normalized() * stepLen);
+          step = concave ? Vec2(-at.H.inverse() * at.g) : Vec2(at.g.normalized() * stepLen);
         } else {
           const int k = fixed[0] ? 1 : 0;
           step[k] = at.H(k, k) < 0 ? -at.g[k] / at.H(k, k) : (at.g[k] > 0 ? stepLen : -stepLen);
@@ -123,7 +123,7 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Maxi
         step *= scale;
         // Halve until h rises.
         Height next;
-        Vec2d to;
+        Vec2 to;
         bool rose = false;
         for (int halving = 0; halving < 40; ++halving) {
           to = (uv + step).cwiseMax(0.0).cwiseMin(1.0);
@@ -173,12 +173,12 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Maxi
       const Height at0 = EvalHeight(shape, map, seed);
       const double gtol = 1e-10 * std::max(at0.H.norm(), 1e-300);
       const auto r = SolveNewton2(
-          [&](const Vec2d& p, Vec2d* f, Mat2d* j) {
+          [&](const Vec2& p, Vec2* f, Mat2* j) {
             const Height e = EvalHeight(shape, map, p);
             *f = e.g;
             *j = e.H;
           },
-          seed, Vec2d(gtol, gtol), opt);
+          seed, Vec2(gtol, gtol), opt);
       st.nNewtonIterations += r.iterations;
       if (r.status == NewtonStatus::Converged && (r.uv.array() > 0).all() && (r.uv.array() < 1).all()) {
         const Height e = EvalHeight(shape, map, r.uv);

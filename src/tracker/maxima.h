@@ -25,10 +25,10 @@ const char* ToString(StationaryKind k);
 
 struct Stationary {
   StationaryKind kind;
-  Vec2d uv;
+  Vec2 uv;
   double y;           // screen y of the point, pixels (down)
-  Vec2d gradH;        // (h_u, h_v) there
-  Mat2d hessH;        // second derivatives of h there
+  Vec2 gradH;        // (h_u, h_v) there
+  Mat2 hessH;        // second derivatives of h there
   int edge = -1;      // EdgeMaximum: PatchEdge of its edge; CornerMaximum: -1
 };
 

@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/vec.h"
+
 namespace patchscan {
 
 enum class NewtonStatus {
@@ -113,12 +115,9 @@ Newton1Result SolveNewton1(Eval&& eval, double t0, double lo, double hi, double 
   }
 }
 
-using Vec2d = Eigen::Vector2d;
-using Mat2d = Eigen::Matrix2d;
-
 struct Newton2Result {
-  Vec2d uv = Vec2d::Zero();
-  Vec2d f = Vec2d::Zero();  // residual at uv
+  Vec2 uv = Vec2::Zero();
+  Vec2 f = Vec2::Zero();  // residual at uv
   int iterations = 0;
   NewtonStatus status = NewtonStatus::Converged;
 };
@@ -128,14 +127,14 @@ struct Newton2Result {
 // |f_i| <= tolerance_i for both; the residual that damping compares is
 // max_i |f_i| / tolerance_i, so the two functions may have different units.
 template <class Eval>
-Newton2Result SolveNewton2(Eval&& eval, const Vec2d& uv0, const Vec2d& tolerance,
+Newton2Result SolveNewton2(Eval&& eval, const Vec2& uv0, const Vec2& tolerance,
                            const NewtonOptions& opt = {}) {
   Newton2Result r;
   r.uv = uv0.cwiseMax(0.0).cwiseMin(1.0);
-  Mat2d jac;
+  Mat2 jac;
   eval(r.uv, &r.f, &jac);
-  if (!r.f.allFinite()) return {r.uv, Vec2d::Zero(), 0, NewtonStatus::Singular};
-  auto size = [&](const Vec2d& f) { return f.cwiseAbs().cwiseQuotient(tolerance).maxCoeff(); };
+  if (!r.f.allFinite()) return {r.uv, Vec2::Zero(), 0, NewtonStatus::Singular};
+  auto size = [&](const Vec2& f) { return f.cwiseAbs().cwiseQuotient(tolerance).maxCoeff(); };
   double residual = size(r.f);
   for (;;) {
     if (residual <= 1.0) return r;
@@ -151,9 +150,9 @@ Newton2Result SolveNewton2(Eval&& eval, const Vec2d& uv0, const Vec2d& tolerance
       r.status = NewtonStatus::Singular;
       return r;
     }
-    Vec2d step = -jac.inverse() * r.f;
+    Vec2 step = -jac.inverse() * r.f;
     // Step 1: the domain [0,1]^2; a clipped step keeps its direction.
-    const Vec2d target = r.uv + step;
+    const Vec2 target = r.uv + step;
     if ((target.array() < 0.0).any() || (target.array() > 1.0).any()) {
       if (opt.domain == DomainRule::Fail) {
         r.uv = target;  // where it wanted to go: the caller may use it to see which edge
@@ -172,8 +171,8 @@ Newton2Result SolveNewton2(Eval&& eval, const Vec2d& uv0, const Vec2d& tolerance
       }
     }
     // Step 2: halve the step while the residual does not decrease.
-    Vec2d uv = (r.uv + step).cwiseMax(0.0).cwiseMin(1.0), f;
-    Mat2d j;
+    Vec2 uv = (r.uv + step).cwiseMax(0.0).cwiseMin(1.0), f;
+    Mat2 j;
     int halvings = 0;
     double next;
     for (;;) {

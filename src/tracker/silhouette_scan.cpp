@@ -6,7 +6,7 @@
 namespace patchscan {
 namespace {
 
-bool OnBoundary(const Vec2d& uv) {
+bool OnBoundary(const Vec2& uv) {
   return uv.x() <= 0.0 || uv.x() >= 1.0 || uv.y() <= 0.0 || uv.y() >= 1.0;
 }
 
@@ -20,7 +20,7 @@ constexpr int kSearchMaxDepth = 12;
 
 template <class ShapeT>
 void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, double yScan, double u0,
-                                double v0, double h, int depth, std::vector<Vec2d>* found) {
+                                double v0, double h, int depth, std::vector<Vec2>* found) {
   double lo = INFINITY, hi = -INFINITY, second = 0.0, size = 0.0;
   for (const auto& [a, b] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}, {1.0, 1.0}, {0.5, 0.5}}) {
     ScreenDerivs d;
@@ -39,8 +39,8 @@ void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, doubl
     return;
   }
   const auto r = SolveNewton2(
-      [&](const Vec2d& p, Vec2d* f, Mat2d* j) { SilhouetteSystem(shape, map, yScan, p, f, j); },
-      Vec2d(u0 + 0.5 * h, v0 + 0.5 * h), Vec2d(kEdgeTolPx, kEdgeTolPx));
+      [&](const Vec2& p, Vec2* f, Mat2* j) { SilhouetteSystem(shape, map, yScan, p, f, j); },
+      Vec2(u0 + 0.5 * h, v0 + 0.5 * h), Vec2(kEdgeTolPx, kEdgeTolPx));
   if (r.status != NewtonStatus::Converged) return;
   const double grow = 0.5 * h;
   if (r.uv.x() < u0 - grow || r.uv.x() > u0 + h + grow || r.uv.y() < v0 - grow || r.uv.y() > v0 + h + grow)
@@ -52,13 +52,13 @@ void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, doubl
   if (d.dpdu.head<2>().norm() < kCollapsedRatio * d.dpdv.head<2>().norm() ||
       d.dpdv.head<2>().norm() < kCollapsedRatio * d.dpdu.head<2>().norm())
     return;
-  for (const Vec2d& q : *found)
+  for (const Vec2& q : *found)
     if ((q - r.uv).norm() < kSameTrackerUv) return;
   found->push_back(r.uv);
 }
 
 // Convergence in y: as for the edge trackers.
-const Vec2d kTolerance(kEdgeTolPx, kEdgeTolPx);
+const Vec2 kTolerance(kEdgeTolPx, kEdgeTolPx);
 
 }  // namespace
 
@@ -73,13 +73,13 @@ SilhouetteScan::SilhouetteScan(const Surface& s, const ScreenMap& map,
 }
 
 template <class ShapeT>
-bool SilhouetteScan::Solve(const ShapeT& shape, double yScan, const Vec2d& start, Vec2d* uv,
+bool SilhouetteScan::Solve(const ShapeT& shape, double yScan, const Vec2& start, Vec2* uv,
                            DomainRule domain) {
   NewtonOptions opt;
   opt.domain = domain;
   ++stats_.nNewtonCalls;
   const auto r = SolveNewton2(
-      [&](const Vec2d& p, Vec2d* f, Mat2d* j) { SilhouetteSystem(shape, map_, yScan, p, f, j); },
+      [&](const Vec2& p, Vec2* f, Mat2* j) { SilhouetteSystem(shape, map_, yScan, p, f, j); },
       start.cwiseMax(0.0).cwiseMin(1.0), kTolerance, opt);
   stats_.nNewtonIterations += r.iterations;
   *uv = r.uv;
@@ -94,9 +94,9 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   births_.clear();
   bool search = false;  // an event no tracker explains: look for the crossings again
   std::erase_if(trackers_, [&](SilhouetteTracker& t) {
-    const Vec2d start = extrapolate_ ? ExtrapolatedStart(t.uv, t.uvPrev, t.uvPrev2, t.nSolved,
+    const Vec2 start = extrapolate_ ? ExtrapolatedStart(t.uv, t.uvPrev, t.uvPrev2, t.nSolved,
                                                            kEdgeTolPx <= kQuadraticExtrapolationTolPx) : t.uv;
-    Vec2d uv;
+    Vec2 uv;
     // Steps are clipped at the boundary, not refused: a path that grazes an edge on its
     // way to a crossing inside still arrives; one whose crossing has left the domain
     // stalls on the boundary and fails.
@@ -117,8 +117,8 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   });
   // A new tracker's seed may sit on the boundary (a fold) with the first step pointing
   // out: seeds are solved with steps clipped at the boundary.
-  auto add = [&](const Vec2d& start, long* counter) {
-    Vec2d uv;
+  auto add = [&](const Vec2& start, long* counter) {
+    Vec2 uv;
     if (!Solve(shape, yScan, start, &uv, DomainRule::Clip)) return false;
     for (const SilhouetteTracker& t : trackers_)
       if ((t.uv - uv).norm() < kSameTrackerUv) return true;  // already tracked
@@ -134,16 +134,16 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     const double drop = yScan - p.y;  // how far h has fallen below the point
     ScreenDerivs d;
     EvaluateScreen(shape, map_, p.uv.x(), p.uv.y(), DerivOrder::First, &d);
-    const Vec2d gx(d.dpdu.x(), d.dpdv.x());  // screen x gradient
+    const Vec2 gx(d.dpdu.x(), d.dpdv.x());  // screen x gradient
     if (p.kind == StationaryKind::StrictMaximum) {
       // Level curve h = h_max - drop ~ ellipse d^T (-H) d = 2 drop; its points of extreme
       // x are the silhouette: d = +-sqrt(2 drop / g^T (-H)^-1 g) (-H)^-1 g (§3.2.2.2).
-      const Mat2d negH = -p.hessH;
-      const Vec2d w = negH.inverse() * gx;
+      const Mat2 negH = -p.hessH;
+      const Vec2 w = negH.inverse() * gx;
       const double q = gx.dot(w);
       bool born = false;
       if (q > 0 && drop >= 0) {
-        const Vec2d delta = std::sqrt(2.0 * drop / q) * w;
+        const Vec2 delta = std::sqrt(2.0 * drop / q) * w;
         born |= add(p.uv + delta, &stats_.nCreatedAtMaxima);
         born |= add(p.uv - delta, &stats_.nCreatedAtMaxima);
       }
@@ -152,11 +152,11 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
       // Below a saddle the level curve is a hyperbola whose vertices lie along the
       // Hessian's negative eigenvector: seeds there, and along the positive one for the
       // silhouette branches passing through (§3.2.2.4).
-      const Eigen::SelfAdjointEigenSolver<Mat2d> eig(p.hessH);
+      const Eigen::SelfAdjointEigenSolver<Mat2> eig(p.hessH);
       for (int k = 0; k < 2; ++k) {
         const double lambda = std::abs(eig.eigenvalues()[k]);
         if (lambda == 0.0) continue;
-        const Vec2d delta = std::sqrt(2.0 * std::max(drop, 1e-3) / lambda) * eig.eigenvectors().col(k);
+        const Vec2 delta = std::sqrt(2.0 * std::max(drop, 1e-3) / lambda) * eig.eigenvectors().col(k);
         add(p.uv + delta, &stats_.nCreatedAtSaddles);
         add(p.uv - delta, &stats_.nCreatedAtSaddles);
       }
@@ -165,10 +165,10 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   // Step 3: folds: J changed sign at a boundary-edge tracker (§3.2.2.3).
   // The crossing may have run well inside since it crossed the edge: when Newton from
   // the edge point fails, start again a quarter and half way towards the domain's centre.
-  for (const Vec2d& uv : edges.Folds()) {
+  for (const Vec2& uv : edges.Folds()) {
     bool born = false;
     for (double towards : {0.0, 0.25, 0.5})
-      if ((born = add(uv + towards * (Vec2d(0.5, 0.5) - uv), &stats_.nCreatedAtFolds))) break;
+      if ((born = add(uv + towards * (Vec2(0.5, 0.5) - uv), &stats_.nCreatedAtFolds))) break;
     if (!born) search = true;
   }
   // Step 3b: repair by subdivision (when an event is not explained by the trackers).
@@ -176,7 +176,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     ++stats_.nRepairSearches;
     searchFound_.clear();
     FindCrossingsBySubdivision(shape, map_, yScan, 0.0, 0.0, 1.0, 0, &searchFound_);
-    for (const Vec2d& uv : searchFound_) {
+    for (const Vec2& uv : searchFound_) {
       bool tracked = false;
       for (const SilhouetteTracker& t : trackers_) tracked = tracked || (t.uv - uv).norm() < kSameTrackerUv;
       if (tracked) continue;
@@ -196,7 +196,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
       }
 }
 
-void SilhouetteScan::Adopt(const Vec2d& uv) {
+void SilhouetteScan::Adopt(const Vec2& uv) {
   for (const SilhouetteTracker& t : trackers_)
     if ((t.uv - uv).norm() < kSameTrackerUv) return;
   trackers_.push_back({uv, uv, false});
@@ -207,15 +207,15 @@ void SilhouetteScan::Advance(double yScan, const EdgeScan& edges) {
   VisitShape(surface_, [&](const auto& shape) { AdvanceImpl(shape, yScan, edges); });
 }
 
-std::vector<Vec2d> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan) {
-  std::vector<Vec2d> found;
+std::vector<Vec2> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan) {
+  std::vector<Vec2> found;
   VisitShape(s, [&](const auto& shape) { FindCrossingsBySubdivision(shape, map, yScan, 0.0, 0.0, 1.0, 0, &found); });
   return found;
 }
 
-std::vector<Vec2d> SilhouetteCrossingsBruteForce(const Surface& s, const ScreenMap& map,
+std::vector<Vec2> SilhouetteCrossingsBruteForce(const Surface& s, const ScreenMap& map,
                                                  double yScan, int grid) {
-  std::vector<Vec2d> found;
+  std::vector<Vec2> found;
   VisitShape(s, [&](const auto& shape) {
     NewtonOptions opt;
     opt.domain = DomainRule::Fail;
@@ -223,11 +223,11 @@ std::vector<Vec2d> SilhouetteCrossingsBruteForce(const Surface& s, const ScreenM
     for (int j = 0; j <= grid; ++j)
       for (int i = 0; i <= grid; ++i) {
         const auto r = SolveNewton2(
-            [&](const Vec2d& p, Vec2d* f, Mat2d* jac) { SilhouetteSystem(shape, map, yScan, p, f, jac); },
-            Vec2d(double(i) / grid, double(j) / grid), kTolerance, opt);
+            [&](const Vec2& p, Vec2* f, Mat2* jac) { SilhouetteSystem(shape, map, yScan, p, f, jac); },
+            Vec2(double(i) / grid, double(j) / grid), kTolerance, opt);
         if (r.status != NewtonStatus::Converged) continue;
         bool seen = false;
-        for (const Vec2d& q : found) seen = seen || (q - r.uv).norm() < kSameTrackerUv * 100;
+        for (const Vec2& q : found) seen = seen || (q - r.uv).norm() < kSameTrackerUv * 100;
         if (!seen) found.push_back(r.uv);
       }
   });

@@ -18,9 +18,9 @@
 namespace patchscan {
 
 struct SilhouetteTracker {
-  Vec2d uv, uvPrev;
+  Vec2 uv, uvPrev;
   bool hasPrev = false;
-  Vec2d uvPrev2 = Vec2d::Zero();  // the scan line before the previous one (when nSolved >= 3)
+  Vec2 uvPrev2 = Vec2::Zero();  // the scan line before the previous one (when nSolved >= 3)
   int nSolved = 1;                // scan lines on which this tracker has been solved
 };
 
@@ -40,8 +40,8 @@ constexpr double kSameTrackerUv = 1e-7;
 
 // F = (y - yScan, J / max(|s_u|, |s_v|)) and its Jacobian at uv.
 template <class ShapeT>
-inline void SilhouetteSystem(const ShapeT& shape, const ScreenMap& map, double yScan, const Vec2d& uv,
-                      Vec2d* f, Mat2d* jac) {
+inline void SilhouetteSystem(const ShapeT& shape, const ScreenMap& map, double yScan, const Vec2& uv,
+                      Vec2* f, Mat2* jac) {
   ScreenDerivs d;
   EvaluateScreen(shape, map, uv.x(), uv.y(), DerivOrder::Second, &d);
   const Vec2 su = d.dpdu.head<2>(), sv = d.dpdv.head<2>();
@@ -55,7 +55,7 @@ inline void SilhouetteSystem(const ShapeT& shape, const ScreenMap& map, double y
                     sv.x() * d.d2pdu2.y();
   const double jv = d.d2pduv.x() * sv.y() + su.x() * d.d2pdv2.y() - d.d2pdv2.x() * su.y() -
                     sv.x() * d.d2pduv.y();
-  *f = Vec2d(d.p.y() - yScan, j / norm);
+  *f = Vec2(d.p.y() - yScan, j / norm);
   *jac << su.y(), sv.y(), ju / norm, jv / norm;
 }
 
@@ -72,20 +72,20 @@ class SilhouetteScan {
   // Takes up a crossing of the current scan line found by other means (the X scan's walk
   // along the level curve passed a silhouette no tracker held): a repair, tracked from
   // the next scan line on. Ignored if a tracker is already there.
-  void Adopt(const Vec2d& uv);
+  void Adopt(const Vec2& uv);
 
   const std::vector<SilhouetteTracker>& Trackers() const { return trackers_; }
   const SilhouetteScanStats& Stats() const { return stats_; }
   // Where trackers were born and where they died (their last position) at the latest
   // Advance.
-  const std::vector<Vec2d>& Births() const { return births_; }
-  const std::vector<Vec2d>& Deaths() const { return deaths_; }
+  const std::vector<Vec2>& Births() const { return births_; }
+  const std::vector<Vec2>& Deaths() const { return deaths_; }
 
  private:
   template <class ShapeT>
   void AdvanceImpl(const ShapeT& shape, double yScan, const EdgeScan& edges);
   template <class ShapeT>
-  bool Solve(const ShapeT& shape, double yScan, const Vec2d& start, Vec2d* uv, DomainRule domain);
+  bool Solve(const ShapeT& shape, double yScan, const Vec2& start, Vec2* uv, DomainRule domain);
 
   const Surface& surface_;
   const ScreenMap& map_;
@@ -93,18 +93,18 @@ class SilhouetteScan {
   size_t nextStationary_ = 0;
   bool extrapolate_;
   std::vector<SilhouetteTracker> trackers_;
-  std::vector<Vec2d> births_, deaths_, searchFound_;
+  std::vector<Vec2> births_, deaths_, searchFound_;
   SilhouetteScanStats stats_;
 };
 
 // The crossings of scan line yScan with the silhouette found by the trackers' repair
 // search: the domain subdivided while a cell's conservative y range holds yScan, Newton
 // from cells under two pixels on the screen. Collapsed edges are not silhouettes.
-std::vector<Vec2d> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan);
+std::vector<Vec2> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan);
 
 // All solutions of y = yScan, J = 0 in [0,1]^2 found by Newton from a grid of starts and
 // merged: slow and independent of any tracking, for tests and repairs.
-std::vector<Vec2d> SilhouetteCrossingsBruteForce(const Surface& s, const ScreenMap& map,
+std::vector<Vec2> SilhouetteCrossingsBruteForce(const Surface& s, const ScreenMap& map,
                                                  double yScan, int grid = 48);
 
 }  // namespace patchscan

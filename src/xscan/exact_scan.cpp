@@ -15,7 +15,7 @@ struct ExactScan::Active {
   std::size_t index;
   double yMax = INFINITY;
   ScreenMap map;
-  Eigen::Matrix3d normalFromObject;
+  Mat3 normalFromObject;
   std::unique_ptr<EdgeScan> edges;
   std::unique_ptr<SilhouetteScan> silhouettes;
   // For the trace: the stationary points in screen space, by y, and the next to pass.
@@ -50,7 +50,7 @@ Vec2 ClampLength(const Vec2& v, double len) {
 }  // namespace
 
 raster::Fragment FragmentAt(const WalkPoint& p, const Surface& surface,
-                            const Eigen::Matrix3d& normalFromObject, std::uint32_t surfaceId) {
+                            const Mat3& normalFromObject, std::uint32_t surfaceId) {
   const SurfaceDerivs& o = p.object;
   raster::Fragment f;
   f.w = p.w;
@@ -193,7 +193,7 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
 
 void ExactScan::FinishWalk(Active& a) {
   // Silhouettes the walk found without a tracker are tracked from the next row on.
-  for (const Vec2d& uv : walkEvents_.untrackedSilhouettes) a.silhouettes->Adopt(uv);
+  for (const Vec2& uv : walkEvents_.untrackedSilhouettes) a.silhouettes->Adopt(uv);
   if (trace_) TraceWalk(a);
 }
 
@@ -364,31 +364,31 @@ bool ExactScan::ScanRowSlabs(double y, const raster::SampleColumns& columns, ras
 
 void ExactScan::TraceTrackers(Active& a, double y) {
   const Surface& s = surfaces_[a.index];
-  auto mark = [&](TraceKind kind, const Vec2d& uv) {
+  auto mark = [&](TraceKind kind, const Vec2& uv) {
     ScreenDerivs d;
     EvaluateScreen(s, a.map, uv.x(), uv.y(), DerivOrder::Position, &d);
     if (d.w > 0.0) trace_->Mark(kind, d.p.x(), d.p.y());
   };
-  for (const Vec2d& uv : rowTrackers_.edgePoints) mark(TraceKind::EdgeTracker, uv);
-  for (const Vec2d& uv : rowTrackers_.silhouettePoints) mark(TraceKind::SilhouetteTracker, uv);
+  for (const Vec2& uv : rowTrackers_.edgePoints) mark(TraceKind::EdgeTracker, uv);
+  for (const Vec2& uv : rowTrackers_.silhouettePoints) mark(TraceKind::SilhouetteTracker, uv);
   for (; a.nextStationary < a.stationary.size() && a.stationary[a.nextStationary].second.y() <= y; ++a.nextStationary)
     trace_->Mark(a.stationary[a.nextStationary].first, a.stationary[a.nextStationary].second.x(),
                  a.stationary[a.nextStationary].second.y());
-  for (const Vec2d& uv : a.edges->Folds()) mark(TraceKind::Fold, uv);
-  for (const Vec2d& uv : a.silhouettes->Births()) mark(TraceKind::Birth, uv);
-  for (const Vec2d& uv : a.edges->Deaths()) mark(TraceKind::Death, uv);
-  for (const Vec2d& uv : a.silhouettes->Deaths()) mark(TraceKind::Death, uv);
+  for (const Vec2& uv : a.edges->Folds()) mark(TraceKind::Fold, uv);
+  for (const Vec2& uv : a.silhouettes->Births()) mark(TraceKind::Birth, uv);
+  for (const Vec2& uv : a.edges->Deaths()) mark(TraceKind::Death, uv);
+  for (const Vec2& uv : a.silhouettes->Deaths()) mark(TraceKind::Death, uv);
 }
 
 void ExactScan::TraceWalk(Active& a) {
   const Surface& s = surfaces_[a.index];
-  auto mark = [&](TraceKind kind, const Vec2d& uv) {
+  auto mark = [&](TraceKind kind, const Vec2& uv) {
     ScreenDerivs d;
     EvaluateScreen(s, a.map, uv.x(), uv.y(), DerivOrder::Position, &d);
     if (d.w > 0.0) trace_->Mark(kind, d.p.x(), d.p.y());
   };
-  for (const Vec2d& uv : walkEvents_.repairs) mark(TraceKind::Repair, uv);
-  for (const Vec2d& uv : walkEvents_.failures) mark(TraceKind::Failure, uv);
+  for (const Vec2& uv : walkEvents_.repairs) mark(TraceKind::Repair, uv);
+  for (const Vec2& uv : walkEvents_.failures) mark(TraceKind::Failure, uv);
 }
 
 }  // namespace patchscan

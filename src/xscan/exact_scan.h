@@ -27,7 +27,7 @@ namespace patchscan {
 // The fragment of the surface point a walk found: world position, unit world normal (its
 // limit from inside at a collapsed edge), eye distance, uv and uv per pixel.
 raster::Fragment FragmentAt(const WalkPoint& p, const Surface& surface,
-                            const Eigen::Matrix3d& normalFromObject, std::uint32_t surfaceId);
+                            const Mat3& normalFromObject, std::uint32_t surfaceId);
 
 struct ExactScanOptions {
   bool extrapolate = true;  // start tracker Newton from the last two positions (§3.5)
@@ -100,7 +100,7 @@ class ExactScan final : public raster::FragmentSource {
   std::span<const Surface> surfaces_;
   Camera camera_;
   Vec3 eye_, right_, forward_;  // EyePoint, ViewRight and ViewForward of camera_, for the θ frame
-  std::vector<Vec2d> angles_;   // (cos θ_i, sin θ_i): the θ trackers' table (§4.1)
+  std::vector<Vec2> angles_;   // (cos θ_i, sin θ_i): the θ trackers' table (§4.1)
   ExactScanOptions options_;
   struct Pending {
     double yMin, yMax;

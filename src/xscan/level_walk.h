@@ -37,8 +37,8 @@ struct WalkStats {
 
 // Where the walks repaired a tracker miss and where they gave up, for the trace.
 struct WalkEvents {
-  std::vector<Vec2d> repairs, failures;
-  std::vector<Vec2d> untrackedSilhouettes;  // also in repairs: for the Y scan to adopt
+  std::vector<Vec2> repairs, failures;
+  std::vector<Vec2> untrackedSilhouettes;  // also in repairs: for the Y scan to adopt
   void Clear() {
     repairs.clear();
     failures.clear();
@@ -48,9 +48,9 @@ struct WalkEvents {
 
 // A scan line's trackers of one surface, the walk's starting points.
 struct RowTrackers {
-  std::vector<Vec2d> edgePoints;        // on the boundary, y = ys
+  std::vector<Vec2> edgePoints;        // on the boundary, y = ys
   std::vector<PatchEdge> edgeOf;        // per edge point
-  std::vector<Vec2d> silhouettePoints;  // inside, y = ys and J = 0
+  std::vector<Vec2> silhouettePoints;  // inside, y = ys and J = 0
   void Clear() {
     edgePoints.clear();
     edgeOf.clear();
@@ -77,9 +77,9 @@ constexpr long kWalkMaxStepsBase = 4096;
 
 // The point of a walk and what the walk needs there.
 struct WalkPoint {
-  Vec2d uv;
+  Vec2 uv;
   double x = 0.0, y = 0.0;
-  Vec2d gradX, gradY;
+  Vec2 gradX, gradY;
   double j = 0.0;   // J = x_u y_v - x_v y_u
   double jn = 0.0;  // J / (|grad x| |grad y|): the sine of the angle, scale-free
   double w = 0.0;   // eye distance
@@ -120,7 +120,7 @@ class LevelWalker {
 
   // `order` Second also fills in p.object's second derivatives (the θ trackers' G_i needs
   // the normal's derivatives); the screen quantities are first order either way.
-  WalkPoint Eval(const Vec2d& uv, DerivOrder order = DerivOrder::First) const {
+  WalkPoint Eval(const Vec2& uv, DerivOrder order = DerivOrder::First) const {
     WalkPoint p;
     p.uv = uv;
     ScreenDerivs d;
@@ -129,8 +129,8 @@ class LevelWalker {
     p.w = d.w;
     p.x = d.p.x();
     p.y = d.p.y();
-    p.gradX = Vec2d(d.dpdu.x(), d.dpdv.x());
-    p.gradY = Vec2d(d.dpdu.y(), d.dpdv.y());
+    p.gradX = Vec2(d.dpdu.x(), d.dpdv.x());
+    p.gradY = Vec2(d.dpdu.y(), d.dpdv.y());
     p.j = p.gradX.x() * p.gradY.y() - p.gradX.y() * p.gradY.x();
     const double scale = p.gradX.norm() * p.gradY.norm();
     p.jn = scale > 0.0 ? p.j / scale : 0.0;
@@ -140,26 +140,26 @@ class LevelWalker {
   }
 
  protected:
-  void Failed(const Vec2d& uv) {
+  void Failed(const Vec2& uv) {
     ++stats_->nFailures;
     if (events_) events_->failures.push_back(uv);
   }
-  void Repaired(const Vec2d& uv, long WalkStats::*counter) {
+  void Repaired(const Vec2& uv, long WalkStats::*counter) {
     ++(stats_->*counter);
     if (events_) events_->repairs.push_back(uv);
   }
 
   // The unit tangent of the level curve, (-y_v, y_u) / |grad y|, times the walk's sense.
-  static Vec2d Tangent(const WalkPoint& p, double sense) {
-    return sense * Vec2d(-p.gradY.y(), p.gradY.x()) / p.gradY.norm();
+  static Vec2 Tangent(const WalkPoint& p, double sense) {
+    return sense * Vec2(-p.gradY.y(), p.gradY.x()) / p.gradY.norm();
   }
-  static bool Inside(const Vec2d& uv) {
+  static bool Inside(const Vec2& uv) {
     return uv.x() >= 0.0 && uv.x() <= 1.0 && uv.y() >= 0.0 && uv.y() <= 1.0;
   }
 
   // Back onto the level curve from q, moving along grad y (the shortest way to first
   // order). Allowed to leave the domain slightly: the caller checks.
-  WalkPoint Correct(Vec2d q) const {
+  WalkPoint Correct(Vec2 q) const {
     constexpr int kMaxCorrections = 12;
     for (int k = 0; k < kMaxCorrections; ++k) {
       const WalkPoint p = Eval(q);
@@ -174,19 +174,19 @@ class LevelWalker {
   }
 
   // The point of the level curve at column c, by Newton from `seed`.
-  bool SolveColumn(int c, const Vec2d& seed, WalkPoint* out) const {
+  bool SolveColumn(int c, const Vec2& seed, WalkPoint* out) const {
     const double xs = cols_.At(c);
     ++stats_->nNewtonCalls;
     // The solver's last evaluation is at the point it returns: kept, not repeated.
     const auto r = SolveNewton2(
-        [&](const Vec2d& uv, Vec2d* f, Mat2d* jac) {
+        [&](const Vec2& uv, Vec2* f, Mat2* jac) {
           *out = Eval(uv);
           const WalkPoint& p = *out;
-          *f = Vec2d(p.x - xs, p.y - ys_);
+          *f = Vec2(p.x - xs, p.y - ys_);
           *jac << p.gradX.x(), p.gradX.y(), p.gradY.x(), p.gradY.y();
-          if (!p.ok) *f = Vec2d(NAN, NAN);
+          if (!p.ok) *f = Vec2(NAN, NAN);
         },
-        seed, Vec2d(kEdgeTolPx, kEdgeTolPx));
+        seed, Vec2(kEdgeTolPx, kEdgeTolPx));
     stats_->nNewtonIterations += r.iterations;
     if (r.status != NewtonStatus::Converged) return false;
     if (out->uv != r.uv) *out = Eval(r.uv);
@@ -249,8 +249,8 @@ class LevelWalker {
       else b = m;
     }
     const auto r = SolveNewton2(
-        [&](const Vec2d& uv, Vec2d* f, Mat2d* jac) { SilhouetteSystem(shape_, map_, ys_, uv, f, jac); },
-        0.5 * (a.uv + b.uv), Vec2d(kEdgeTolPx, kEdgeTolPx));
+        [&](const Vec2& uv, Vec2* f, Mat2* jac) { SilhouetteSystem(shape_, map_, ys_, uv, f, jac); },
+        0.5 * (a.uv + b.uv), Vec2(kEdgeTolPx, kEdgeTolPx));
     const double bracket = (b.uv - a.uv).norm();
     if (r.status == NewtonStatus::Converged && (r.uv - 0.5 * (a.uv + b.uv)).norm() <= bracket + kSameCrossingUv) {
       *s = Eval(r.uv);
@@ -268,7 +268,7 @@ class LevelWalker {
   }
 
   // Marks the silhouette tracker at s as passed; false if none holds it.
-  bool UseSilhouetteTracker(const Vec2d& uv) {
+  bool UseSilhouetteTracker(const Vec2& uv) {
     bool found = false;
     for (size_t k = 0; k < trackers_->silhouettePoints.size(); ++k)
       if ((trackers_->silhouettePoints[k] - uv).norm() <= kSameCrossingUv) {
@@ -277,7 +277,7 @@ class LevelWalker {
       }
     return found;
   }
-  bool UseEdgeTracker(const Vec2d& uv) {
+  bool UseEdgeTracker(const Vec2& uv) {
     bool found = false;
     for (size_t k = 0; k < trackers_->edgePoints.size(); ++k)
       if ((trackers_->edgePoints[k] - uv).norm() <= kSameCrossingUv) {
@@ -289,10 +289,10 @@ class LevelWalker {
 
   // Where the straight step from a to q (outside) crosses the boundary, the crossing of
   // the level curve with that edge, by Newton along the edge.
-  bool ExitPoint(const WalkPoint& a, const Vec2d& q, WalkPoint* e) const {
+  bool ExitPoint(const WalkPoint& a, const Vec2& q, WalkPoint* e) const {
     double tHit = 1.0;
     PatchEdge edge = PatchEdge::U0;
-    const Vec2d d = q - a.uv;
+    const Vec2 d = q - a.uv;
     auto consider = [&](int axis, double bound, PatchEdge which) {
       if (d[axis] == 0.0) return;
       const double t = (bound - a.uv[axis]) / d[axis];
@@ -305,7 +305,7 @@ class LevelWalker {
     if (q.x() > 1.0) consider(0, 1.0, PatchEdge::U1);
     if (q.y() < 0.0) consider(1, 0.0, PatchEdge::V0);
     if (q.y() > 1.0) consider(1, 1.0, PatchEdge::V1);
-    const Vec2d hit = a.uv + tHit * d;
+    const Vec2 hit = a.uv + tHit * d;
     const bool alongU = edge == PatchEdge::V0 || edge == PatchEdge::V1;  // t runs along u
     const auto r = SolveNewton1(
         [&](double t, double* f, double* df) {
@@ -358,7 +358,7 @@ class LevelWalker {
     *didPass = false;
     for (;;) {
       if (*h < kWalkStepMin) return Step::Lost;
-      const Vec2d tan = Tangent(*p, sense);
+      const Vec2 tan = Tangent(*p, sense);
       // Aim at the next column when it is within the step (first order).
       const bool onSil = std::abs(p->jn) <= kOnSilhouetteJn;
       const int dir = DirX(*p, sense);
@@ -368,7 +368,7 @@ class LevelWalker {
         hColumn = std::abs(cols_.At(c) - p->x) * p->gradY.norm() / std::abs(p->j);
       const bool aimed = hColumn <= *h;
       const double step = aimed ? hColumn : *h;
-      const Vec2d q = p->uv + step * tan;
+      const Vec2 q = p->uv + step * tan;
       WalkPoint next;
       bool ok;
       if (aimed) {
@@ -412,7 +412,7 @@ class LevelWalker {
   // The walk's sense whose tangent at p, on boundary edge `edge`, points into the domain;
   // 0 when the curve only touches the edge there (the scan line at an edge extremum).
   static double InwardSense(const WalkPoint& p, PatchEdge edge) {
-    const Vec2d t = Tangent(p, 1.0);
+    const Vec2 t = Tangent(p, 1.0);
     double inward = 0.0;
     switch (edge) {
       case PatchEdge::U0: inward = t.x(); break;
@@ -428,7 +428,7 @@ class LevelWalker {
   long MaxSteps() const { return kWalkMaxStepsBase + kWalkMaxStepsPerColumn * cols_.n; }
 
   template <class Emit>
-  void WalkFromEdge(const Vec2d& uv, PatchEdge edge, Emit& emit) {
+  void WalkFromEdge(const Vec2& uv, PatchEdge edge, Emit& emit) {
     ++stats_->nWalks;
     WalkPoint p = Eval(uv);
     if (!p.ok) {
@@ -455,7 +455,7 @@ class LevelWalker {
   }
 
   template <class Emit>
-  void WalkClosed(const Vec2d& uv, Emit& emit) {
+  void WalkClosed(const Vec2& uv, Emit& emit) {
     WalkPoint start = Eval(uv);
     if (!start.ok || std::abs(start.y - ys_) > 1e3 * kEdgeTolPx) return;  // not a crossing
     ++stats_->nWalks;

@@ -3,7 +3,7 @@
 namespace patchscan {
 
 TableResidual TableFunction(const SurfaceDerivs& o, const Affine3& worldFromObject, const ThetaFrame& frame,
-                            const Vec2d& angle) {
+                            const Vec2& angle) {
   const auto L = worldFromObject.linear();
   const Vec3 p = worldFromObject * o.p;
   const Vec3 pu = L * o.dpdu, pv = L * o.dpdv;
@@ -45,26 +45,26 @@ TableResidual TableFunction(const SurfaceDerivs& o, const Affine3& worldFromObje
   // d(G/|N|) = dG/|N| - G (N·dN)/|N|³.
   TableResidual out;
   out.g = G / len;
-  out.grad = Vec2d(Gu / len - G * n.dot(nu) / (len * len * len), Gv / len - G * n.dot(nv) / (len * len * len));
+  out.grad = Vec2(Gu / len - G * n.dot(nu) / (len * len * len), Gv / len - G * n.dot(nv) / (len * len * len));
   out.along = n.dot(c * s - sn * r) / len;
   out.t = -n.dot(r) / len;
   return out;
 }
 
-double TurnFunction(const SurfaceDerivs& object, const Vec2d& gradY, const Affine3& worldFromObject,
+double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const Affine3& worldFromObject,
                     const ThetaFrame& frame) {
   // At the point's own angle θ, G_θ = 0 and G_φ/|N| = ρ sin(φ - θ) with ρ the in-plane part
   // of the unit normal, so G_θ's gradient at fixed φ = θ is -ρ ∇θ.
   const auto L = worldFromObject.linear();
   const Vec3 n = (L.determinant() < 0.0 ? -1.0 : 1.0) * (L * object.dpdu).cross(L * object.dpdv);
   const double theta = frame.Theta(worldFromObject * object.p, n);
-  return TurnRate(TableFunction(object, worldFromObject, frame, Vec2d(std::cos(theta), std::sin(theta))), gradY);
+  return TurnRate(TableFunction(object, worldFromObject, frame, Vec2(std::cos(theta), std::sin(theta))), gradY);
 }
 
-double TurnRate(const TableResidual& g, const Vec2d& gradY) {
+double TurnRate(const TableResidual& g, const Vec2& gradY) {
   const double len = gradY.norm();
   if (!(g.along > 0.0) || !(len > 0.0)) return NAN;  // the normal is across the scan plane
-  return -g.grad.dot(Vec2d(-gradY.y(), gradY.x())) / (len * g.along);
+  return -g.grad.dot(Vec2(-gradY.y(), gradY.x())) / (len * g.along);
 }
 
 }  // namespace patchscan

@@ -89,7 +89,7 @@ struct ThetaFrame {
   // The surface's object-to-world map (the θ trackers differentiate the world normal),
   // and (cos θ_i, sin θ_i) for i < N (empty: computed when needed).
   const Affine3* worldFromObject = nullptr;
-  std::span<const Vec2d> angles;
+  std::span<const Vec2> angles;
   // θ of world normal n at world point p, in (-π, π].
   double Theta(const Vec3& p, const Vec3& n) const {
     const Vec3 r = orthographic ? forward : Vec3((p - eye).normalized());
@@ -106,7 +106,7 @@ struct ThetaFrame {
 };
 
 // The side of the domain [0,1]² a boundary point lies on: 0 v = 0, 1 u = 1, 2 v = 1, 3 u = 0.
-inline int DomainSide(const Vec2d& uv) {
+inline int DomainSide(const Vec2& uv) {
   const double d[4] = {uv.y(), 1.0 - uv.x(), 1.0 - uv.y(), uv.x()};
   return static_cast<int>(std::min_element(d, d + 4) - d);
 }
@@ -120,7 +120,7 @@ struct ChainSet {
     bool closed;
   };
   std::vector<ThetaVertex> v;
-  std::vector<Vec2d> before;
+  std::vector<Vec2> before;
   std::vector<Chain> chains;
   void Clear() {
     v.clear();
@@ -130,7 +130,7 @@ struct ChainSet {
   void Add(std::span<const ThetaVertex> chain, bool closed) {
     chains.push_back({static_cast<std::uint32_t>(v.size()), static_cast<std::uint32_t>(v.size() + chain.size()), closed});
     v.insert(v.end(), chain.begin(), chain.end());
-    before.resize(v.size(), Vec2d(NAN, NAN));
+    before.resize(v.size(), Vec2(NAN, NAN));
   }
   std::span<const ThetaVertex> Of(const Chain& c) const { return {v.data() + c.begin, c.end - c.begin}; }
 };
@@ -144,20 +144,20 @@ struct ChainSet {
 // side (negative at θ_i + π, the other root of G_i), and t = T / |N|.
 struct TableResidual {
   double g = 0.0, along = 0.0, t = 0.0;
-  Vec2d grad = Vec2d::Zero();
+  Vec2 grad = Vec2::Zero();
 };
 TableResidual TableFunction(const SurfaceDerivs& object, const Affine3& worldFromObject, const ThetaFrame& frame,
-                            const Vec2d& angle);
+                            const Vec2& angle);
 
 // §4.3's turn function: θ's derivative along the level curve y = const at a surface
 // point, per unit (u,v) length along the curve's tangent (-y_v, y_u)/|∇y| (radians per
 // unit of (u,v)); zero at a turn point. NaN where the normal is perpendicular to the scan
 // plane (θ undefined). `gradY` is screen y's (u,v) gradient there.
-double TurnFunction(const SurfaceDerivs& object, const Vec2d& gradY, const Affine3& worldFromObject,
+double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const Affine3& worldFromObject,
                     const ThetaFrame& frame);
 // The same from G_i's residual at a point where θ = θ_i (a solved θ tracker): there G_i's
 // gradient is -ρ ∇θ, with ρ = `along`.
-double TurnRate(const TableResidual& atOwnAngle, const Vec2d& gradY);
+double TurnRate(const TableResidual& atOwnAngle, const Vec2& gradY);
 
 // A turn tracker's turn function is solved to this (radians per unit of (u,v)): where θ
 // turns at a rate of 1 per unit² of (u,v) (a gentle crinkle), the point is within 1e-7 of
@@ -221,18 +221,18 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // The θ tracker of table angle i on this line by damped Newton from `start`: false if
   // it does not converge (or leaves the domain). Counts the iterations into *iterations.
   // `residual`, if given, receives G_i's residual at the solution.
-  bool SolveTable(int i, const Vec2d& start, WalkPoint* out, long* iterations,
+  bool SolveTable(int i, const Vec2& start, WalkPoint* out, long* iterations,
                   TableResidual* residual = nullptr) const;
 
   // The turn tracker of this line (§4.3: y = ys and the turn function zero) by Newton from
   // `start`: false if it does not converge (a turn pair has met and gone) or leaves the
   // domain. Counts the iterations into *iterations.
-  bool SolveTurn(const Vec2d& start, WalkPoint* out, long* iterations) const;
+  bool SolveTurn(const Vec2& start, WalkPoint* out, long* iterations) const;
 
   // (cos θ_i, sin θ_i).
-  Vec2d Angle(int i) const {
+  Vec2 Angle(int i) const {
     if (static_cast<std::size_t>(i) < frame_.angles.size()) return frame_.angles[static_cast<std::size_t>(i)];
-    return Vec2d(std::cos(i * table_), std::sin(i * table_));
+    return Vec2(std::cos(i * table_), std::sin(i * table_));
   }
 
  private:
@@ -243,7 +243,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   }
   double ThetaOf(const raster::Fragment& f) const { return frame_.Theta(f.position, f.normal); }
   // The turn function at (u,v) (NaN where undefined).
-  double TurnAt(const Vec2d& uv) const {
+  double TurnAt(const Vec2& uv) const {
     const WalkPoint p = this->Eval(uv, DerivOrder::Second);
     return p.ok ? TurnFunction(p.object, p.gradY, World(), frame_) : NAN;
   }
@@ -268,7 +268,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // Whether v lies on the step from a to b: along the chord between its ends, and
   // within a quarter of its length off it.
   static bool WithinStep(const WalkPoint& a, const WalkPoint& b, const WalkPoint& v) {
-    const Vec2d d = b.uv - a.uv;
+    const Vec2 d = b.uv - a.uv;
     const double len2 = d.squaredNorm();
     if (!(len2 > 0.0)) return (v.uv - a.uv).norm() <= kSameCrossingUv;
     const double t = (v.uv - a.uv).dot(d) / len2;
@@ -384,7 +384,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       // The vertex is the θ tracker itself (G_i = 0 on the line), by Newton from the
       // interpolated point; if that lands outside the step (near a turn point θ_i may be
       // crossed again close by), the interpolated point.
-      const Vec2d guess = from.uv + t * (to.uv - from.uv);
+      const Vec2 guess = from.uv + t * (to.uv - from.uv);
       WalkPoint v;
       // It must also lie on from's side of `to` after the chain's last vertex (x runs one
       // way between anchors; a turn just placed beyond `from` may have passed it).
@@ -442,8 +442,8 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
   for (long k = 0; k < this->MaxSteps(); ++k) {
     if (h < kWalkStepMin) break;
     ++theta_->nSteps;
-    const Vec2d tan = Base::Tangent(p, sense);
-    const Vec2d q = p.uv + h * tan;
+    const Vec2 tan = Base::Tangent(p, sense);
+    const Vec2 q = p.uv + h * tan;
     WalkPoint next;
     bool ok = false;
     if (Base::Inside(q)) {
@@ -552,27 +552,27 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
 }
 
 template <class ShapeT>
-bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2d& start, WalkPoint* out, long* iterations,
+bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2& start, WalkPoint* out, long* iterations,
                                      TableResidual* residual) const {
-  const Vec2d angle = Angle(i);
+  const Vec2 angle = Angle(i);
   const Affine3& world = World();
   NewtonOptions opt;
   opt.maxIterations = kThetaMaxIterations;
   opt.domain = DomainRule::Fail;  // a tracker leaving [0,1]² has left the patch
   const auto r = SolveNewton2(
-      [&](const Vec2d& uv, Vec2d* f, Mat2d* jac) {
+      [&](const Vec2& uv, Vec2* f, Mat2* jac) {
         *out = this->Eval(uv, DerivOrder::Second);
         const TableResidual g = TableFunction(out->object, world, frame_, angle);
         if (residual) *residual = g;
-        *f = Vec2d(out->y - this->ys_, g.g);
+        *f = Vec2(out->y - this->ys_, g.g);
         jac->row(0) = out->gradY.transpose();
         jac->row(1) = g.grad.transpose();
         // Blinn's damping (§4.1): a point where the normal's in-plane direction has
         // flipped (the other root θ_i + π of G_i) or T has changed sign is no decrease,
         // so the solver halves the step that reached it.
-        if (!out->ok || !(g.along > 0.0) || !(g.t * angle.y() > 0.0)) *f = Vec2d(NAN, NAN);
+        if (!out->ok || !(g.along > 0.0) || !(g.t * angle.y() > 0.0)) *f = Vec2(NAN, NAN);
       },
-      start, Vec2d(kEdgeTolPx, kThetaTol), opt);
+      start, Vec2(kEdgeTolPx, kThetaTol), opt);
   *iterations += r.iterations;
   if (r.status != NewtonStatus::Converged) return false;
   if (out->uv != r.uv) {
@@ -583,25 +583,25 @@ bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2d& start, WalkPoint* out, 
 }
 
 template <class ShapeT>
-bool ThetaWalker<ShapeT>::SolveTurn(const Vec2d& start, WalkPoint* out, long* iterations) const {
+bool ThetaWalker<ShapeT>::SolveTurn(const Vec2& start, WalkPoint* out, long* iterations) const {
   const Affine3& world = World();
   NewtonOptions opt;
   opt.maxIterations = kThetaMaxIterations;
   opt.domain = DomainRule::Fail;
   const auto r = SolveNewton2(
-      [&](const Vec2d& uv, Vec2d* f, Mat2d* jac) {
+      [&](const Vec2& uv, Vec2* f, Mat2* jac) {
         *out = this->Eval(uv, DerivOrder::Second);
         const double tau = out->ok ? TurnFunction(out->object, out->gradY, world, frame_) : NAN;
-        *f = Vec2d(out->y - this->ys_, tau);
+        *f = Vec2(out->y - this->ys_, tau);
         jac->row(0) = out->gradY.transpose();
         // Forward differences, stepping back from the domain's far edges.
         const double hu = uv.x() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
         const double hv = uv.y() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
-        (*jac)(1, 0) = (TurnAt(uv + Vec2d(hu, 0.0)) - tau) / hu;
-        (*jac)(1, 1) = (TurnAt(uv + Vec2d(0.0, hv)) - tau) / hv;
-        if (!out->ok) *f = Vec2d(NAN, NAN);
+        (*jac)(1, 0) = (TurnAt(uv + Vec2(hu, 0.0)) - tau) / hu;
+        (*jac)(1, 1) = (TurnAt(uv + Vec2(0.0, hv)) - tau) / hv;
+        if (!out->ok) *f = Vec2(NAN, NAN);
       },
-      start, Vec2d(kEdgeTolPx, kTurnTol), opt);
+      start, Vec2(kEdgeTolPx, kTurnTol), opt);
   *iterations += r.iterations;
   if (r.status != NewtonStatus::Converged) return false;
   if (out->uv != r.uv) *out = this->Eval(r.uv);
@@ -643,7 +643,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
   to->Clear();
   // The unused tracker of the line nearest to uv: an edge tracker on the same side of
   // the domain, or a silhouette tracker.
-  auto nearest = [&](const std::vector<Vec2d>& points, std::vector<char>* used, const Vec2d& uv, int side) {
+  auto nearest = [&](const std::vector<Vec2>& points, std::vector<char>* used, const Vec2& uv, int side) {
     int best = -1;
     double bestD = INFINITY;
     for (std::size_t k = 0; k < points.size(); ++k) {
@@ -699,7 +699,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
                      a.kind == ThetaVertex::Kind::Turn ? -lastD : lastD)) return false;
           for (std::size_t i = 1; i + 1 < scratch->size(); ++i) {
             to->v.push_back((*scratch)[i]);
-            to->before.push_back(Vec2d(NAN, NAN));
+            to->before.push_back(Vec2(NAN, NAN));
           }
         }
       }
@@ -724,8 +724,8 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
           skipped = true;
           continue;
         case ThetaVertex::Kind::Turn: {
-          const Vec2d& prev = from.before[c.begin + k];
-          const Vec2d start = extrapolate && prev.allFinite() ? Vec2d(2.0 * V.f.uv - prev) : V.f.uv;
+          const Vec2& prev = from.before[c.begin + k];
+          const Vec2 start = extrapolate && prev.allFinite() ? Vec2(2.0 * V.f.uv - prev) : V.f.uv;
           ++theta_->nTurnTrackers;
           // A turn tracker with no root near (its pair has met it and both are gone) is
           // dropped, and the link across its place repaired sideways.
@@ -754,8 +754,8 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
           break;
         }
         case ThetaVertex::Kind::Table: {
-          const Vec2d& prev = from.before[c.begin + k];
-          const Vec2d start = extrapolate && prev.allFinite() ? Vec2d(2.0 * V.f.uv - prev) : V.f.uv;
+          const Vec2& prev = from.before[c.begin + k];
+          const Vec2 start = extrapolate && prev.allFinite() ? Vec2(2.0 * V.f.uv - prev) : V.f.uv;
           ++theta_->nTrackers;
           // A tracker that leaves the patch or does not converge is dropped (§3.2: deleted
           // when it leaves [0,1]²); the link across its place is repaired sideways.

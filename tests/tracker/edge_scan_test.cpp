@@ -15,7 +15,7 @@ namespace {
 std::vector<double> BruteRoots(const Surface& s, const ScreenMap& map, PatchEdge e, double yScan) {
   constexpr int kSamples = 2048;
   auto f = [&](double t) {
-    const Vec2d uv = EdgePoint(e, t);
+    const Vec2 uv = EdgePoint(e, t);
     ScreenDerivs d;
     EvaluateScreen(s, map, uv.x(), uv.y(), DerivOrder::Position, &d);
     return d.p.y() - yScan;

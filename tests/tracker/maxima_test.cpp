@@ -23,7 +23,7 @@ Camera View(const Vec3& eye, const Vec3& lookAt = Vec3::Zero()) {
 
 // The smallest screen y over a dense grid of (u,v): a brute-force reference for the
 // topmost point, accurate to the grid spacing squared times the curvature.
-double BruteTopY(const Surface& s, const ScreenMap& map, Vec2d* at = nullptr) {
+double BruteTopY(const Surface& s, const ScreenMap& map, Vec2* at = nullptr) {
   constexpr int kGrid = 1500;
   double best = INFINITY;
   for (int j = 0; j <= kGrid; ++j)
@@ -32,7 +32,7 @@ double BruteTopY(const Surface& s, const ScreenMap& map, Vec2d* at = nullptr) {
       EvaluateScreen(s, map, double(i) / kGrid, double(j) / kGrid, DerivOrder::Position, &d);
       if (d.p.y() < best) {
         best = d.p.y();
-        if (at) *at = Vec2d(double(i) / kGrid, double(j) / kGrid);
+        if (at) *at = Vec2(double(i) / kGrid, double(j) / kGrid);
       }
     }
   return best;
@@ -125,7 +125,7 @@ TEST(Maxima, TeapotTopOfEveryPatchIsFoundAndApexesAreNotMaxima) {
     const ScreenMap map(cam, s.worldFromObject);
     const auto found = FindStationaryPoints(s, map, &st);
     ASSERT_FALSE(found.empty()) << "patch " << k + 1;
-    Vec2d at;
+    Vec2 at;
     const double brute = BruteTopY(s, map, &at);
     EXPECT_NEAR(found.front().y, brute, kBruteTolPx) << "patch " << k + 1 << "\n" << Describe(found);
     for (const Stationary& m : found) {
@@ -133,7 +133,7 @@ TEST(Maxima, TeapotTopOfEveryPatchIsFoundAndApexesAreNotMaxima) {
       for (double du : {-1e-3, 0.0, 1e-3})
         for (double dv : {-1e-3, 0.0, 1e-3}) {
           ScreenDerivs d;
-          const Vec2d q = (m.uv + Vec2d(du, dv)).cwiseMax(0.0).cwiseMin(1.0);
+          const Vec2 q = (m.uv + Vec2(du, dv)).cwiseMax(0.0).cwiseMin(1.0);
           EvaluateScreen(s, map, q.x(), q.y(), DerivOrder::Position, &d);
           EXPECT_GE(d.p.y(), m.y - 1e-9) << "patch " << k + 1;
         }

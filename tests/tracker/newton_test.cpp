@@ -64,8 +64,8 @@ TEST(Newton1, FailuresAreStatusesNotNaN) {
 // Circle x^2 + y^2 = r2 meets the line x - y = c.
 struct CircleLine {
   double r2, c;
-  void operator()(const Vec2d& p, Vec2d* f, Mat2d* j) const {
-    *f = Vec2d(p.squaredNorm() - r2, p.x() - p.y() - c);
+  void operator()(const Vec2& p, Vec2* f, Mat2* j) const {
+    *f = Vec2(p.squaredNorm() - r2, p.x() - p.y() - c);
     *j << 2 * p.x(), 2 * p.y(), 1, -1;
   }
 };
@@ -74,19 +74,19 @@ TEST(Newton2, ConvergesQuadraticallyToTheIntersection) {
   const CircleLine f{0.5, 0.1};
   // The root with x, y > 0: x = (c + sqrt(2 r2 - c^2)) / 2.
   const double x = (0.1 + std::sqrt(1.0 - 0.01)) / 2;
-  const Vec2d root(x, x - 0.1);
+  const Vec2 root(x, x - 0.1);
   double prev = 0.0;
   for (int k = 1; k <= 4; ++k) {
     NewtonOptions o;
     o.maxIterations = k;
-    const auto r = SolveNewton2(f, Vec2d(0.9, 0.9), Vec2d::Zero(), o);
+    const auto r = SolveNewton2(f, Vec2(0.9, 0.9), Vec2::Zero(), o);
     const double e = (r.uv - root).norm();
     if (k >= 2 && prev > 1e-6) {
       EXPECT_LT(e, 2.0 * prev * prev) << "k " << k;  // quadratic
     }
     prev = e;
   }
-  const auto r = SolveNewton2(f, Vec2d(0.9, 0.9), Vec2d(1e-12, 1e-12));
+  const auto r = SolveNewton2(f, Vec2(0.9, 0.9), Vec2(1e-12, 1e-12));
   EXPECT_EQ(r.status, NewtonStatus::Converged);
   EXPECT_LE((r.uv - root).norm(), 1e-11);
   EXPECT_LE(r.iterations, 6);
@@ -97,19 +97,19 @@ TEST(Newton2, DomainRulesAndSingularities) {
   const CircleLine f{0.5, 0.1};
   NewtonOptions fail;
   fail.domain = DomainRule::Fail;
-  auto r = SolveNewton2(f, Vec2d(0.0, 0.05), Vec2d(1e-12, 1e-12), fail);
+  auto r = SolveNewton2(f, Vec2(0.0, 0.05), Vec2(1e-12, 1e-12), fail);
   EXPECT_TRUE(r.status == NewtonStatus::LeftDomain || r.status == NewtonStatus::Converged);
   // Tangent line: the Jacobian is singular at the single touching point; no NaN.
   const CircleLine tangent{0.5, 1.0};  // x - y = 1 touches x^2 + y^2 = 1/2 at (1/2, -1/2)
-  r = SolveNewton2(tangent, Vec2d(0.5, 0.0), Vec2d(1e-14, 1e-14));
+  r = SolveNewton2(tangent, Vec2(0.5, 0.0), Vec2(1e-14, 1e-14));
   EXPECT_TRUE(r.uv.allFinite() && r.f.allFinite());
   EXPECT_NE(r.status, NewtonStatus::Converged);
   // A function that returns NaN beyond u = 0.6.
-  auto nan = [](const Vec2d& p, Vec2d* v, Mat2d* j) {
-    *v = p.x() > 0.6 ? Vec2d(NAN, NAN) : Vec2d(p.x() - 0.8, p.y() - 0.5);
-    *j = Mat2d::Identity();
+  auto nan = [](const Vec2& p, Vec2* v, Mat2* j) {
+    *v = p.x() > 0.6 ? Vec2(NAN, NAN) : Vec2(p.x() - 0.8, p.y() - 0.5);
+    *j = Mat2::Identity();
   };
-  r = SolveNewton2(nan, Vec2d(0.5, 0.5), Vec2d(1e-9, 1e-9));
+  r = SolveNewton2(nan, Vec2(0.5, 0.5), Vec2(1e-9, 1e-9));
   EXPECT_NE(r.status, NewtonStatus::Converged);
   EXPECT_TRUE(r.uv.allFinite() && r.f.allFinite());
 }
@@ -122,13 +122,13 @@ TEST(Newton2, RandomCubicsNeverLoopNorNaN) {
   for (int n = 0; n < 2000; ++n) {
     double a[8];
     for (double& x : a) x = d(rng);
-    auto f = [&](const Vec2d& p, Vec2d* v, Mat2d* j) {
+    auto f = [&](const Vec2& p, Vec2* v, Mat2* j) {
       const double u = p.x(), w = p.y();
-      *v = Vec2d(a[0] * u * u * u + a[1] * w + a[2] * u * w + a[3],
+      *v = Vec2(a[0] * u * u * u + a[1] * w + a[2] * u * w + a[3],
                  a[4] * w * w * w + a[5] * u + a[6] * u * u + a[7]);
       *j << 3 * a[0] * u * u + a[2] * w, a[1] + a[2] * u, a[5] + 2 * a[6] * u, 3 * a[4] * w * w;
     };
-    const auto r = SolveNewton2(f, Vec2d(s(rng), s(rng)), Vec2d(1e-10, 1e-10));
+    const auto r = SolveNewton2(f, Vec2(s(rng), s(rng)), Vec2(1e-10, 1e-10));
     ASSERT_TRUE(r.uv.allFinite() && r.f.allFinite()) << "system " << n;
     ASSERT_LE(r.iterations, NewtonOptions{}.maxIterations);
     ASSERT_TRUE((r.uv.array() >= 0).all() && (r.uv.array() <= 1).all());

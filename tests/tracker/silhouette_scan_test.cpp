@@ -24,7 +24,7 @@ Camera View(const Vec3& eye) {
 
 // Whether uv is on a collapsed edge (a pole, the lid apex), where J vanishes identically:
 // brute-force solutions there are not silhouette crossings.
-bool OnCollapsedEdge(const Surface& s, const ScreenMap& map, const Vec2d& p) {
+bool OnCollapsedEdge(const Surface& s, const ScreenMap& map, const Vec2& p) {
   ScreenDerivs d;
   EvaluateScreen(s, map, p.x(), p.y(), DerivOrder::First, &d);
   return d.dpdu.head<2>().norm() < 1e-6 * d.dpdv.head<2>().norm() ||
@@ -46,12 +46,12 @@ void ExpectTracksMatch(const Surface& s, const Camera& cam, const char* name,
     const double y = row + 0.5;
     edges.Advance(y);
     sil.Advance(y, edges);
-    std::vector<Vec2d> want = SilhouetteCrossingsBruteForce(s, map, y);
-    std::erase_if(want, [&](const Vec2d& p) { return OnCollapsedEdge(s, map, p); });
+    std::vector<Vec2> want = SilhouetteCrossingsBruteForce(s, map, y);
+    std::erase_if(want, [&](const Vec2& p) { return OnCollapsedEdge(s, map, p); });
     ASSERT_EQ(sil.Trackers().size(), want.size()) << name << " scan line y " << y;
     for (const SilhouetteTracker& t : sil.Trackers()) {
       double best = INFINITY;
-      for (const Vec2d& w : want) best = std::min(best, (w - t.uv).norm());
+      for (const Vec2& w : want) best = std::min(best, (w - t.uv).norm());
       EXPECT_LE(best, kMatchUv) << name << " y " << y << " tracker at " << t.uv.transpose();
       ++compared;
     }
@@ -90,13 +90,13 @@ TEST(SilhouetteScan, RepairSearchFindsWhatManyStartsFind) {
   long compared = 0;
   for (int row = 0; row < cam.height; ++row) {
     const double y = row + 0.5;
-    std::vector<Vec2d> want = SilhouetteCrossingsBruteForce(torus, map, y);
-    std::erase_if(want, [&](const Vec2d& p) { return OnCollapsedEdge(torus, map, p); });
-    const std::vector<Vec2d> got = SilhouetteCrossingsBySubdivision(torus, map, y);
+    std::vector<Vec2> want = SilhouetteCrossingsBruteForce(torus, map, y);
+    std::erase_if(want, [&](const Vec2& p) { return OnCollapsedEdge(torus, map, p); });
+    const std::vector<Vec2> got = SilhouetteCrossingsBySubdivision(torus, map, y);
     ASSERT_EQ(got.size(), want.size()) << "y " << y;
-    for (const Vec2d& g : got) {
+    for (const Vec2& g : got) {
       double best = INFINITY;
-      for (const Vec2d& w : want) best = std::min(best, (w - g).norm());
+      for (const Vec2& w : want) best = std::min(best, (w - g).norm());
       EXPECT_LE(best, kMatchUv) << "y " << y;
       ++compared;
     }
@@ -136,11 +136,11 @@ TEST(SilhouetteScan, TeapotAgreesWithBruteForceOnNearlyEveryScanLine) {
       edges.Advance(y);
       sil.Advance(y, edges);
       auto want = SilhouetteCrossingsBruteForce(s, map, y, 32);
-      std::erase_if(want, [&](const Vec2d& p) { return OnCollapsedEdge(s, map, p); });
+      std::erase_if(want, [&](const Vec2& p) { return OnCollapsedEdge(s, map, p); });
       bool same = want.size() == sil.Trackers().size();
       for (const SilhouetteTracker& t : sil.Trackers()) {
         double best = INFINITY;
-        for (const Vec2d& w : want) best = std::min(best, (w - t.uv).norm());
+        for (const Vec2& w : want) best = std::min(best, (w - t.uv).norm());
         same = same && best <= kMatchUv;
       }
       if (!same) {

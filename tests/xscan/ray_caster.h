@@ -158,7 +158,7 @@ class RayCaster {
         hits->push_back({uv, d.w, k});
         return true;
       }
-      Eigen::Matrix2d jac;
+      Mat2 jac;
       jac << d.dpdu.x(), d.dpdv.x(), d.dpdu.y(), d.dpdv.y();
       if (jac.determinant() == 0.0) return false;
       uv = (uv - jac.inverse() * f).cwiseMax(0.0).cwiseMin(1.0);

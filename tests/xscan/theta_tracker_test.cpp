@@ -59,7 +59,7 @@ ThetaFrame FrameOf(const Camera& c, const Surface& s) {
 }
 
 // The value of G_i / |N| at (u,v), for finite differences.
-double TableG(const Surface& s, const ThetaFrame& frame, double u, double v, const Vec2d& angle) {
+double TableG(const Surface& s, const ThetaFrame& frame, double u, double v, const Vec2& angle) {
   SurfaceDerivs d;
   VisitShape(s, [&](const auto& shape) { shape.Evaluate(u, v, DerivOrder::Second, &d); });
   return TableFunction(d, s.worldFromObject, frame, angle).g;
@@ -76,7 +76,7 @@ void AtRandomPoints(unsigned seed, Compare&& compare) {
     const ThetaFrame frame = FrameOf(c.camera, c.surface);
     int compared = 0;
     for (int k = 0; k < 200; ++k) {
-      const Vec2d uv(in(rng), in(rng));
+      const Vec2 uv(in(rng), in(rng));
       compared += compare(c, frame, uv, k);
     }
     EXPECT_GT(compared, 50) << c.name;
@@ -88,15 +88,15 @@ TEST(ThetaTracker, GradientOfGMatchesFiniteDifferences) {
   // rounding about 1e-16 / h, both below 1e-8 for these surfaces' derivatives; relative to
   // the gradient's own size (at least 1e-2 at the points compared) that is 1e-6.
   constexpr double kStep = 1e-5, kRelTol = 1e-5;
-  AtRandomPoints(7, [&](const TrackerCase& c, const ThetaFrame& frame, const Vec2d& uv, int k) {
+  AtRandomPoints(7, [&](const TrackerCase& c, const ThetaFrame& frame, const Vec2& uv, int k) {
     const double u = uv.x(), v = uv.y();
     const int i = 1 + k % 15;
-    const Vec2d angle(std::cos(2 * std::numbers::pi * i / 16), std::sin(2 * std::numbers::pi * i / 16));
+    const Vec2 angle(std::cos(2 * std::numbers::pi * i / 16), std::sin(2 * std::numbers::pi * i / 16));
     SurfaceDerivs d;
     VisitShape(c.surface, [&](const auto& shape) { shape.Evaluate(u, v, DerivOrder::Second, &d); });
     if (d.dpdu.cross(d.dpdv).norm() < 1e-6) return false;  // a collapsed edge
     const TableResidual g = TableFunction(d, c.surface.worldFromObject, frame, angle);
-    const Vec2d fd((TableG(c.surface, frame, u + kStep, v, angle) - TableG(c.surface, frame, u - kStep, v, angle)) / (2 * kStep),
+    const Vec2 fd((TableG(c.surface, frame, u + kStep, v, angle) - TableG(c.surface, frame, u - kStep, v, angle)) / (2 * kStep),
                    (TableG(c.surface, frame, u, v + kStep, angle) - TableG(c.surface, frame, u, v - kStep, angle)) / (2 * kStep));
     if (fd.norm() < 1e-2) return false;
     EXPECT_LE((g.grad - fd).norm(), kRelTol * fd.norm()) << c.name << " at (" << u << ", " << v << "), i " << i
@@ -117,17 +117,17 @@ TEST(ThetaTracker, GradientOfGMatchesFiniteDifferences) {
 // gradient there, and the surface's derivatives.
 struct ThetaAt {
   double theta = 0.0;
-  Vec2d gradY;
+  Vec2 gradY;
   SurfaceDerivs d;
 };
-ThetaAt ThetaOfPoint(const Surface& s, const Camera& c, const ThetaFrame& frame, const Vec2d& uv) {
+ThetaAt ThetaOfPoint(const Surface& s, const Camera& c, const ThetaFrame& frame, const Vec2& uv) {
   ThetaAt out;
   VisitShape(s, [&](const auto& shape) { shape.Evaluate(uv.x(), uv.y(), DerivOrder::Second, &out.d); });
   const Vec3 n = (s.worldFromObject.linear().inverse().transpose() * out.d.dpdu.cross(out.d.dpdv)).normalized();
   out.theta = frame.Theta(s.worldFromObject * out.d.p, n);
   ScreenDerivs sd;
   ScreenMap(c, s.worldFromObject).FromObject(out.d, DerivOrder::First, &sd);
-  out.gradY = Vec2d(sd.dpdu.y(), sd.dpdv.y());
+  out.gradY = Vec2(sd.dpdu.y(), sd.dpdv.y());
   return out;
 }
 
@@ -138,12 +138,12 @@ TEST(ThetaTracker, TurnFunctionIsThetasDerivativeAlongTheLevelCurve) {
   // h^2 |θ'''| / 6 and rounding 1e-16 / h stay below 1e-7 where |θ'| < 1e3; compared at
   // 1e-5 relative to max(|θ'|, 1).
   constexpr double kStep = 1e-5, kRelTol = 1e-5;
-  AtRandomPoints(11, [&](const TrackerCase& c, const ThetaFrame& frame, const Vec2d& uv, int) {
+  AtRandomPoints(11, [&](const TrackerCase& c, const ThetaFrame& frame, const Vec2& uv, int) {
     const ThetaAt at = ThetaOfPoint(c.surface, c.camera, frame, uv);
     if (at.d.dpdu.cross(at.d.dpdv).norm() < 1e-6 || at.gradY.norm() < 1e-6) return false;  // a collapsed edge
     const double tau = TurnFunction(at.d, at.gradY, c.surface.worldFromObject, frame);
     if (!std::isfinite(tau)) return false;  // the normal across the scan plane
-    const Vec2d t = Vec2d(-at.gradY.y(), at.gradY.x()).normalized();
+    const Vec2 t = Vec2(-at.gradY.y(), at.gradY.x()).normalized();
     const double fd = std::remainder(ThetaOfPoint(c.surface, c.camera, frame, uv + kStep * t).theta -
                                          ThetaOfPoint(c.surface, c.camera, frame, uv - kStep * t).theta,
                                      2 * std::numbers::pi) /
@@ -217,7 +217,7 @@ class LineScan {
   ScreenMap map_;
   int steps_;
   ThetaFrame frame_;
-  Eigen::Matrix3d normalFromObject_;
+  Mat3 normalFromObject_;
   double yTop_;
   std::unique_ptr<EdgeScan> edges_;
   std::unique_ptr<SilhouetteScan> silhouettes_;
@@ -316,16 +316,16 @@ TEST(ThetaTracker, SolvedTurnTrackersSitAtTurnPoints) {
     LineScan scan(c.surface, c.camera, 16);
     const ThetaFrame frame = FrameOf(c.camera, c.surface);
     const ScreenMap map(c.camera, c.surface.worldFromObject);
-    auto yAt = [&](const Vec2d& uv, Vec2d* grad) {
+    auto yAt = [&](const Vec2& uv, Vec2* grad) {
       ScreenDerivs sd;
       EvaluateScreen(c.surface, map, uv.x(), uv.y(), DerivOrder::First, &sd);
-      *grad = Vec2d(sd.dpdu.y(), sd.dpdv.y());
+      *grad = Vec2(sd.dpdu.y(), sd.dpdv.y());
       return sd.p.y();
     };
     // The point of line ys nearest uv along screen y's gradient.
-    auto onLine = [&](Vec2d uv, double ys) {
+    auto onLine = [&](Vec2 uv, double ys) {
       for (int k = 0; k < 20; ++k) {
-        Vec2d g;
+        Vec2 g;
         const double y = yAt(uv, &g);
         if (std::abs(y - ys) <= 1e-10) break;
         uv -= (y - ys) * g / g.squaredNorm();
@@ -349,7 +349,7 @@ TEST(ThetaTracker, SolvedTurnTrackersSitAtTurnPoints) {
           ++solved;
           EXPECT_NEAR(p.y, y, kEdgeTolPx) << c.name;
           EXPECT_LE(iterations, kThetaMaxIterations);
-          const Vec2d t = Vec2d(-p.gradY.y(), p.gradY.x()).normalized();
+          const Vec2 t = Vec2(-p.gradY.y(), p.gradY.x()).normalized();
           const double at = ThetaOfPoint(c.surface, c.camera, frame, p.uv).theta;
           const double ahead = std::remainder(ThetaOfPoint(c.surface, c.camera, frame, onLine(p.uv + kDelta * t, y)).theta - at, 2 * std::numbers::pi);
           const double behind = std::remainder(ThetaOfPoint(c.surface, c.camera, frame, onLine(p.uv - kDelta * t, y)).theta - at, 2 * std::numbers::pi);
