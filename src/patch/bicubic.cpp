@@ -34,7 +34,7 @@ unsigned CollapsedEdges(const BicubicPatch& patch) {
   const auto& b = patch.BezierPoints();
   Bounds3 box;
   for (const Vec3& p : b) box.Extend(p);
-  const double tol = kCollapseRelTol * std::max(box.Diagonal().norm(), 1e-300);
+  const double tol = kCollapsedRel * std::max(box.Diagonal().norm(), 1e-300);
   // Index of the k-th control point along each edge (u fastest: point (i,j) at 4j + i).
   auto index = [](PatchEdge e, int k) {
     switch (e) {

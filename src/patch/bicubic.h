@@ -102,9 +102,8 @@ inline const char* EdgeName(PatchEdge e) {
 
 // Collapsed (degenerate) edges of a bicubic patch: boundary curves whose four Bézier
 // control points coincide, so the whole edge is one point (the teapot's lid apex).
-// Points count as equal within kCollapseRelTol of the patch's extent: exact data that
-// was meant to meet differs only by rounding of its last digits. Bit i is PatchEdge i.
-constexpr double kCollapseRelTol = 1e-12;
+// Points count as equal within kCollapsedRel of the patch's extent (surface_derivs.h): exact
+// data that was meant to meet differs only by rounding of its last digits. Bit i is PatchEdge i.
 unsigned CollapsedEdges(const BicubicPatch& patch);
 
 }  // namespace patchscan

@@ -15,6 +15,15 @@ struct SurfaceDerivs {
   Vec3 d2pdu2, d2pduv, d2pdv2;
 };
 
+// A boundary edge is collapsed (a pole, the teapot lid's apex) where one first derivative
+// vanishes against the other: a tangent along the edge this small relative to the
+// derivative across it, or a normal dp/du x dp/dv this small relative to |dp/du| |dp/dv|,
+// or (for control points) points this close relative to the patch's extent. An exact
+// collapse leaves rounding of ~1e-16 relative; a real edge, even a sliver seen edge-on, is
+// many orders above. One threshold for every test of it: the edge trackers, the maxima
+// pre-pass, the silhouette search, the normals and `patchscan info`.
+constexpr double kCollapsedRel = 1e-9;
+
 inline bool Wants(DerivOrder order, DerivOrder level) {
   return static_cast<int>(order) >= static_cast<int>(level);
 }

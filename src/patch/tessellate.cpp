@@ -16,9 +16,8 @@ Vec3 WorldNormal(const Surface& s, double u, double v) {
   SurfaceDerivs d;
   EvaluateObject(s, u, v, DerivOrder::First, &d);
   Vec3 n = d.dpdu.cross(d.dpdv);
-  // Relative to the derivatives' own size: below this the cross product is rounding.
-  constexpr double kDegenerateSine = 1e-10;
-  if (n.norm() <= kDegenerateSine * d.dpdu.norm() * d.dpdv.norm() || n.norm() == 0.0) {
+  // A collapsed edge: the cross product is rounding.
+  if (n.norm() <= kCollapsedRel * d.dpdu.norm() * d.dpdv.norm() || n.norm() == 0.0) {
     auto inward = [](double t) { return t < 0.5 ? kNormalNudge : (t > 0.5 ? -kNormalNudge : 0.0); };
     EvaluateObject(s, u + inward(u), v + inward(v), DerivOrder::First, &d);
     n = d.dpdu.cross(d.dpdv);

@@ -23,17 +23,13 @@ EdgeSample SampleEdge(const ShapeT& shape, const ScreenMap& map, PatchEdge e, do
   return {d.p.y(), pt.y(), ptt.y(), SilhouetteJ(d), pt.head<2>().norm(), across.head<2>().norm()};
 }
 
-// An edge whose screen tangent is this small against the cross derivative everywhere
-// is collapsed to a point (the lid apex): exact collapse leaves rounding-level tangents.
-constexpr double kCollapsedRelTangent = 1e-9;
-
 template <class ShapeT>
 std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEdge e) {
-  // Step 1: collapsed edges have no crossing to track.
+  // Step 1: collapsed edges (kCollapsedRel everywhere along them) have no crossing to track.
   bool collapsed = true;
   for (int k = 0; k <= 4 && collapsed; ++k) {
     const EdgeSample s = SampleEdge(shape, map, e, k / 4.0);
-    collapsed = s.tangent <= kCollapsedRelTangent * std::max(s.across, 1e-300);
+    collapsed = s.tangent <= kCollapsedRel * std::max(s.across, 1e-300);
   }
   if (collapsed) return {};
   // Step 2: critical points of y(t): sign changes of y_t between samples, refined by

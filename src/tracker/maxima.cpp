@@ -52,9 +52,6 @@ constexpr int kMaxClimbIterations = 200;
 constexpr double kStationaryParamDist = 1e-6;
 // Samples around a collapsed edge to check that h falls away from it in every direction.
 constexpr int kCollapsedEdgeSamples = 16;
-// An edge whose tangent is this small against the cross derivative is collapsed: exact
-// collapse gives rounding-level tangents (1e-16 relative); a real edge is far above.
-constexpr double kCollapsedRelTangent = 1e-9;
 
 // At a boundary coordinate, whether the gradient pushes out of the domain.
 bool PushesOut(double t, double g) { return (t <= 0.0 && g < 0.0) || (t >= 1.0 && g > 0.0); }
@@ -70,7 +67,7 @@ bool OnCollapsedEdgeThatIsNoMaximum(const ShapeT& shape, const ScreenMap& map, c
     // Along the edge the other parameter varies; its tangent is dp/d(other).
     const Vec3& tangent = fixedParam == 0 ? at.pv : at.pu;
     const Vec3& across = fixedParam == 0 ? at.pu : at.pv;
-    if (tangent.norm() > kCollapsedRelTangent * std::max(across.norm(), 1e-300)) continue;
+    if (tangent.norm() > kCollapsedRel * std::max(across.norm(), 1e-300)) continue;
     for (int k = 0; k < kCollapsedEdgeSamples; ++k) {
       Vec2 q = uv;
       q[1 - fixedParam] = (k + 0.5) / kCollapsedEdgeSamples;

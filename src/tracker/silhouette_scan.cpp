@@ -48,9 +48,8 @@ void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, doubl
   // A collapsed edge (a pole, the lid apex) solves J = 0 everywhere along it: no silhouette.
   ScreenDerivs d;
   EvaluateScreen(shape, map, r.uv.x(), r.uv.y(), DerivOrder::First, &d);
-  constexpr double kCollapsedRatio = 1e-6;
-  if (d.dpdu.head<2>().norm() < kCollapsedRatio * d.dpdv.head<2>().norm() ||
-      d.dpdv.head<2>().norm() < kCollapsedRatio * d.dpdu.head<2>().norm())
+  if (d.dpdu.head<2>().norm() < kCollapsedRel * d.dpdv.head<2>().norm() ||
+      d.dpdv.head<2>().norm() < kCollapsedRel * d.dpdu.head<2>().norm())
     return;
   for (const Vec2& q : *found)
     if ((q - r.uv).norm() < kSameTrackerUv) return;

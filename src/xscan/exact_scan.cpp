@@ -56,10 +56,8 @@ raster::Fragment FragmentAt(const WalkPoint& p, const Surface& surface,
   f.w = p.w;
   f.position = surface.worldFromObject * o.p;
   const Vec3 n = o.dpdu.cross(o.dpdv);
-  // As WorldNormal: relative to the derivatives, below this the cross product is
-  // rounding (a collapsed edge), and the normal is its limit from inside.
-  constexpr double kDegenerateSine = 1e-10;
-  if (n.norm() > kDegenerateSine * o.dpdu.norm() * o.dpdv.norm() && n.norm() > 0.0)
+  // As WorldNormal: at a collapsed edge the normal is its limit from inside.
+  if (n.norm() > kCollapsedRel * o.dpdu.norm() * o.dpdv.norm() && n.norm() > 0.0)
     f.normal = (normalFromObject * n).normalized();
   else
     f.normal = WorldNormal(surface, p.uv.x(), p.uv.y());
