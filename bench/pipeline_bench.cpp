@@ -46,11 +46,12 @@ void BM_TrackerStep(benchmark::State& state) {
     std::vector<std::unique_ptr<EdgeScan>> edges;
     std::vector<std::unique_ptr<SilhouetteScan>> silhouettes;
     std::vector<ScreenMap> maps;
+    Counters counters;
     maps.reserve(t.scene.surfaces.size());  // the scans keep references to their maps
     for (const Surface& s : t.scene.surfaces) {
       maps.emplace_back(t.view.camera, s.worldFromObject);
-      edges.push_back(std::make_unique<EdgeScan>(s, maps.back(), extrapolate));
-      silhouettes.push_back(std::make_unique<SilhouetteScan>(s, maps.back(), FindStationaryPoints(s, maps.back())));
+      edges.push_back(std::make_unique<EdgeScan>(s, maps.back(), counters, extrapolate));
+      silhouettes.push_back(std::make_unique<SilhouetteScan>(s, maps.back(), FindStationaryPoints(s, maps.back()), counters));
     }
     state.ResumeTiming();
     for (int y = 0; y < t.view.camera.height; ++y) {
@@ -61,12 +62,9 @@ void BM_TrackerStep(benchmark::State& state) {
         steps += static_cast<long>(edges[k]->Trackers().size() + silhouettes[k]->Trackers().size());
       }
     }
-    for (std::size_t k = 0; k < edges.size(); ++k)
-    {
-      iterations += edges[k]->Stats().nNewtonIterations + silhouettes[k]->Stats().nNewtonIterations;
-      bisections += edges[k]->Stats().nRepairs;
-      searches += silhouettes[k]->Stats().nRepairSearches;
-    }
+    iterations += counters[Counter::EdgeNewtonIterations] + counters[Counter::SilhouetteNewtonIterations];
+    bisections += counters[Counter::EdgeRepairs];
+    searches += counters[Counter::RepairSearches];
   }
   state.SetItemsProcessed(steps);
   const double runs = static_cast<double>(state.iterations());

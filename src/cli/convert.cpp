@@ -1,12 +1,9 @@
 #include "cli/convert.h"
 
-#include <unistd.h>
-
-#include <filesystem>
-#include <fstream>
 #include <ostream>
 
 #include "cli/exit_codes.h"
+#include "cli/file_output.h"
 #include "cli/render.h"
 #include "patch/rib_writer.h"
 
@@ -41,26 +38,9 @@ int RunConvert(const ConvertOptions& o, std::ostream& err) {
     err << "patchscan: " << o.file << ": " << e->message << '\n';
     return kExitInputError;
   }
-  // Step 2: whole or not at all: a temporary file beside the target, renamed into place.
-  const std::filesystem::path target(o.output);
-  const std::filesystem::path temp =
-      target.parent_path() / ("." + target.filename().string() + ".tmp" + std::to_string(getpid()));
-  {
-    std::ofstream f(temp, std::ios::binary);
-    f << std::get<std::string>(text);
-    f.close();
-    if (!f) {
-      std::error_code ec;
-      std::filesystem::remove(temp, ec);
-      err << "patchscan: " << o.output << ": cannot write\n";
-      return kExitOutputError;
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(temp, target, ec);
-  if (ec) {
-    std::filesystem::remove(temp, ec);
-    err << "patchscan: " << o.output << ": cannot rename the finished file into place\n";
+  // Step 2: whole or not at all.
+  if (const auto why = WriteFileWhole(o.output, std::get<std::string>(text))) {
+    err << "patchscan: " << *why << '\n';
     return kExitOutputError;
   }
   return kExitOk;

@@ -1,28 +1,25 @@
 #include "cli/render.h"
 
-#include <Eigen/Geometry>
 #include <sys/resource.h>
-#include <unistd.h>
-
-#include <csignal>
 
 #include <chrono>
-#include <filesystem>
-#include <fstream>
-#include <map>
 #include <ostream>
 
 #include "cli/exit_codes.h"
+#include "cli/file_output.h"
+#include "cli/render_setup.h"
+#include "cli/stats_report.h"
 #include "patch/tessellate.h"
 #include "raster/image_writer.h"
-#include "raster/scanline_renderer.h"
-#include "raster/texture.h"
 #include "xscan/exact_scan.h"
 #include "xscan/overlay.h"
 #include "xscan/tess_feed.h"
 
 namespace patchscan::cli {
 namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
 
 // Peak resident memory of this process so far, in KiB.
 long PeakResidentKiB() {
@@ -31,115 +28,42 @@ long PeakResidentKiB() {
   return u.ru_maxrss;
 }
 
-// Set by SIGINT and SIGTERM during a render; the row sink below stops the render at the
-// next row, and the unfinished image's temporary file is removed.
-volatile std::sig_atomic_t gInterrupted = 0;
-extern "C" void OnInterrupt(int) { gInterrupted = 1; }
-
-void CatchInterrupts() {
-  struct sigaction action {};
-  action.sa_handler = OnInterrupt;
-  sigemptyset(&action.sa_mask);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+// The options that do not fit the mode: the message for the user, or empty.
+std::string ModeConflict(const RenderOptions& o) {
+  const std::string mode = NameOf(kRenderModeNames, o.mode);
+  if (Direct(o.mode) && (o.shading != raster::ShadingMode::Phong || o.hiddenLine))
+    return "--mode " + mode + " shades every sample with its own normal: --shading flat/gouraud and --hidden-line "
+           "need a triangle mode (--mode tess)";
+  if (!Direct(o.mode) && o.overlay != Overlay::None)
+    return "--overlay trackers draws the Y scan's trackers: it needs --mode exact or theta";
+  return {};
 }
 
-// Passes rows on (none once interrupted), timing how long the next sink (the image writer) takes, and when stderr
-// is a terminal shows the percentage done, at most a few times a second.
-class ProgressSink final : public raster::RowSink {
- public:
-  ProgressSink(raster::RowSink& next, int height, std::ostream& err)
-      : next_(next), height_(height), err_(err), show_(isatty(STDERR_FILENO) != 0) {}
-  ~ProgressSink() override {
-    if (shown_) err_ << "\r              \r" << std::flush;
+// The direct modes' front end: Blinn's Y scan with the exact or the θ-sampled X scan.
+std::unique_ptr<ExactScan> DirectScan(const RenderOptions& o, const Scene& scene, const Camera& camera, int aa) {
+  ExactScanOptions xo;
+  xo.extrapolate = !o.noExtrapolate;
+  if (o.mode == RenderMode::Theta) {
+    xo.thetaSteps = o.thetaSteps;
+    // Sample rows are 1 / (aa - 1) pixels apart (aa 1: one per pixel).
+    const double spacing = aa == 1 ? 1.0 : 1.0 / (aa - 1);
+    xo.slabRows = o.yStep > 0.0 ? std::max(1, static_cast<int>(std::lround(o.yStep / spacing))) : 0;
   }
-  bool WriteRow(int y, const float* pixels) override {
-    if (gInterrupted) return false;
-    if (show_) {
-      const auto now = std::chrono::steady_clock::now();
-      if (now - last_ > std::chrono::milliseconds(250)) {
-        last_ = now;
-        shown_ = true;
-        err_ << "\rrender: " << (100 * (y + 1)) / height_ << "%" << std::flush;
-      }
-    }
-    const auto t0 = std::chrono::steady_clock::now();
-    const bool ok = next_.WriteRow(y, pixels);
-    outputSeconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return ok;
-  }
-  double OutputSeconds() const { return outputSeconds_; }
-
- private:
-  raster::RowSink& next_;
-  int height_;
-  std::ostream& err_;
-  bool show_, shown_ = false;
-  double outputSeconds_ = 0.0;
-  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
-};
-
-// RenderMan light sources as the back end's lights: ambient lights sum into the rig's
-// ambient light; the others keep their colour (intensity times lightcolor).
-raster::LightRig SceneLights(const std::vector<SceneLight>& lights) {
-  raster::LightRig rig;
-  rig.ambient = raster::Rgb::Zero();
-  for (const SceneLight& l : lights) {
-    raster::Light out;
-    out.intensity = l.colour;
-    switch (l.kind) {
-      case SceneLight::Kind::Ambient:
-        rig.ambient += l.colour;
-        continue;
-      case SceneLight::Kind::Distant:
-        out.kind = raster::Light::Kind::Directional;
-        out.vector = (l.to - l.from).normalized();
-        break;
-      case SceneLight::Kind::Point:
-        out.kind = raster::Light::Kind::Point;
-        out.vector = l.from;
-        out.inverseSquare = true;
-        break;
-      case SceneLight::Kind::Spot:
-        out.kind = raster::Light::Kind::Spot;
-        out.vector = l.from;
-        out.inverseSquare = true;
-        out.axis = (l.to - l.from).normalized();
-        out.cosOutside = std::cos(l.coneAngle);
-        out.cosInside = std::cos(std::max(0.0, l.coneAngle - l.coneDelta));
-        out.beamDistribution = l.beamDistribution;
-        break;
-    }
-    rig.lights.push_back(out);
-  }
-  return rig;
+  return std::make_unique<ExactScan>(scene.surfaces, camera, xo);
 }
 
-// A scene file's appearance as a back-end material. The default shader keeps the
-// renderer's material, tinted by the colour.
-raster::Material SceneMaterial(const Appearance& a, const raster::Material& fallback) {
-  using S = Appearance::Shader;
-  using M = raster::Material::Model;
-  raster::Material m = fallback;
-  m.opacity = a.opacity.mean();
-  m.twoSided = a.twoSided;
-  m.reversed = a.reversed;
-  if (a.shader == S::Default) {
-    m.colour = fallback.colour.cwiseProduct(a.colour);
-    return m;
+// The tessellated mode's mesh (nullopt: interrupted).
+std::optional<raster::TriangleMesh> TessellatedMesh(const RenderOptions& o, const Scene& scene, const Camera& camera) {
+  TessMesh tess;
+  for (size_t k = 0; k < scene.surfaces.size(); ++k) {
+    if (gInterrupted) return std::nullopt;
+    if (o.tessPixels > 0)
+      TessellateToScreen(scene.surfaces[k], camera, o.tessPixels, static_cast<std::uint32_t>(k), &tess);
+    else
+      TessellateUniform(scene.surfaces[k], o.tessRate, static_cast<std::uint32_t>(k), &tess);
   }
-  m.model = a.shader == S::Constant ? M::Constant
-            : a.shader == S::Matte  ? M::Matte
-            : a.shader == S::Metal  ? M::Metal
-                                    : M::Plastic;
-  m.colour = a.colour;
-  m.emission = raster::Rgb::Zero();
-  m.ka = a.ka;
-  m.kd = a.kd;
-  m.ks = a.ks;
-  m.roughness = a.roughness;
-  m.specularColour = a.specularColour;
-  return m;
+  WeldBoundaryVertices(&tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
+  return ToRasterMesh(tess, camera);
 }
 
 }  // namespace
@@ -153,15 +77,13 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   cmd->add_option("FILE", o->file, "scene file: .bpt (Bézier patches) or .rib (RenderMan scene)")->required();
   cmd->add_option("-o,--output", o->output,
                   "output image file (default: a RIB scene's Display file name; required otherwise)");
-  cmd->add_option("--mode", o->mode,
+  AddChoiceOption(cmd, "--mode", &o->mode, kRenderModeNames,
                   "how surfaces become samples: exact = Blinn's scan-line algorithm, every "
                   "visible sample's (u,v) found by Newton iteration (shading always uses the "
                   "exact normal; --shading flat/gouraud and --hidden-line need triangles); "
                   "theta = the same Y scan, with each cross-section sampled at --theta-steps "
                   "angles of its normal per turn and the samples between interpolated along the "
-                  "chords; tess = tessellated with OpenSubdiv's Bfr::Tessellation pattern")
-      ->check(CLI::IsMember({"exact", "theta", "tess"}))
-      ->capture_default_str();
+                  "chords; tess = tessellated with OpenSubdiv's Bfr::Tessellation pattern");
   cmd->add_option("--theta-steps", o->thetaSteps,
                   "theta mode: tabulated normal angles per turn of a cross-section (chord error "
                   "R (1 - cos(pi/N)) pixels for a section of radius R pixels)")
@@ -181,14 +103,12 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   cmd->add_flag("--no-extrapolate", o->noExtrapolate,
                 "exact mode: start each tracker's Newton iteration from its last position "
                 "instead of extrapolating from its last two (to measure what extrapolation saves)");
-  cmd->add_option("--overlay", o->overlay,
+  AddChoiceOption(cmd, "--overlay", &o->overlay, ChoiceNames<Overlay>{{"none", Overlay::None}, {"trackers", Overlay::Trackers}},
                   "exact mode: trackers = draw what the scan did over the image: each tracker's "
                   "path as dots (boundary-edge trackers blue, silhouette trackers red) and each "
                   "event as a ring (maximum passed yellow, saddle magenta, fold green, "
                   "silhouette tracker born pink, tracker died black, crossing repaired by the "
-                  "x scan orange, walk or sample given up cyan)")
-      ->check(CLI::IsMember({"none", "trackers"}))
-      ->capture_default_str();
+                  "x scan orange, walk or sample given up cyan)");
   cmd->add_option("--tess-rate", o->tessRate, "tessellation segments per patch edge (uniform)")
       ->check(CLI::Range(1, kMaxTessRate))
       ->capture_default_str();
@@ -201,9 +121,11 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
                   "shared with the neighbours (1: one sample at the pixel centre; default: a RIB "
                   "scene's PixelSamples, else 3)")
       ->check(CLI::Range(1, raster::kMaxAa));
-  cmd->add_option("--shading", o->shading, "flat, gouraud or phong")
-      ->check(CLI::IsMember({"flat", "gouraud", "phong"}))
-      ->capture_default_str();
+  AddChoiceOption(cmd, "--shading", &o->shading,
+                  ChoiceNames<raster::ShadingMode>{{"flat", raster::ShadingMode::Flat},
+                                                   {"gouraud", raster::ShadingMode::Gouraud},
+                                                   {"phong", raster::ShadingMode::Phong}},
+                  "flat, gouraud or phong");
   cmd->add_option("--texture", o->texture,
                   "none; checker, a procedural 8x8 uv checker; or an image file read through "
                   "OpenImageIO's TextureSystem (mipmapped, opened only when a visible sample "
@@ -232,9 +154,9 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
 }
 
 int RunRender(const RenderOptions& o, std::ostream& err) {
-  using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   CatchInterrupts();
+  // Step 1: the scene, the camera and what the options ask of them.
   auto loaded = LoadSceneAndCamera(o.file, o.camera, err);
   if (const int* code = std::get_if<int>(&loaded)) return *code;
   const Scene& scene = std::get<LoadedScene>(loaded).scene;
@@ -245,99 +167,27 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
     err << "patchscan: no output image: give -o IMAGE" << (scene.image.cameraFromWorld ? " (the scene has no Display file)" : "") << '\n';
     return kExitUsage;
   }
+  if (const std::string why = ModeConflict(o); !why.empty()) {
+    err << "patchscan: " << why << '\n';
+    return kExitUsage;
+  }
   const int aa = o.aa.value_or(scene.image.pixelSamples.value_or(kDefaultAa));
 
-  // Both direct modes run Blinn's Y scan; they differ in the X scan.
-  const bool exact = o.mode == "exact" || o.mode == "theta";
-  if (exact && (o.shading != "phong" || o.hiddenLine)) {
-    err << "patchscan: --mode " << o.mode << " shades every sample with its own normal: --shading "
-           "flat/gouraud and --hidden-line need a triangle mode (--mode tess)\n";
-    return kExitUsage;
-  }
-  if (!exact && o.overlay != "none") {
-    err << "patchscan: --overlay trackers draws the Y scan's trackers: it needs --mode exact or theta\n";
-    return kExitUsage;
-  }
-
-  // Step 1: tessellate and feed the back end, or set up the exact scan.
-  TessMesh tess;
-  raster::TriangleMesh mesh;
+  // Step 2: the front end: the direct scan, or the tessellated mesh.
   std::unique_ptr<ExactScan> scan;
-  if (exact) {
-    ExactScanOptions xo;
-    xo.extrapolate = !o.noExtrapolate;
-    if (o.mode == "theta") {
-      xo.thetaSteps = o.thetaSteps;
-      // Sample rows are 1 / (aa - 1) pixels apart (aa 1: one per pixel).
-      const double spacing = aa == 1 ? 1.0 : 1.0 / (aa - 1);
-      xo.slabRows = o.yStep > 0.0 ? std::max(1, static_cast<int>(std::lround(o.yStep / spacing))) : 0;
-    }
-    scan = std::make_unique<ExactScan>(scene.surfaces, camera, xo);
-  } else {
-    for (size_t k = 0; k < scene.surfaces.size(); ++k) {
-      if (gInterrupted) {
-        err << "patchscan: interrupted; no image written\n";
-        return kExitInterrupted;
-      }
-      if (o.tessPixels > 0)
-        TessellateToScreen(scene.surfaces[k], camera, o.tessPixels, static_cast<std::uint32_t>(k), &tess);
-      else
-        TessellateUniform(scene.surfaces[k], o.tessRate, static_cast<std::uint32_t>(k), &tess);
-    }
-    WeldBoundaryVertices(&tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
-    mesh = ToRasterMesh(tess, camera);
+  std::optional<raster::TriangleMesh> mesh;
+  if (Direct(o.mode)) {
+    scan = DirectScan(o, scene, camera, aa);
+  } else if (!(mesh = TessellatedMesh(o, scene, camera))) {
+    err << "patchscan: interrupted; no image written\n";
+    return kExitInterrupted;
   }
-  const auto t1 = Clock::now();
+  const auto tSetUp = Clock::now();
 
-  // Step 2: render, streaming rows to the image.
-  raster::RenderSettings s;
-  s.width = camera.width;
-  s.height = camera.height;
-  s.aa = aa;
-  s.shading = o.shading == "flat"      ? raster::ShadingMode::Flat
-              : o.shading == "gouraud" ? raster::ShadingMode::Gouraud
-                                       : raster::ShadingMode::Phong;
-  s.cullBackFaces = o.cullBackFaces;
-  s.hiddenLine = o.hiddenLine;
-  s.opacity = o.opacity;
-  s.seed = o.seed;
-  s.hither = camera.hither;
-  s.eye = EyePoint(camera);
-  s.orthographic = camera.orthographic;
-  s.forward = ViewForward(camera);
-  std::unique_ptr<raster::ImageTexture> texture;
-  if (o.texture == "checker") {
-    s.material.checkerSquares = 8;
-  } else if (o.texture != "none") {
-    std::error_code ec;
-    if (!std::filesystem::is_regular_file(o.texture, ec)) {
-      err << "patchscan: --texture: no such file '" << o.texture << "'\n";
-      return kExitUsage;
-    }
-    texture = std::make_unique<raster::ImageTexture>(o.texture);
-    s.material.texture = texture.get();
-  }
-  const Vec3 forward = ViewForward(camera), right = ViewRight(camera);
-  s.lights = scene.lights.empty() ? raster::DefaultLightRig(forward, right.cross(forward), right)
-                                  : SceneLights(scene.lights);
-  // The scene's own materials, each texture opened only when a visible sample needs it.
-  std::map<std::string, std::unique_ptr<raster::ImageTexture>> sceneTextures;
-  for (const Appearance& a : scene.appearances) {
-    raster::Material m = SceneMaterial(a, s.material);
-    if (!a.textureName.empty()) {
-      std::error_code ec;
-      if (!std::filesystem::is_regular_file(a.textureName, ec)) {
-        err << "patchscan: " << scene.source << ": paintedplastic texture '" << a.textureName << "' not found\n";
-        return kExitInputError;
-      }
-      auto& t = sceneTextures[a.textureName];
-      if (!t) t = std::make_unique<raster::ImageTexture>(a.textureName);
-      m.texture = t.get();
-    }
-    s.materials.push_back(m);
-  }
-  s.materialOf = scene.appearanceOf;
-
+  // Step 3: the back end, and the rows' way to the image file.
+  auto setup = SetUpBackEnd(o, scene, camera, aa, err);
+  if (const int* code = std::get_if<int>(&setup)) return *code;
+  const BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);
   auto opened = raster::ImageWriter::Open(output, camera.width, camera.height, o.aov);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';
@@ -346,28 +196,26 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   auto& writer = *std::get<std::unique_ptr<raster::ImageWriter>>(opened);
   std::unique_ptr<TrackerOverlay> overlay;
   raster::RowSink* out = &writer;
-  if (o.overlay == "trackers") {
+  if (o.overlay == Overlay::Trackers) {
     overlay = std::make_unique<TrackerOverlay>(writer, camera.width, camera.height);
     scan->SetTrace(overlay.get());
     out = overlay.get();
   }
+
+  // Step 4: render the rows, streaming each to the image; then commit it.
   ProgressSink progress(*out, camera.height, err);
-  auto stats = exact ? raster::RenderFragments(*scan, s, progress) : raster::RenderMesh(mesh, s, progress);
-  if (stats && overlay && !overlay->Finish()) stats.reset();
-  if (!stats) {
+  auto counted = scan ? raster::RenderFragments(*scan, backEnd.settings, progress)
+                      : raster::RenderMesh(*mesh, backEnd.settings, progress);
+  if (counted && overlay && !overlay->Finish()) counted.reset();
+  if (!counted) {
     if (gInterrupted) {
       err << "\npatchscan: interrupted; no image written\n";
       return kExitInterrupted;
     }
-    if (texture && !texture->Error().empty()) {
-      err << "patchscan: " << texture->Error() << '\n';
+    if (const std::string why = backEnd.TextureError(); !why.empty()) {
+      err << "patchscan: " << why << '\n';
       return kExitInputError;
     }
-    for (const auto& [name, t] : sceneTextures)
-      if (!t->Error().empty()) {
-        err << "patchscan: " << t->Error() << '\n';
-        return kExitInputError;
-      }
     err << "patchscan: " << output << ": writing the image failed\n";
     return kExitOutputError;
   }
@@ -376,109 +224,24 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
     err << "patchscan: " << *why << '\n';
     return kExitOutputError;
   }
-  const auto t2 = Clock::now();
-  // Encoding and writing the image, inside the render's time.
-  const double outputSec = progress.OutputSeconds() + std::chrono::duration<double>(t2 - tCommit).count();
+  const auto tDone = Clock::now();
 
-  // Step 3: statistics.
-  const double loadSec = std::chrono::duration<double>(tLoaded - t0).count();
-  const double tessSec = std::chrono::duration<double>(t1 - tLoaded).count();
-  const double renderSec = std::chrono::duration<double>(t2 - t1).count();
-  const long peakKiB = PeakResidentKiB();
-  const ExactScanStats xs = exact ? scan->Stats() : ExactScanStats{};
-  // Newton iterations per tracker per scan line (paper 001 §3.5 reports ~2.5 without
-  // extrapolation, under 1 with): edge and silhouette trackers together.
-  const double itersPerTracker =
-      xs.nTrackerSteps > 0 ? static_cast<double>(xs.edges.nNewtonIterations + xs.silhouettes.nNewtonIterations) /
-                                   static_cast<double>(xs.nTrackerSteps)
-                             : 0.0;
-  if (o.stats) {
-    if (exact)
-      err << "surfaces: " << xs.nSurfaces << " (set up " << xs.nSurfacesActivated
-          << ", most active at once " << xs.maxActiveSurfaces << "), maxima and saddles "
-          << xs.nStationary << "\nsample rows: " << xs.nRows << ", fragments " << xs.nFragments
-          << "\ntrackers: " << xs.nTrackerSteps << " tracker-rows, Newton iterations per tracker "
-          << "per row " << itersPerTracker << " (edges " << xs.edges.nNewtonIterations
-          << ", silhouettes " << xs.silhouettes.nNewtonIterations << ")\nevents: edge trackers "
-          << xs.edges.nCreated << " born, " << xs.edges.nDeleted << " died, " << xs.edges.nFolds
-          << " folds; silhouette trackers born at maxima " << xs.silhouettes.nCreatedAtMaxima
-          << ", folds " << xs.silhouettes.nCreatedAtFolds << ", saddles "
-          << xs.silhouettes.nCreatedAtSaddles << ", died " << xs.silhouettes.nDeletedFailed
-          << ", left " << xs.silhouettes.nDeletedLeft << "\nx scan: " << xs.walk.nWalks
-          << " walks (" << xs.walk.nClosedWalks << " closed), " << xs.walk.nColumnSteps
-          << " column steps, " << xs.walk.nArcSteps << " arc steps, " << xs.walk.nSilhouettes
-          << " silhouette points, Newton " << xs.walk.nNewtonCalls << " calls / "
-          << xs.walk.nNewtonIterations << " iterations\nrepairs: " << xs.edges.nRepairs
-          << " edge-tracker bisections, " << xs.walk.nUntrackedSilhouettes
-          << " silhouettes and " << xs.walk.nUntrackedExits
-          << " boundary exits found by the x scan without a tracker; " << xs.silhouettes.nRepairSearches
-          << " subdivision searches after unexplained events, finding " << xs.silhouettes.nRepaired
-          << " lost crossings; failures "
-          << xs.walk.nFailures << '\n';
-    if (o.mode == "theta")
-      err << "theta chains: " << xs.theta.nChains << ", vertices " << xs.theta.nVertices << ", crawl steps "
-          << xs.theta.nSteps << ", turn points " << xs.theta.nTurnPoints << ", tilt vertices " << xs.theta.nTilts
-          << "\ntheta trackers: " << xs.theta.nTrackers << " advanced from the line before, Newton iterations per tracker "
-          << (xs.theta.nTrackers ? static_cast<double>(xs.theta.nTrackerIterations) / static_cast<double>(xs.theta.nTrackers) : 0.0)
-          << ", " << xs.theta.nTrackerFailures << " lost; " << xs.theta.nTurnTrackers << " turn points advanced, "
-          << "Newton iterations per turn point "
-          << (xs.theta.nTurnTrackers ? static_cast<double>(xs.theta.nTurnIterations) / static_cast<double>(xs.theta.nTurnTrackers) : 0.0)
-          << ", " << xs.theta.nTurnFailures << " lost; " << xs.theta.nLinkRepairs << " links repaired sideways, "
-          << xs.theta.nLineRepairs << " lines crawled afresh\nslabs: " << xs.nSlabIntervals
-          << " intervals as slabs (" << xs.nSlabTriangles << " triangles, " << stats->nTrianglesSetUp
-          << " set up), " << xs.nRowIntervals << " row by row\n";
-    else
-      err << "triangles n: " << stats->nTriangles << " (set up " << stats->nTrianglesSetUp
-          << ")\nmost active on one sample row m: " << stats->maxActive << '\n';
-    err << "samples tested: " << stats->nSamplesTested << "\nsamples covered: "
-        << stats->nSamplesCovered << "\nshading calls: " << stats->nShadingCalls << " (+"
-        << stats->nExtraShadingCalls << " adaptive-stochastic, " << stats->nSuperSampledPixels
-        << " pixels super-sampled)\ntime: load " << loadSec << " s, " << (exact ? "set up " : "tessellate ")
-        << tessSec << " s, render " << renderSec << " s (of which writing the image " << outputSec
-        << " s)\npeak memory: " << peakKiB << " KiB\n"
-        << "texture: " << (texture ? (texture->Opened() ? "opened" : "never needed") : "none")
-        << (texture ? ", " + std::to_string(texture->Lookups()) + " lookups" : std::string()) << '\n';
-  }
+  // Step 5: what it took.
+  if (!o.stats && o.statsJson.empty()) return kExitOk;
+  RenderReport report;
+  report.mode = o.mode;
+  report.counters = *counted;
+  if (scan) report.counters.Merge(scan->Stats());
+  report.load = Seconds(t0, tLoaded);
+  report.setUp = Seconds(tLoaded, tSetUp);
+  report.render = Seconds(tSetUp, tDone);
+  report.output = progress.OutputSeconds() + Seconds(tCommit, tDone);  // encoding and writing, inside the render
+  report.peakKiB = PeakResidentKiB();
+  report.texture = backEnd.TextureReport();
+  if (o.stats) PrintReport(report, err);
   if (!o.statsJson.empty()) {
-    std::ofstream js(o.statsJson);
-    js << "{\"mode\": \"" << o.mode << "\", \"triangles\": " << stats->nTriangles << ", \"triangles_set_up\": "
-       << stats->nTrianglesSetUp << ", \"max_active\": " << stats->maxActive
-       << ", \"samples_tested\": " << stats->nSamplesTested << ", \"samples_covered\": "
-       << stats->nSamplesCovered << ", \"shading_calls\": " << stats->nShadingCalls
-       << ", \"extra_shading_calls\": " << stats->nExtraShadingCalls
-       << ", \"super_sampled_pixels\": " << stats->nSuperSampledPixels
-       << ", \"exact\": {\"surfaces_set_up\": " << xs.nSurfacesActivated
-       << ", \"max_active_surfaces\": " << xs.maxActiveSurfaces << ", \"stationary_points\": " << xs.nStationary
-       << ", \"sample_rows\": " << xs.nRows << ", \"fragments\": " << xs.nFragments
-       << ", \"tracker_rows\": " << xs.nTrackerSteps << ", \"newton_iterations_per_tracker_row\": " << itersPerTracker
-       << ", \"edge_newton_iterations\": " << xs.edges.nNewtonIterations
-       << ", \"silhouette_newton_iterations\": " << xs.silhouettes.nNewtonIterations
-       << ", \"edge_repairs\": " << xs.edges.nRepairs << ", \"folds\": " << xs.edges.nFolds
-       << ", \"silhouettes_born_at_maxima\": " << xs.silhouettes.nCreatedAtMaxima
-       << ", \"silhouettes_born_at_folds\": " << xs.silhouettes.nCreatedAtFolds
-       << ", \"silhouettes_born_at_saddles\": " << xs.silhouettes.nCreatedAtSaddles
-       << ", \"walks\": " << xs.walk.nWalks << ", \"closed_walks\": " << xs.walk.nClosedWalks
-       << ", \"column_steps\": " << xs.walk.nColumnSteps << ", \"arc_steps\": " << xs.walk.nArcSteps
-       << ", \"xscan_newton_calls\": " << xs.walk.nNewtonCalls
-       << ", \"xscan_newton_iterations\": " << xs.walk.nNewtonIterations
-       << ", \"silhouette_points\": " << xs.walk.nSilhouettes
-       << ", \"untracked_silhouettes\": " << xs.walk.nUntrackedSilhouettes
-       << ", \"untracked_exits\": " << xs.walk.nUntrackedExits
-       << ", \"repair_searches\": " << xs.silhouettes.nRepairSearches
-       << ", \"repaired_by_search\": " << xs.silhouettes.nRepaired << ", \"failures\": " << xs.walk.nFailures
-       << ", \"theta_chains\": " << xs.theta.nChains << ", \"theta_vertices\": " << xs.theta.nVertices
-       << ", \"theta_steps\": " << xs.theta.nSteps << ", \"theta_turn_points\": " << xs.theta.nTurnPoints
-       << ", \"theta_tilts\": " << xs.theta.nTilts << ", \"theta_trackers\": " << xs.theta.nTrackers
-       << ", \"theta_tracker_iterations\": " << xs.theta.nTrackerIterations
-       << ", \"theta_trackers_lost\": " << xs.theta.nTrackerFailures << ", \"theta_turn_trackers\": " << xs.theta.nTurnTrackers
-       << ", \"theta_turn_iterations\": " << xs.theta.nTurnIterations << ", \"theta_turns_lost\": " << xs.theta.nTurnFailures
-       << ", \"theta_link_repairs\": " << xs.theta.nLinkRepairs
-       << ", \"theta_line_repairs\": " << xs.theta.nLineRepairs
-       << ", \"slab_intervals\": " << xs.nSlabIntervals << ", \"row_intervals\": " << xs.nRowIntervals
-       << ", \"slab_triangles\": " << xs.nSlabTriangles << "}, \"seconds_load\": " << loadSec << ", \"seconds_tessellate\": " << tessSec
-       << ", \"seconds_render\": " << renderSec << ", \"seconds_output\": " << outputSec << ", \"peak_rss_kib\": " << peakKiB << "}\n";
-    if (!js) {
-      err << "patchscan: " << o.statsJson << ": cannot write statistics\n";
+    if (const auto why = WriteFileWhole(o.statsJson, ReportJson(report))) {
+      err << "patchscan: " << *why << " (statistics)\n";
       return kExitOutputError;
     }
   }

@@ -8,22 +8,34 @@
 #include <string>
 
 #include "cli/camera_options.h"
+#include "cli/choice_option.h"
+#include "raster/scanline_renderer.h"
 
 namespace patchscan::cli {
 
 constexpr int kDefaultAa = 3;
 
+// Where the back end's samples come from: Blinn's Y scan with the exact X scan or with the
+// θ-sampled one (paper 001 §3, §4), or tessellated surfaces.
+enum class RenderMode { Exact, Theta, Tess };
+inline const ChoiceNames<RenderMode> kRenderModeNames = {
+    {"exact", RenderMode::Exact}, {"theta", RenderMode::Theta}, {"tess", RenderMode::Tess}};
+// Both direct modes run Blinn's Y scan (they differ in the X scan).
+inline bool Direct(RenderMode m) { return m != RenderMode::Tess; }
+
+enum class Overlay { None, Trackers };
+
 struct RenderOptions {
   std::string file, output;
-  std::string mode = "exact";
+  RenderMode mode = RenderMode::Exact;
   bool noExtrapolate = false;
   int thetaSteps = 16;
   double yStep = 1.0;  // theta mode: pixels between scan lines with chains; 0: every sample row
-  std::string overlay = "none";
+  Overlay overlay = Overlay::None;
   int tessRate = 8;
   double tessPixels = 0.0;  // > 0: screen-adaptive tessellation instead of tessRate
   std::optional<int> aa;  // none: a RIB scene's PixelSamples, else kDefaultAa
-  std::string shading = "phong";
+  raster::ShadingMode shading = raster::ShadingMode::Phong;
   std::string texture = "none";
   bool cullBackFaces = false;
   bool hiddenLine = false;
@@ -37,8 +49,8 @@ struct RenderOptions {
 
 CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* opts);
 
-// Renders; messages to `err`; returns the exit code. The image is written whole or not
-// at all.
+// Renders; messages to `err`; returns the exit code. The image (and the --stats-json
+// file) is written whole or not at all.
 int RunRender(const RenderOptions& opts, std::ostream& err);
 
 }  // namespace patchscan::cli

@@ -95,7 +95,7 @@ constexpr double kShadeDiscrepancy = 0.08;
 // from a mesh's y-sorted list or arrive while the rows are scanned (θ slabs).
 class TriangleStore {
  public:
-  TriangleStore(const RenderSettings& s, const Lattice& lat, int layers, ShadingMode shading, RenderStats& stats)
+  TriangleStore(const RenderSettings& s, const Lattice& lat, int layers, ShadingMode shading, Counters& stats)
       : s_(s), lat_(lat), layers_(layers), shading_(shading), invHither_(1.0 / s.hither), stats_(stats) {
     active_.reserve(1024);
     live_.reserve(1024);
@@ -115,7 +115,7 @@ class TriangleStore {
                       s_.EyeFor(a.position)))
         return;
     }
-    ++stats_.nTrianglesSetUp;
+    ++stats_[Counter::TrianglesSetUp];
     Active at{*setup, {a, b, c}, surfaceId, lastRow, {}, Vec3::Zero()};
     if (s_.orthographic) {
       // With W = 1 the barycentrics are e_i . (x, y, 1) / |det|.
@@ -131,7 +131,7 @@ class TriangleStore {
         f.duvdx = f.duvdy = Vec2::Zero();
         f.surfaceId = surfaceId;
         at.vertexColour[k] = ShadeFragment(f, s_, &failed_);
-        ++stats_.nShadingCalls;
+        ++stats_[Counter::ShadingCalls];
       }
     int slot;
     if (!freeSlots_.empty()) {
@@ -156,7 +156,7 @@ class TriangleStore {
   // Resolves sample row j against the live triangles: the nearest per sample, each
   // sample's handle `handleBase` + the triangle's slot.
   void ScanRow(int j, double y, Sample* row, std::int32_t handleBase) {
-    stats_.maxActive = std::max<std::int64_t>(stats_.maxActive, static_cast<std::int64_t>(live_.size()));
+    stats_.Raise(Counter::MaxActiveTriangles, static_cast<std::int64_t>(live_.size()));
     for (const int k : live_) {
       if (active_[k].lastRow < j) continue;  // done, retired at the next pixel row
       const TriangleSetup& t = active_[k].setup;
@@ -182,7 +182,7 @@ class TriangleStore {
       const int i0 = std::max(0, lat_.Ceil(lo, lat_.nx) - 1), i1 = std::min(lat_.nx - 1, lat_.Floor(hi, lat_.nx) + 1);
       for (int i = i0; i <= i1; ++i) {
         double e[3];
-        ++stats_.nSamplesTested;
+        ++stats_[Counter::SamplesTested];
         if (!Inside(t, lat_.At(i), y, e)) continue;
         const double invW = s_.orthographic ? 1.0 / (dp.x() * lat_.At(i) + dp.y() * y + dp.z())
                                             : (e[0] + e[1] + e[2]) * std::abs(t.invDet);
@@ -271,7 +271,7 @@ class TriangleStore {
   int layers_;
   ShadingMode shading_;
   double invHither_;
-  RenderStats& stats_;
+  Counters& stats_;
   bool failed_ = false;  // a texture could not be read
   std::vector<Active> active_;  // the slots
   std::vector<int> live_, freeSlots_;
@@ -282,9 +282,9 @@ class TriangleStore {
 class TriangleGeometry {
  public:
   TriangleGeometry(const TriangleMesh& mesh, const RenderSettings& s, const Lattice& lat,
-                   int layers, RenderStats& stats)
+                   int layers, Counters& stats)
       : mesh_(mesh), s_(s), lat_(lat), store_(s, lat, layers, s.shading, stats) {
-    stats.nTriangles = static_cast<std::int64_t>(mesh.triangles.size());
+    stats[Counter::Triangles] = static_cast<std::int64_t>(mesh.triangles.size());
     ySorted_.reserve(mesh.triangles.size());
     for (std::uint32_t k = 0; k < mesh.triangles.size(); ++k) {
       const RasterTriangle& t = mesh.triangles[k];
@@ -354,7 +354,7 @@ constexpr std::int32_t kTriangleHandle = std::int32_t{1} << 30;
 class FragmentGeometry final : public FragmentRow {
  public:
   FragmentGeometry(FragmentSource& source, const RenderSettings& s, const Lattice& lat,
-                   int layers, RenderStats& stats)
+                   int layers, Counters& stats)
       : source_(source), s_(s), lat_(lat), layers_(layers), stats_(stats), pools_(s.aa),
         store_(s, lat, layers, ShadingMode::Phong, stats) {
     for (auto& p : pools_) p.reserve(static_cast<size_t>(lat.nx) * layers);
@@ -377,7 +377,7 @@ class FragmentGeometry final : public FragmentRow {
   }
 
   void Add(int column, const Fragment& f) override {
-    ++stats_.nSamplesTested;
+    ++stats_[Counter::SamplesTested];
     if (column < 0 || column >= lat_.nx || !(f.w >= s_.hither)) return;
     if (s_.cullBackFaces && f.normal.dot(s_.EyeFor(f.position) - f.position) < 0.0) return;
     if (const Material& m = s_.MaterialOf(f.surfaceId); !m.twoSided && !ShowsFront(m, f.normal, f.position, s_.EyeFor(f.position)))
@@ -389,7 +389,7 @@ class FragmentGeometry final : public FragmentRow {
 
   void AddTriangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
                    std::uint32_t surfaceId) override {
-    ++stats_.nTriangles;
+    ++stats_[Counter::Triangles];
     double yMax = s_.height;
     if (a.h.z() > 0 && b.h.z() > 0 && c.h.z() > 0)
       yMax = std::max({a.h.y() / a.h.z(), b.h.y() / b.h.z(), c.h.y() / c.h.z()});
@@ -447,7 +447,7 @@ class FragmentGeometry final : public FragmentRow {
   const RenderSettings& s_;
   const Lattice& lat_;
   int layers_;
-  RenderStats& stats_;
+  Counters& stats_;
   bool failed_ = false;
   std::vector<std::vector<Fragment>> pools_;  // per sample row of the pixel row
   std::vector<Fragment>* pool_ = nullptr;    // the row being scanned
@@ -460,8 +460,8 @@ class FragmentGeometry final : public FragmentRow {
 // per pixel, one shading call per group plus the adaptive-stochastic extra calls, and
 // the finished row handed to the sink.
 template <class Geometry>
-std::optional<RenderStats> RenderRows(Geometry& geo, const RenderSettings& s, const Lattice& lat,
-                                      int layers, RenderStats& stats, RowSink& sink) {
+std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const Lattice& lat,
+                                      int layers, Counters& stats, RowSink& sink) {
   std::vector<std::vector<Sample>> rows(s.aa, std::vector<Sample>(static_cast<size_t>(lat.nx) * layers));
   std::vector<float> pixels(static_cast<size_t>(s.width) * kChannels);
   const int perPixel = s.aa * s.aa;
@@ -532,7 +532,7 @@ std::optional<RenderStats> RenderRows(Geometry& geo, const RenderSettings& s, co
           if (memberGroup[k] == g) gathered[n++] = members[k];
         return n;
       };
-      stats.nSamplesCovered += covered;
+      stats[Counter::SamplesCovered] += covered;
       Rgb colour = Rgb::Zero();
       if (s.hiddenLine) {
         // White surfaces, black triangle edges, no shading.
@@ -545,7 +545,7 @@ std::optional<RenderStats> RenderRows(Geometry& geo, const RenderSettings& s, co
           // a_j contributes a prod (1 - a_j) of its colour at each sample.
           Group& gr = groups[g];
           const int n = gather(g);
-          gr.rgb = geo.ShadeGroup(gathered.data(), n, gr.sx / gr.count, gr.sy / gr.count, stats.nShadingCalls);
+          gr.rgb = geo.ShadeGroup(gathered.data(), n, gr.sx / gr.count, gr.sy / gr.count, stats[Counter::ShadingCalls]);
           colour += (gr.weight / perPixel) * gr.rgb;
         }
         // Only the (l-1) x (l-1) samples a pixel owns (not its right and bottom edges, which
@@ -557,18 +557,18 @@ std::optional<RenderStats> RenderRows(Geometry& geo, const RenderSettings& s, co
               UnitHash(s.seed, j0 + r, i0 + c) >= extraP)
             continue;
           const Sample& smp = rows[r][static_cast<size_t>(i0 + c) * layers];
-          const Rgb rgb = geo.ShadeSample(r, smp, lat.At(i0 + c), lat.At(j0 + r), stats.nExtraShadingCalls);
+          const Rgb rgb = geo.ShadeSample(r, smp, lat.At(i0 + c), lat.At(j0 + r), stats[Counter::ExtraShadingCalls]);
           superSample = (rgb - groups[groupOf[k]].rgb).cwiseAbs().maxCoeff() > kShadeDiscrepancy;
         }
         if (superSample) {
-          ++stats.nSuperSampledPixels;
+          ++stats[Counter::SuperSampledPixels];
           colour = Rgb::Zero();
           for (int k = 0; k < perPixel; ++k) {
             if (groupOf[k] < 0) continue;
             const int r = k / s.aa;
             const Sample& smp = rows[r][static_cast<size_t>(i0 + k % s.aa) * layers];
             colour += geo.ShadeSample(r, smp, lat.At(i0 + k % s.aa), lat.At(j0 + r),
-                                      stats.nExtraShadingCalls) / perPixel;
+                                      stats[Counter::ExtraShadingCalls]) / perPixel;
           }
         }
       }
@@ -608,9 +608,9 @@ bool RenderSettings::AnyTransparency() const {
   return false;
 }
 
-std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSettings& s,
+std::optional<Counters> RenderMesh(const TriangleMesh& mesh, const RenderSettings& s,
                                       RowSink& sink) {
-  RenderStats stats;
+  Counters stats;
   const Lattice lat(s);
   // With transparency each sample keeps its `layers` nearest fragments, nearest first.
   const int layers = s.AnyTransparency() ? kMaxLayers : 1;
@@ -618,9 +618,9 @@ std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSett
   return RenderRows(geo, s, lat, layers, stats, sink);
 }
 
-std::optional<RenderStats> RenderFragments(FragmentSource& source, const RenderSettings& s,
+std::optional<Counters> RenderFragments(FragmentSource& source, const RenderSettings& s,
                                            RowSink& sink) {
-  RenderStats stats;
+  Counters stats;
   const Lattice lat(s);
   const int layers = s.AnyTransparency() ? kMaxLayers : 1;
   FragmentGeometry geo(source, s, lat, layers, stats);

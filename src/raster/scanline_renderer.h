@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/counters.h"
 #include "raster/fragment.h"
 #include "raster/mesh.h"
 #include "raster/shading.h"
@@ -55,14 +56,6 @@ struct RenderSettings {
   Vec3 EyeFor(const Vec3& p) const { return orthographic ? Vec3(p - forward) : eye; }
 };
 
-// Counts paper 000 reports: n triangles, the most active on one sample row (m), the
-// samples tested and covered, and the shading calls.
-struct RenderStats {
-  std::int64_t nTriangles = 0, nTrianglesSetUp = 0, maxActive = 0;
-  std::int64_t nSamplesTested = 0, nSamplesCovered = 0, nShadingCalls = 0;
-  std::int64_t nExtraShadingCalls = 0, nSuperSampledPixels = 0;
-};
-
 // The channels of a row handed to a RowSink, per pixel.
 constexpr int kChannelZ = 4;    // w, the eye distance along the view axis (0: no surface)
 constexpr int kChannelN = 5;    // 3 channels: unit world normal
@@ -79,16 +72,20 @@ class RowSink {
   virtual bool WriteRow(int y, const float* pixels) = 0;
 };
 
+// The renders below return the counts paper 000 reports (core/counters.h, the back-end
+// group): n triangles, the most active on one sample row (m), the samples tested and
+// covered, and the shading calls.
+
 // Renders `mesh`. nullopt if the sink stopped it or the material's texture could not be
 // read (the texture's Error() says why). Allocates only before the first row.
-std::optional<RenderStats> RenderMesh(const TriangleMesh& mesh, const RenderSettings& settings,
+std::optional<Counters> RenderMesh(const TriangleMesh& mesh, const RenderSettings& settings,
                                       RowSink& sink);
 
 // Renders the fragments `source` produces row by row (exact renders). Shading mode flat
 // and Gouraud and hidden-line mode need triangles and are not applied: every shading call
 // uses the fragments' exact normals. A group of samples of one surface in a pixel is
 // shaded once with its fragments' attributes averaged.
-std::optional<RenderStats> RenderFragments(FragmentSource& source, const RenderSettings& settings,
+std::optional<Counters> RenderFragments(FragmentSource& source, const RenderSettings& settings,
                                            RowSink& sink);
 
 }  // namespace patchscan::raster

@@ -68,8 +68,8 @@ std::vector<EdgePiece> MonotoneEdgePieces(const Surface& s, const ScreenMap& map
   return VisitShape(s, [&](const auto& shape) { return Pieces(shape, map, e); });
 }
 
-EdgeScan::EdgeScan(const Surface& s, const ScreenMap& map, bool extrapolate, double tolerancePx)
-    : surface_(s), map_(map), extrapolate_(extrapolate), tolerancePx_(tolerancePx) {
+EdgeScan::EdgeScan(const Surface& s, const ScreenMap& map, Counters& counters, bool extrapolate, double tolerancePx)
+    : surface_(s), map_(map), extrapolate_(extrapolate), tolerancePx_(tolerancePx), counters_(counters) {
   for (PatchEdge e : {PatchEdge::U0, PatchEdge::U1, PatchEdge::V0, PatchEdge::V1}) {
     const auto p = MonotoneEdgePieces(s, map, e);
     pieces_.insert(pieces_.end(), p.begin(), p.end());
@@ -89,13 +89,15 @@ void EdgeScan::Advance(double yScan) {
     std::erase_if(trackers_, [&](const EdgeTracker& t) {
       const EdgePiece& p = pieces_[t.piece];
       if (p.yBottom >= yScan) return false;
-      ++stats_.nDeleted;
+      ++counters_[Counter::EdgeDied];
+      ++events_;
       deaths_.push_back(EdgePoint(p.edge, t.t));
       const double bottom = SampleEdge(shape, map_, p.edge, p.t0).y >= p.yBottom ? p.t0 : p.t1;
       const double j = SampleEdge(shape, map_, p.edge, bottom).j;
       if ((j > 0 && t.j < 0) || (j < 0 && t.j > 0)) {
         folds_.push_back(EdgePoint(p.edge, bottom));
-        ++stats_.nFolds;
+        ++counters_[Counter::Folds];
+        ++events_;
       }
       return true;
     });
@@ -108,7 +110,8 @@ void EdgeScan::Advance(double yScan) {
       // J at the piece's top, where the tracker is born: a silhouette that crosses the
       // edge between the top and the first scan line is a fold too.
       trackers_.push_back({static_cast<int>(nextPiece_), top, top, false, SampleEdge(shape, map_, p.edge, top).j});
-      ++stats_.nCreated;
+      ++counters_[Counter::EdgeBorn];
+      ++events_;
     }
     // Step 3: Newton from the extrapolated start (§3.5), bisection on the piece if it fails.
     for (EdgeTracker& tr : trackers_) {
@@ -139,18 +142,20 @@ void EdgeScan::Advance(double yScan) {
       if (!tr.hasPrev) {
         t = bisect();
       } else {
-        ++stats_.nNewtonCalls;
+        ++counters_[Counter::EdgeNewtonCalls];
         const auto r = SolveNewton1(f, std::clamp(start, p.t0, p.t1), p.t0, p.t1, tolerancePx_);
-        stats_.nNewtonIterations += r.iterations;
+        counters_[Counter::EdgeNewtonIterations] += r.iterations;
         t = r.t;
         if (r.status != NewtonStatus::Converged) {
-          ++stats_.nRepairs;
+          ++counters_[Counter::EdgeRepairs];
+          ++events_;
           t = bisect();
         }
       }
       const double j = SampleEdge(shape, map_, p.edge, t).j;
       tr.folded = (j > 0 && tr.j < 0) || (j < 0 && tr.j > 0);
-      stats_.nFolds += tr.folded;
+      counters_[Counter::Folds] += tr.folded;
+      events_ += tr.folded;
       if (tr.folded) folds_.push_back(EdgePoint(p.edge, t));
       tr.j = j;
       tr.tPrev2 = tr.tPrev;

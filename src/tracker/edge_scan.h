@@ -13,6 +13,7 @@
 #include <array>
 #include <vector>
 
+#include "core/counters.h"
 #include "patch/screen.h"
 #include "tracker/newton.h"
 
@@ -57,16 +58,12 @@ struct EdgeTracker {
   int nSolved = 0;      // scan lines on which this tracker has been solved
 };
 
-struct EdgeScanStats {
-  long nNewtonCalls = 0, nNewtonIterations = 0, nRepairs = 0;
-  long nCreated = 0, nDeleted = 0, nFolds = 0;
-};
-
 // All boundary-edge trackers of one surface, advanced scan line by scan line.
 class EdgeScan {
  public:
-  // `tolerancePx`: convergence in screen y (Blinn stopped at a tenth of a raster).
-  EdgeScan(const Surface& s, const ScreenMap& map, bool extrapolate = true,
+  // `tolerancePx`: convergence in screen y (Blinn stopped at a tenth of a raster). Counts
+  // into `counters` (the y scan's, core/counters.h), which must outlive the scan.
+  EdgeScan(const Surface& s, const ScreenMap& map, Counters& counters, bool extrapolate = true,
            double tolerancePx = kEdgeTolPx);
 
   // Moves every tracker to the scan line yScan (non-decreasing from call to call),
@@ -76,7 +73,10 @@ class EdgeScan {
 
   const std::vector<EdgeTracker>& Trackers() const { return trackers_; }
   const std::vector<EdgePiece>& Pieces() const { return pieces_; }
-  const EdgeScanStats& Stats() const { return stats_; }
+  // Events so far: trackers born and died, folds, bisection repairs. Two calls that
+  // return the same number bracket scan lines on which the boundary crossings kept their
+  // topology (a θ slab needs that, xscan/exact_scan.cpp).
+  long Events() const { return events_; }
   // Where a silhouette crossed a boundary edge since the previous scan line (§3.2.2.3):
   // a tracker whose J changed sign (its position), or a tracker deleted at the bottom of
   // its piece after J changed sign on the way there (that end). Refilled by Advance.
@@ -94,7 +94,8 @@ class EdgeScan {
   std::vector<EdgeTracker> trackers_;
   std::vector<Vec2> folds_, deaths_;
   size_t nextPiece_ = 0;
-  EdgeScanStats stats_;
+  Counters& counters_;
+  long events_ = 0;
 };
 
 }  // namespace patchscan

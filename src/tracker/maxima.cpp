@@ -79,7 +79,7 @@ bool OnCollapsedEdgeThatIsNoMaximum(const ShapeT& shape, const ScreenMap& map, c
 }
 
 template <class ShapeT>
-std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, MaximaStats& st) {
+std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Counters& st) {
   std::vector<Stationary> found;
   auto classifyInterior = [](const Mat2& H) {
     const double det = H.determinant(), scale = H.squaredNorm();
@@ -90,7 +90,7 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Maxi
 
   for (int sj = 0; sj < kMaximaSeedGrid; ++sj)
     for (int si = 0; si < kMaximaSeedGrid; ++si) {
-      ++st.nSeeds;
+      ++st[Counter::MaximaSeeds];
       const Vec2 seed(si / double(kMaximaSeedGrid - 1), sj / double(kMaximaSeedGrid - 1));
 
       // Step 1: constrained hill climbing (projected gradient, Newton when concave).
@@ -99,7 +99,7 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Maxi
       double stepLen = 0.25;  // gradient step length in parameter units, adapted
       bool fixed[2] = {false, false};
       for (int it = 0; it < kMaxClimbIterations; ++it) {
-        ++st.nClimbIterations;
+        ++st[Counter::MaximaClimbIterations];
         for (int k = 0; k < 2; ++k) fixed[k] = PushesOut(uv[k], at.g[k]);
         if (fixed[0] && fixed[1]) break;
         Vec2 step = Vec2::Zero();
@@ -152,7 +152,7 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Maxi
         // A collapsed edge is one point (a pole, the teapot's lid apex): the end is a
         // maximum only if h falls away from that point into the domain all along it.
         if (OnCollapsedEdgeThatIsNoMaximum(shape, map, uv, at)) {
-          ++st.nRejectedCollapsed;
+          ++st[Counter::MaximaRejectedCollapsed];
           continue;
         }
       } else {
@@ -176,7 +176,7 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Maxi
             *j = e.H;
           },
           seed, Vec2(gtol, gtol), opt);
-      st.nNewtonIterations += r.iterations;
+      st[Counter::MaximaNewtonIterations] += r.iterations;
       if (r.status == NewtonStatus::Converged && (r.uv.array() > 0).all() && (r.uv.array() < 1).all()) {
         const Height e = EvalHeight(shape, map, r.uv);
         if (e.H.determinant() < -kCylinderRelDet * e.H.squaredNorm())
@@ -197,7 +197,7 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Maxi
         break;
       }
     }
-    if (dup) ++st.nDuplicates;
+    if (dup) ++st[Counter::MaximaDuplicates];
     else unique.push_back(s);
   }
   return unique;
@@ -206,9 +206,9 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Maxi
 }  // namespace
 
 std::vector<Stationary> FindStationaryPoints(const Surface& s, const ScreenMap& map,
-                                             MaximaStats* stats) {
-  MaximaStats local;
-  MaximaStats& st = stats ? *stats : local;
+                                             Counters* counters) {
+  Counters local;
+  Counters& st = counters ? *counters : local;
   return VisitShape(s, [&](const auto& shape) { return FindImpl(shape, map, st); });
 }
 

@@ -9,6 +9,7 @@
 
 #include <vector>
 
+#include "core/counters.h"
 #include "patch/screen.h"
 #include "tracker/newton.h"
 
@@ -32,12 +33,6 @@ struct Stationary {
   int edge = -1;      // EdgeMaximum: PatchEdge of its edge; CornerMaximum: -1
 };
 
-// Counters of the pre-pass (DESIGN.md: count what the papers count).
-struct MaximaStats {
-  int nSeeds = 0, nClimbIterations = 0, nNewtonIterations = 0, nDuplicates = 0;
-  int nRejectedCollapsed = 0;  // climbs that stopped on a collapsed edge that is no maximum
-};
-
 // Seeds per side of the grid of starting points (corners and centre included, §3.2.2.1).
 constexpr int kMaximaSeedGrid = 5;
 // Duplicates (Blinn's thesis): two points of one kind whose y, and the y at the midpoint
@@ -47,6 +42,6 @@ constexpr double kDuplicateY = 0.1;
 // All maxima and saddles of one surface seen through `map`, sorted by y (topmost first).
 // Minima are not reported (trackers die there by failing to converge, §3.2.3).
 std::vector<Stationary> FindStationaryPoints(const Surface& s, const ScreenMap& map,
-                                             MaximaStats* stats = nullptr);
+                                             Counters* counters = nullptr);
 
 }  // namespace patchscan

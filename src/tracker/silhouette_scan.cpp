@@ -61,9 +61,9 @@ const Vec2 kTolerance(kEdgeTolPx, kEdgeTolPx);
 
 }  // namespace
 
-SilhouetteScan::SilhouetteScan(const Surface& s, const ScreenMap& map,
-                               std::vector<Stationary> stationary, bool extrapolate)
-    : surface_(s), map_(map), stationary_(std::move(stationary)), extrapolate_(extrapolate) {
+SilhouetteScan::SilhouetteScan(const Surface& s, const ScreenMap& map, std::vector<Stationary> stationary,
+                               Counters& counters, bool extrapolate)
+    : surface_(s), map_(map), stationary_(std::move(stationary)), extrapolate_(extrapolate), counters_(counters) {
   std::erase_if(stationary_, [](const Stationary& p) {
     return p.kind != StationaryKind::StrictMaximum && p.kind != StationaryKind::Saddle;
   });
@@ -76,13 +76,16 @@ bool SilhouetteScan::Solve(const ShapeT& shape, double yScan, const Vec2& start,
                            DomainRule domain) {
   NewtonOptions opt;
   opt.domain = domain;
-  ++stats_.nNewtonCalls;
+  ++counters_[Counter::SilhouetteNewtonCalls];
   const auto r = SolveNewton2(
       [&](const Vec2& p, Vec2* f, Mat2* j) { SilhouetteSystem(shape, map_, yScan, p, f, j); },
       start.cwiseMax(0.0).cwiseMin(1.0), kTolerance, opt);
-  stats_.nNewtonIterations += r.iterations;
+  counters_[Counter::SilhouetteNewtonIterations] += r.iterations;
   *uv = r.uv;
-  if (r.status == NewtonStatus::LeftDomain) ++stats_.nDeletedLeft;
+  if (r.status == NewtonStatus::LeftDomain) {
+    ++counters_[Counter::SilhouettesLeft];
+    ++events_;
+  }
   return r.status == NewtonStatus::Converged;
 }
 
@@ -100,7 +103,8 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     // way to a crossing inside still arrives; one whose crossing has left the domain
     // stalls on the boundary and fails.
     if (!Solve(shape, yScan, start, &uv, DomainRule::Clip)) {
-      ++stats_.nDeletedFailed;
+      ++counters_[Counter::SilhouettesDied];
+      ++events_;
       deaths_.push_back(t.uv);
       // A death inside the domain is a minimum of the curve, or a lost tracker: only a
       // search can tell.
@@ -116,14 +120,15 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   });
   // A new tracker's seed may sit on the boundary (a fold) with the first step pointing
   // out: seeds are solved with steps clipped at the boundary.
-  auto add = [&](const Vec2& start, long* counter) {
+  auto add = [&](const Vec2& start, Counter born) {
     Vec2 uv;
     if (!Solve(shape, yScan, start, &uv, DomainRule::Clip)) return false;
     for (const SilhouetteTracker& t : trackers_)
       if ((t.uv - uv).norm() < kSameTrackerUv) return true;  // already tracked
     trackers_.push_back({uv, uv, false});
     births_.push_back(uv);
-    ++*counter;
+    ++counters_[born];
+    ++events_;
     return true;
   };
   // Step 2: maxima and saddles passed since the last scan line.
@@ -143,8 +148,8 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
       bool born = false;
       if (q > 0 && drop >= 0) {
         const Vec2 delta = std::sqrt(2.0 * drop / q) * w;
-        born |= add(p.uv + delta, &stats_.nCreatedAtMaxima);
-        born |= add(p.uv - delta, &stats_.nCreatedAtMaxima);
+        born |= add(p.uv + delta, Counter::SilhouettesBornAtMaxima);
+        born |= add(p.uv - delta, Counter::SilhouettesBornAtMaxima);
       }
       if (!born) search = true;  // a closed curve appeared and the seeds missed it
     } else {
@@ -156,8 +161,8 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
         const double lambda = std::abs(eig.eigenvalues()[k]);
         if (lambda == 0.0) continue;
         const Vec2 delta = std::sqrt(2.0 * std::max(drop, 1e-3) / lambda) * eig.eigenvectors().col(k);
-        add(p.uv + delta, &stats_.nCreatedAtSaddles);
-        add(p.uv - delta, &stats_.nCreatedAtSaddles);
+        add(p.uv + delta, Counter::SilhouettesBornAtSaddles);
+        add(p.uv - delta, Counter::SilhouettesBornAtSaddles);
       }
     }
   }
@@ -167,12 +172,13 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   for (const Vec2& uv : edges.Folds()) {
     bool born = false;
     for (double towards : {0.0, 0.25, 0.5})
-      if ((born = add(uv + towards * (Vec2(0.5, 0.5) - uv), &stats_.nCreatedAtFolds))) break;
+      if ((born = add(uv + towards * (Vec2(0.5, 0.5) - uv), Counter::SilhouettesBornAtFolds))) break;
     if (!born) search = true;
   }
   // Step 3b: repair by subdivision (when an event is not explained by the trackers).
   if (search) {
-    ++stats_.nRepairSearches;
+    ++counters_[Counter::RepairSearches];
+    ++events_;
     searchFound_.clear();
     FindCrossingsBySubdivision(shape, map_, yScan, 0.0, 0.0, 1.0, 0, &searchFound_);
     for (const Vec2& uv : searchFound_) {
@@ -181,7 +187,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
       if (tracked) continue;
       trackers_.push_back({uv, uv, false});
       births_.push_back(uv);
-      ++stats_.nRepaired;
+      ++counters_[Counter::RepairedBySearch];
     }
   }
   // Step 4: trackers that converged onto one crossing are one tracker.
@@ -189,7 +195,8 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     for (size_t b = a + 1; b < trackers_.size();)
       if ((trackers_[a].uv - trackers_[b].uv).norm() < kSameTrackerUv) {
         trackers_.erase(trackers_.begin() + static_cast<long>(b));
-        ++stats_.nMerged;
+        ++counters_[Counter::SilhouettesMerged];
+        ++events_;
       } else {
         ++b;
       }
@@ -199,7 +206,8 @@ void SilhouetteScan::Adopt(const Vec2& uv) {
   for (const SilhouetteTracker& t : trackers_)
     if ((t.uv - uv).norm() < kSameTrackerUv) return;
   trackers_.push_back({uv, uv, false});
-  ++stats_.nAdopted;
+  ++counters_[Counter::SilhouettesAdopted];
+  ++events_;
 }
 
 void SilhouetteScan::Advance(double yScan, const EdgeScan& edges) {

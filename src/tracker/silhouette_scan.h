@@ -24,15 +24,6 @@ struct SilhouetteTracker {
   int nSolved = 1;                // scan lines on which this tracker has been solved
 };
 
-struct SilhouetteScanStats {
-  long nNewtonCalls = 0, nNewtonIterations = 0;
-  long nCreatedAtMaxima = 0, nCreatedAtFolds = 0, nCreatedAtSaddles = 0;
-  long nDeletedFailed = 0, nDeletedLeft = 0, nMerged = 0;
-  long nAdopted = 0;
-  long nRepairSearches = 0;  // subdivision searches after an unexplained event
-  long nRepaired = 0;        // crossings they found that no tracker held  // repairs: crossings found by the X scan and tracked from then on
-};
-
 // Both equations are solved in pixels: y - yScan, and J / max(|s_u|, |s_v|), to the edge
 // trackers' tolerance kEdgeTolPx.
 // Two trackers closer than this in (u,v) are the same crossing.
@@ -61,8 +52,9 @@ inline void SilhouetteSystem(const ShapeT& shape, const ScreenMap& map, double y
 
 class SilhouetteScan {
  public:
-  // `stationary`: the surface's maxima and saddles (FindStationaryPoints).
-  SilhouetteScan(const Surface& s, const ScreenMap& map, std::vector<Stationary> stationary,
+  // `stationary`: the surface's maxima and saddles (FindStationaryPoints). Counts into
+  // `counters`, which must outlive the scan.
+  SilhouetteScan(const Surface& s, const ScreenMap& map, std::vector<Stationary> stationary, Counters& counters,
                  bool extrapolate = true);
 
   // Moves to scan line yScan (non-decreasing); `edges` must already be at yScan (its
@@ -75,7 +67,9 @@ class SilhouetteScan {
   void Adopt(const Vec2& uv);
 
   const std::vector<SilhouetteTracker>& Trackers() const { return trackers_; }
-  const SilhouetteScanStats& Stats() const { return stats_; }
+  // Events so far: trackers born, died, left, merged and adopted, repair searches (as
+  // EdgeScan::Events).
+  long Events() const { return events_; }
   // Where trackers were born and where they died (their last position) at the latest
   // Advance.
   const std::vector<Vec2>& Births() const { return births_; }
@@ -94,7 +88,8 @@ class SilhouetteScan {
   bool extrapolate_;
   std::vector<SilhouetteTracker> trackers_;
   std::vector<Vec2> births_, deaths_, searchFound_;
-  SilhouetteScanStats stats_;
+  Counters& counters_;
+  long events_ = 0;
 };
 
 // The crossings of scan line yScan with the silhouette found by the trackers' repair

@@ -71,7 +71,7 @@ raster::Fragment FragmentAt(const WalkPoint& p, const Surface& surface,
 
 ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options)
     : surfaces_(surfaces), camera_(camera), eye_(EyePoint(camera)), right_(ViewRight(camera)), forward_(ViewForward(camera)), options_(options) {
-  stats_.nSurfaces = static_cast<long>(surfaces.size());
+  counters_[Counter::Surfaces] = static_cast<std::int64_t>(surfaces.size());
   for (int i = 0; i < options_.thetaSteps; ++i) {
     const double a = 2.0 * std::numbers::pi * i / options_.thetaSteps;
     angles_.emplace_back(std::cos(a), std::sin(a));
@@ -98,8 +98,8 @@ void ExactScan::Activate(std::size_t index, double y, double spacing) {
   a->normalFromObject = s.worldFromObject.linear().inverse().transpose();
   for (const Pending& p : pending_)
     if (p.index == index) a->yMax = p.yMax;
-  std::vector<Stationary> stationary = FindStationaryPoints(s, a->map);
-  stats_.nStationary += static_cast<long>(stationary.size());
+  std::vector<Stationary> stationary = FindStationaryPoints(s, a->map, &counters_);
+  counters_[Counter::Stationary] += static_cast<std::int64_t>(stationary.size());
   for (const Stationary& p : stationary) {
     ScreenDerivs d;
     EvaluateScreen(s, a->map, p.uv.x(), p.uv.y(), DerivOrder::Position, &d);
@@ -108,57 +108,16 @@ void ExactScan::Activate(std::size_t index, double y, double spacing) {
   }  // FindStationaryPoints sorts by y
   double yTop = y;
   for (const Stationary& p : stationary) yTop = std::min(yTop, p.y);
-  a->edges = std::make_unique<EdgeScan>(s, a->map, options_.extrapolate);
-  a->silhouettes = std::make_unique<SilhouetteScan>(s, a->map, std::move(stationary), options_.extrapolate);
+  a->edges = std::make_unique<EdgeScan>(s, a->map, counters_, options_.extrapolate);
+  a->silhouettes = std::make_unique<SilhouetteScan>(s, a->map, std::move(stationary), counters_, options_.extrapolate);
   const double step = std::max(spacing, 1.0);
   for (double yp = std::max(yTop, y - kMaxPreAdvancePx); yp < y; yp += step) {
     a->edges->Advance(yp);
     a->silhouettes->Advance(yp, *a->edges);
   }
-  ++stats_.nSurfacesActivated;
+  ++counters_[Counter::SurfacesSetUp];
   active_.push_back(std::move(a));
-  stats_.maxActiveSurfaces = std::max(stats_.maxActiveSurfaces, static_cast<long>(active_.size()));
-}
-
-namespace {
-
-void AddEdgeStats(EdgeScanStats* to, const EdgeScanStats& s) {
-  to->nNewtonCalls += s.nNewtonCalls;
-  to->nNewtonIterations += s.nNewtonIterations;
-  to->nRepairs += s.nRepairs;
-  to->nCreated += s.nCreated;
-  to->nDeleted += s.nDeleted;
-  to->nFolds += s.nFolds;
-}
-
-void AddSilhouetteStats(SilhouetteScanStats* to, const SilhouetteScanStats& s) {
-  to->nNewtonCalls += s.nNewtonCalls;
-  to->nNewtonIterations += s.nNewtonIterations;
-  to->nCreatedAtMaxima += s.nCreatedAtMaxima;
-  to->nCreatedAtFolds += s.nCreatedAtFolds;
-  to->nCreatedAtSaddles += s.nCreatedAtSaddles;
-  to->nDeletedFailed += s.nDeletedFailed;
-  to->nDeletedLeft += s.nDeletedLeft;
-  to->nMerged += s.nMerged;
-  to->nAdopted += s.nAdopted;
-  to->nRepairSearches += s.nRepairSearches;
-  to->nRepaired += s.nRepaired;
-}
-
-}  // namespace
-
-void ExactScan::Retire(Active& a) {
-  AddEdgeStats(&stats_.edges, a.edges->Stats());
-  AddSilhouetteStats(&stats_.silhouettes, a.silhouettes->Stats());
-}
-
-ExactScanStats ExactScan::Stats() const {
-  ExactScanStats s = stats_;
-  for (const auto& a : active_) {
-    AddEdgeStats(&s.edges, a->edges->Stats());
-    AddSilhouetteStats(&s.silhouettes, a->silhouettes->Stats());
-  }
-  return s;
+  counters_.Raise(Counter::MaxActiveSurfaces, static_cast<std::int64_t>(active_.size()));
 }
 
 void ExactScan::AdvanceTo(Active& a, double y) {
@@ -170,7 +129,7 @@ void ExactScan::AdvanceTo(Active& a, double y) {
     rowTrackers_.edgeOf.push_back(a.edges->Pieces()[t.piece].edge);
   }
   for (const SilhouetteTracker& t : a.silhouettes->Trackers()) rowTrackers_.silhouettePoints.push_back(t.uv);
-  stats_.nTrackerSteps += static_cast<long>(a.edges->Trackers().size() + a.silhouettes->Trackers().size());
+  counters_[Counter::TrackerRows] += static_cast<std::int64_t>(a.edges->Trackers().size() + a.silhouettes->Trackers().size());
   if (trace_) TraceTrackers(a, y);
 }
 
@@ -180,8 +139,7 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
   VisitShape(surface, [&](const auto& shape) {
     using ShapeT = std::decay_t<decltype(shape)>;
     const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_};
-    ThetaWalker<ShapeT> walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_, &stats_.theta,
-                               options_.thetaSteps, frame);
+    ThetaWalker<ShapeT> walker(shape, a.map, y, columns, &counters_, &walkEvents_, options_.thetaSteps, frame);
     walker.SetChainSink(chainSink_);
     f(walker, [&](const WalkPoint& p) {
       return FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index));
@@ -206,9 +164,9 @@ void ExactScan::WalkSurface(Active& a, double y, const raster::SampleColumns& co
   } else {
     const Surface& surface = surfaces_[a.index];
     VisitShape(surface, [&](const auto& shape) {
-      LevelWalker walker(shape, a.map, y, columns, &stats_.walk, &walkEvents_);
+      LevelWalker walker(shape, a.map, y, columns, &counters_, &walkEvents_);
       walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, [&](int column, const WalkPoint& p) {
-        ++stats_.nFragments;
+        ++counters_[Counter::Fragments];
         out.Add(column, FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)));
       });
     });
@@ -227,19 +185,15 @@ bool ExactScan::AdvanceSurface(Active& a, double y, const raster::SampleColumns&
 }
 
 bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  ++stats_.nRows;
+  ++counters_[Counter::SampleRows];
   if (options_.thetaSteps > 0 && options_.slabRows > 0) return ScanRowSlabs(y, columns, out);
   // Retire surfaces the scan has passed, set up those it has reached.
-  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) {
-    if (a->yMax >= y) return false;
-    Retire(*a);
-    return true;
-  });
+  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < y; });
   for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= y; ++nextPending_)
     if (pending_[nextPending_].yMax >= y) Activate(pending_[nextPending_].index, y, columns.dx);
 
   auto emit = [&](int column, const raster::Fragment& f) {
-    ++stats_.nFragments;
+    ++counters_[Counter::Fragments];
     out.Add(column, f);
   };
   for (const auto& ap : active_) {
@@ -251,12 +205,7 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
   return true;
 }
 
-long ExactScan::EventCount(const Active& a) const {
-  const EdgeScanStats& e = a.edges->Stats();
-  const SilhouetteScanStats& s = a.silhouettes->Stats();
-  return e.nCreated + e.nDeleted + e.nFolds + e.nRepairs + s.nCreatedAtMaxima + s.nCreatedAtFolds +
-         s.nCreatedAtSaddles + s.nDeletedFailed + s.nDeletedLeft + s.nMerged + s.nAdopted + s.nRepairSearches;
-}
+long ExactScan::EventCount(const Active& a) { return a.edges->Events() + a.silhouettes->Events(); }
 
 void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   const int m = options_.slabRows;
@@ -267,19 +216,14 @@ void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, rast
   // above the interval's first row and below its last.
   const double yTop = columns.x0 + (static_cast<double>(j) - 0.5) * dy, yBottom = yTop + m * dy;
   auto rowY = [&](int r) { return columns.x0 + static_cast<double>(j + r) * dy; };
-  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) {
-    if (a->yMax >= yTop) return false;
-    Retire(*a);
-    return true;
-  });
+  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yTop; });
   const std::size_t firstNew = active_.size();
   for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= yBottom; ++nextPending_)
     if (pending_[nextPending_].yMax >= yTop) Activate(pending_[nextPending_].index, yTop, dy);
   auto walkLine = [&](Active& a, double y, ChainSet* set, bool* broken) {
     set->Clear();
-    const long failures = stats_.walk.nFailures + stats_.walk.nUntrackedSilhouettes + stats_.walk.nUntrackedExits;
     WalkSurface(a, y, columns, out, [&](std::span<const ThetaVertex> chain, bool closed) { set->Add(chain, closed); });
-    *broken = failures != stats_.walk.nFailures + stats_.walk.nUntrackedSilhouettes + stats_.walk.nUntrackedExits;
+    *broken = WalkBroken();
   };
   for (std::size_t k = firstNew; k < active_.size(); ++k) {
     AdvanceTo(*active_[k], yTop);
@@ -302,18 +246,17 @@ void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, rast
       if (st.second.y() > yTop && st.second.y() <= yBottom) quiet = false;
     // Between lines with no event the chains of the top line are advanced as θ trackers
     // (§4.1); a chain that cannot be, or any event, has the bottom line crawled afresh.
-    const long failures = stats_.walk.nFailures + stats_.walk.nUntrackedSilhouettes + stats_.walk.nUntrackedExits;
     if (quiet && AdvanceSurface(a, yBottom, columns)) {
-      a.nextBroken = failures != stats_.walk.nFailures + stats_.walk.nUntrackedSilhouettes + stats_.walk.nUntrackedExits;
+      a.nextBroken = WalkBroken();
     } else {
-      if (quiet) ++stats_.theta.nLineRepairs;
+      if (quiet) ++counters_[Counter::ThetaLineRepairs];
       walkLine(a, yBottom, &a.next, &a.nextBroken);
     }
     slab = slab && quiet && !a.nextBroken && PairChains(a.line, a.next, &a.pairs, &a.ordered);
   }
   byRows_ = !slab;
   if (slab) {
-    ++stats_.nSlabIntervals;
+    ++counters_[Counter::SlabIntervals];
     const SlabFrame frame{yTop, yBottom, camera_.orthographic, eye_, forward_};
     for (const auto& ap : active_) {
       Active& a = *ap;
@@ -322,12 +265,12 @@ void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, rast
         ZipSlab(a.line.Of(a.line.chains[p.top]),
                 std::span<const ThetaVertex>(a.ordered.data() + p.begin, p.end - p.begin), frame, &anchorsTop_,
                 &anchorsBottom_, [&](const raster::RasterVertex& u, const raster::RasterVertex& v, const raster::RasterVertex& w) {
-                  ++stats_.nSlabTriangles;
+                  ++counters_[Counter::SlabTriangles];
                   out.AddTriangle(u, v, w, id);
                 });
     }
   } else {
-    ++stats_.nRowIntervals;
+    ++counters_[Counter::RowIntervals];
     for (const auto& ap : active_) {
       Active& a = *ap;
       a.rows.resize(static_cast<std::size_t>(m));
@@ -350,7 +293,7 @@ bool ExactScan::ScanRowSlabs(double y, const raster::SampleColumns& columns, ras
   if (j < intervalStart_ || j >= intervalEnd_) BeginInterval(j, columns, out);
   if (!byRows_) return true;
   auto emit = [&](int column, const raster::Fragment& f) {
-    ++stats_.nFragments;
+    ++counters_[Counter::Fragments];
     out.Add(column, f);
   };
   const auto r = static_cast<std::size_t>(j - intervalStart_);

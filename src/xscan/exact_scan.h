@@ -41,20 +41,6 @@ struct ExactScanOptions {
   int slabRows = 0;
 };
 
-// Counters of the whole render (DESIGN.md: count what the papers count).
-struct ExactScanStats {
-  long nSurfaces = 0, nSurfacesActivated = 0, maxActiveSurfaces = 0;
-  long nRows = 0, nFragments = 0;
-  long nStationary = 0;
-  long nTrackerSteps = 0;  // edge and silhouette trackers advanced, summed over rows
-  EdgeScanStats edges;
-  SilhouetteScanStats silhouettes;
-  WalkStats walk;
-  ThetaStats theta;
-  // θ slabs: scan-line intervals taken as slabs, and row by row; triangles made.
-  long nSlabIntervals = 0, nRowIntervals = 0, nSlabTriangles = 0;
-};
-
 class ExactScan final : public raster::FragmentSource {
  public:
   // `surfaces` must outlive the scan; fragment surface ids are indices into it.
@@ -69,13 +55,12 @@ class ExactScan final : public raster::FragmentSource {
   // Theta mode: shows every chain to `sink` as it is made (null: none).
   void SetThetaChainSink(ThetaChainSink* sink) { chainSink_ = sink; }
 
-  // Totals so far, including the surfaces still active.
-  ExactScanStats Stats() const;
+  // The counts so far (core/counters.h: set up, y scan, x scan, θ and slab groups).
+  const Counters& Stats() const { return counters_; }
 
  private:
   struct Active;
   void Activate(size_t index, double y, double spacing);
-  void Retire(Active& a);
   // Advances a surface's trackers to y and lists them in rowTrackers_.
   void AdvanceTo(Active& a, double y);
   // The X scan of a surface on line y from rowTrackers_: exact fragments, or (θ) each
@@ -93,7 +78,10 @@ class ExactScan final : public raster::FragmentSource {
   // θ slabs: the scan lines around sample rows [j, j + slabRows), their slab or each row's chains.
   void BeginInterval(long j, const raster::SampleColumns& columns, raster::FragmentRow& out);
   bool ScanRowSlabs(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
-  long EventCount(const Active& a) const;
+  // The Y-scan events of a surface so far (a slab wants none between its lines).
+  static long EventCount(const Active& a);
+  // Whether the last X scan of a surface gave up or repaired a tracker miss.
+  bool WalkBroken() const { return !walkEvents_.failures.empty() || !walkEvents_.repairs.empty(); }
   void TraceTrackers(Active& a, double y);
   void TraceWalk(Active& a);
 
@@ -115,7 +103,7 @@ class ExactScan final : public raster::FragmentSource {
   ThetaChainSink* chainSink_ = nullptr;
   TraceSink* trace_ = nullptr;
   std::vector<char> edgeUsed_, silUsed_;
-  ExactScanStats stats_;
+  Counters counters_;
   // θ slabs: the interval of sample rows being scanned, and whether it is taken row by row.
   long intervalStart_ = 0, intervalEnd_ = -1;
   bool byRows_ = false;

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <vector>
 
+#include "core/counters.h"
 #include "patch/screen.h"
 #include "raster/fragment.h"
 #include "tracker/edge_scan.h"
@@ -22,18 +23,6 @@
 #include "tracker/silhouette_scan.h"
 
 namespace patchscan {
-
-struct WalkStats {
-  long nWalks = 0, nClosedWalks = 0;
-  long nColumnSteps = 0;  // steps that landed on a sample column
-  long nArcSteps = 0;     // steps along the curve between columns (near silhouettes)
-  long nColumnsSolved = 0;
-  long nNewtonCalls = 0, nNewtonIterations = 0;  // the per-sample solves
-  long nSilhouettes = 0;           // silhouette points passed
-  long nUntrackedSilhouettes = 0;  // of those, held by no silhouette tracker (repaired)
-  long nUntrackedExits = 0;        // boundary exits held by no edge tracker (repaired)
-  long nFailures = 0;              // walks or samples given up
-};
 
 // Where the walks repaired a tracker miss and where they gave up, for the trace.
 struct WalkEvents {
@@ -93,8 +82,8 @@ class LevelWalker {
   // Emit(column, const WalkPoint&): the surface point at sample column `column` of the row.
   // `events` may be null.
   LevelWalker(const ShapeT& shape, const ScreenMap& map, double ys,
-              const raster::SampleColumns& cols, WalkStats* stats, WalkEvents* events = nullptr)
-      : shape_(shape), map_(map), ys_(ys), cols_(cols), stats_(stats), events_(events) {}
+              const raster::SampleColumns& cols, Counters* counters, WalkEvents* events = nullptr)
+      : shape_(shape), map_(map), ys_(ys), cols_(cols), counters_(counters), events_(events) {}
 
   // Walks every curve of the row. `edgeUsed` and `silUsed` are scratch (resized here).
   template <class Emit>
@@ -141,11 +130,11 @@ class LevelWalker {
 
  protected:
   void Failed(const Vec2& uv) {
-    ++stats_->nFailures;
+    ++(*counters_)[Counter::Failures];
     if (events_) events_->failures.push_back(uv);
   }
-  void Repaired(const Vec2& uv, long WalkStats::*counter) {
-    ++(stats_->*counter);
+  void Repaired(const Vec2& uv, Counter counter) {
+    ++(*counters_)[counter];
     if (events_) events_->repairs.push_back(uv);
   }
 
@@ -176,7 +165,7 @@ class LevelWalker {
   // The point of the level curve at column c, by Newton from `seed`.
   bool SolveColumn(int c, const Vec2& seed, WalkPoint* out) const {
     const double xs = cols_.At(c);
-    ++stats_->nNewtonCalls;
+    ++(*counters_)[Counter::XscanNewtonCalls];
     // The solver's last evaluation is at the point it returns: kept, not repeated.
     const auto r = SolveNewton2(
         [&](const Vec2& uv, Vec2* f, Mat2* jac) {
@@ -187,7 +176,7 @@ class LevelWalker {
           if (!p.ok) *f = Vec2(NAN, NAN);
         },
         seed, Vec2(kEdgeTolPx, kEdgeTolPx));
-    stats_->nNewtonIterations += r.iterations;
+    (*counters_)[Counter::XscanNewtonIterations] += r.iterations;
     if (r.status != NewtonStatus::Converged) return false;
     if (out->uv != r.uv) *out = Eval(r.uv);
     return out->ok;
@@ -216,7 +205,7 @@ class LevelWalker {
       const double reach = (b.uv - a.uv).norm();
       if (SolveColumn(c, a.uv + std::clamp(t, 0.0, 1.0) * (b.uv - a.uv), &p) &&
           (p.uv - a.uv).norm() <= 2.0 * reach + kSameCrossingUv) {
-        ++stats_->nColumnsSolved;
+        ++(*counters_)[Counter::ColumnsSolved];
         emit(c, p);
         continue;
       }
@@ -332,9 +321,9 @@ class LevelWalker {
         EmitBetween(a, b, emit);
         return false;
       }
-      ++stats_->nSilhouettes;
+      ++(*counters_)[Counter::SilhouettePoints];
       if (!UseSilhouetteTracker(s.uv)) {
-        Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
+        Repaired(s.uv, Counter::UntrackedSilhouettes);
         if (events_) events_->untrackedSilhouettes.push_back(s.uv);
       }
       EmitBetween(a, s, emit);
@@ -372,10 +361,10 @@ class LevelWalker {
       WalkPoint next;
       bool ok;
       if (aimed) {
-        ++stats_->nColumnSteps;
+        ++(*counters_)[Counter::ColumnSteps];
         ok = Inside(q) && SolveColumn(c, q, &next);
       } else {
-        ++stats_->nArcSteps;
+        ++(*counters_)[Counter::ArcSteps];
         next = Correct(q);
         ok = next.ok;
       }
@@ -397,7 +386,7 @@ class LevelWalker {
         continue;
       }
       if (aimed) {
-        ++stats_->nColumnsSolved;
+        ++(*counters_)[Counter::ColumnsSolved];
         emit(c, next);
         *p = next;
         return Step::Ok;
@@ -429,7 +418,7 @@ class LevelWalker {
 
   template <class Emit>
   void WalkFromEdge(const Vec2& uv, PatchEdge edge, Emit& emit) {
-    ++stats_->nWalks;
+    ++(*counters_)[Counter::Walks];
     WalkPoint p = Eval(uv);
     if (!p.ok) {
       Failed(uv);
@@ -447,7 +436,7 @@ class LevelWalker {
       const Step st = Advance(&p, sense, &h, emit, &passed, &didPass);
       if (st == Step::Lost) break;
       if (st == Step::Exit) {
-        if (!UseEdgeTracker(p.uv)) Repaired(p.uv, &WalkStats::nUntrackedExits);
+        if (!UseEdgeTracker(p.uv)) Repaired(p.uv, Counter::UntrackedExits);
         return;
       }
     }
@@ -458,8 +447,8 @@ class LevelWalker {
   void WalkClosed(const Vec2& uv, Emit& emit) {
     WalkPoint start = Eval(uv);
     if (!start.ok || std::abs(start.y - ys_) > 1e3 * kEdgeTolPx) return;  // not a crossing
-    ++stats_->nWalks;
-    ++stats_->nClosedWalks;
+    ++(*counters_)[Counter::Walks];
+    ++(*counters_)[Counter::ClosedWalks];
     WalkPoint p = start;
     p.jn = 0.0;  // the start is on the silhouette whatever rounding says
     double h = kWalkStepStart;
@@ -472,7 +461,7 @@ class LevelWalker {
       if (st == Step::Exit) {
         // Not closed after all: it reached the boundary, whose edge walks did not reach
         // this tracker. Walk the other way too, and count a miss.
-        if (!UseEdgeTracker(p.uv)) Repaired(p.uv, &WalkStats::nUntrackedExits);
+        if (!UseEdgeTracker(p.uv)) Repaired(p.uv, Counter::UntrackedExits);
         WalkPoint back = start;
         back.jn = 0.0;
         double hb = kWalkStepStart;
@@ -480,7 +469,7 @@ class LevelWalker {
           const Step sb = Advance(&back, -1.0, &hb, emit, &passed, &didPass);
           if (sb == Step::Lost) break;
           if (sb == Step::Exit) {
-            if (!UseEdgeTracker(back.uv)) Repaired(back.uv, &WalkStats::nUntrackedExits);
+            if (!UseEdgeTracker(back.uv)) Repaired(back.uv, Counter::UntrackedExits);
             return;
           }
         }
@@ -495,7 +484,7 @@ class LevelWalker {
   const ScreenMap& map_;
   double ys_;
   raster::SampleColumns cols_;
-  WalkStats* stats_;
+  Counters* counters_;
   WalkEvents* events_;
   const RowTrackers* trackers_ = nullptr;
   std::vector<char>*edgeUsed_ = nullptr, *silUsed_ = nullptr;

@@ -48,19 +48,6 @@
 
 namespace patchscan {
 
-// Counters of the θ chains.
-struct ThetaStats {
-  long nChains = 0, nVertices = 0, nSteps = 0;
-  long nTurnPoints = 0;  // vertices where θ turned back (§4.3)
-  long nTilts = 0;       // vertices where the normal turned out of the scan plane
-  // θ trackers advanced from the line before, and their Newton iterations (§3.5)
-  long nTrackers = 0, nTrackerIterations = 0, nTrackerFailures = 0;
-  long nCrawlIterations = 0;  // Newton iterations placing the crawl's Table vertices
-  long nTurnTrackers = 0, nTurnIterations = 0, nTurnFailures = 0;  // turn points advanced (§4.3)
-  long nLinkRepairs = 0;  // links crawled sideways between two advanced vertices (§4.2)
-  long nLineRepairs = 0;  // lines crawled afresh: a chain could not be advanced
-};
-
 // A vertex of a θ chain: its screen x, its surface point, and why it is a vertex: an end
 // on the boundary (or a closed chain's start), a tabulated angle θ_index, a silhouette
 // point (θ = 0 or π), a turn point (§4.3), or a tilt: the normal turned out of the scan
@@ -192,8 +179,8 @@ class ThetaWalker : public LevelWalker<ShapeT> {
  public:
   // `steps`: N, the tabulated angles per turn.
   ThetaWalker(const ShapeT& shape, const ScreenMap& map, double ys, const raster::SampleColumns& cols,
-              WalkStats* stats, WalkEvents* events, ThetaStats* theta, int steps, const ThetaFrame& frame)
-      : Base(shape, map, ys, cols, stats, events), theta_(theta), steps_(steps), frame_(frame),
+              Counters* counters, WalkEvents* events, int steps, const ThetaFrame& frame)
+      : Base(shape, map, ys, cols, counters, events), steps_(steps), frame_(frame),
         table_(2.0 * std::numbers::pi / steps) {}
 
   using Vertex = ThetaVertex;
@@ -221,13 +208,13 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // The θ tracker of table angle i on this line by damped Newton from `start`: false if
   // it does not converge (or leaves the domain). Counts the iterations into *iterations.
   // `residual`, if given, receives G_i's residual at the solution.
-  bool SolveTable(int i, const Vec2& start, WalkPoint* out, long* iterations,
+  bool SolveTable(int i, const Vec2& start, WalkPoint* out, std::int64_t* iterations,
                   TableResidual* residual = nullptr) const;
 
   // The turn tracker of this line (§4.3: y = ys and the turn function zero) by Newton from
   // `start`: false if it does not converge (a turn pair has met and gone) or leaves the
   // domain. Counts the iterations into *iterations.
-  bool SolveTurn(const Vec2& start, WalkPoint* out, long* iterations) const;
+  bool SolveTurn(const Vec2& start, WalkPoint* out, std::int64_t* iterations) const;
 
   // (cos θ_i, sin θ_i).
   Vec2 Angle(int i) const {
@@ -286,7 +273,6 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // Whether the link a-b advanced from A-B needs a sideways repair (see the top).
   bool Suspicious(const Vertex& A, const Vertex& B, const Vertex& a, const Vertex& b) const;
 
-  ThetaStats* theta_;
   int steps_;
   ThetaFrame frame_;
   double table_;  // 2π / N
@@ -306,7 +292,7 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
   for (size_t k = 0; k < t.edgePoints.size(); ++k) {
     if ((*edgeUsed)[k]) continue;
     (*edgeUsed)[k] = 1;
-    ++this->stats_->nWalks;
+    ++(*this->counters_)[Counter::Walks];
     const WalkPoint p = this->Eval(t.edgePoints[k]);
     if (!p.ok) {
       this->Failed(t.edgePoints[k]);
@@ -317,7 +303,7 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
     chain->clear();
     Crawl(p, sense, false, chain, make);
     if (sink_) sink_->Chain(this->ys_, steps_, *chain);
-    theta_->nVertices += static_cast<long>(chain->size());
+    (*this->counters_)[Counter::ThetaVertices] += static_cast<long>(chain->size());
     take(std::span<const Vertex>(*chain), false);
   }
   for (size_t k = 0; k < t.silhouettePoints.size(); ++k) {
@@ -325,13 +311,13 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
     (*silUsed)[k] = 1;
     WalkPoint p = this->Eval(t.silhouettePoints[k]);
     if (!p.ok || std::abs(p.y - this->ys_) > 1e3 * kEdgeTolPx) continue;  // not a crossing
-    ++this->stats_->nWalks;
-    ++this->stats_->nClosedWalks;
+    ++(*this->counters_)[Counter::Walks];
+    ++(*this->counters_)[Counter::ClosedWalks];
     p.jn = 0.0;  // on the silhouette whatever rounding says
     chain->clear();
     Crawl(p, 1.0, true, chain, make);
     if (sink_) sink_->Chain(this->ys_, steps_, *chain);
-    theta_->nVertices += static_cast<long>(chain->size());
+    (*this->counters_)[Counter::ThetaVertices] += static_cast<long>(chain->size());
     take(std::span<const Vertex>(*chain), true);
   }
 }
@@ -341,7 +327,7 @@ template <class Make>
 bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool closed,
                                 std::vector<Vertex>* chain, Make& make, const Vertex* target,
                                 double turning) {
-  if (!target) ++theta_->nChains;
+  if (!target) ++(*this->counters_)[Counter::ThetaChains];
   chain->push_back(MakeVertex(start, make, closed ? ThetaVertex::Kind::Silhouette : ThetaVertex::Kind::End));
   // A link's crawl: done at its target, lost at any other anchor.
   std::size_t checked = chain->size();
@@ -389,7 +375,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       // It must also lie on from's side of `to` after the chain's last vertex (x runs one
       // way between anchors; a turn just placed beyond `from` may have passed it).
       auto inOrder = [&](const WalkPoint& w) { return w.ok && (w.x == chain->back().x || Between(w.x, chain->back().x, to.x)); };
-      if (!SolveTable(k, guess, &v, &theta_->nCrawlIterations) || !WithinStep(from, to, v) || !inOrder(v))
+      if (!SolveTable(k, guess, &v, &(*this->counters_)[Counter::ThetaCrawlIterations]) || !WithinStep(from, to, v) || !inOrder(v))
         v = this->Correct(guess);
       if (inOrder(v)) chain->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, k));
     }
@@ -414,18 +400,18 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       const bool tiltAt = chain->size() > 1 && chain->back().kind == ThetaVertex::Kind::Tilt && chain->back().f.uv == at.uv;
       if (tiltAt) {
         chain->pop_back();
-        --theta_->nTilts;
+        --(*this->counters_)[Counter::ThetaTilts];
         checked = std::min(checked, chain->size());
       }
       // x runs one way between anchors: the turn tracker must lie between the chain's last
       // vertex and the next crawl point (else it is another turn, and the crawl point is
       // taken).
       WalkPoint v;
-      if (!SolveTurn(at.uv, &v, &theta_->nCrawlIterations) || !WithinStep(before, to, v) || std::abs(v.jn) <= 1e-9 ||
+      if (!SolveTurn(at.uv, &v, &(*this->counters_)[Counter::ThetaCrawlIterations]) || !WithinStep(before, to, v) || std::abs(v.jn) <= 1e-9 ||
           !Between(v.x, chain->back().x, to.x))
         v = at;
       chain->push_back(MakeVertex(v, make, ThetaVertex::Kind::Turn));
-      ++theta_->nTurnPoints;
+      ++(*this->counters_)[Counter::ThetaTurnPoints];
     }
     lastTurn = d;
   };
@@ -441,7 +427,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
   };
   for (long k = 0; k < this->MaxSteps(); ++k) {
     if (h < kWalkStepMin) break;
-    ++theta_->nSteps;
+    ++(*this->counters_)[Counter::ThetaSteps];
     const Vec2 tan = Base::Tangent(p, sense);
     const Vec2 q = p.uv + h * tan;
     WalkPoint next;
@@ -461,7 +447,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
           if (endsAtTurn(e)) return true;
           WalkPoint s;
           if (std::abs(p.jn) > 1e-9 && (p.j > 0) != (e.j > 0) && this->LocateSilhouette(p, e, &s)) {
-            if (!this->UseSilhouetteTracker(s.uv)) this->Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
+            if (!this->UseSilhouetteTracker(s.uv)) this->Repaired(s.uv, Counter::UntrackedSilhouettes);
             chain->push_back(MakeVertex(s, make, ThetaVertex::Kind::Silhouette));
           } else {
             noteTurn(p, e, d);
@@ -469,13 +455,13 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
             // changes sign between p and e): the steps are not continued to see it.
             WalkPoint v;
             const double rp = TurnAt(p.uv), re = TurnAt(e.uv);
-            if (rp * re < 0.0 && SolveTurn(0.5 * (p.uv + e.uv), &v, &theta_->nCrawlIterations) &&
+            if (rp * re < 0.0 && SolveTurn(0.5 * (p.uv + e.uv), &v, &(*this->counters_)[Counter::ThetaCrawlIterations]) &&
                 WithinStep(p, e, v) && std::abs(v.jn) > 1e-9 && Between(v.x, chain->back().x, e.x)) {
               const Vertex vt = MakeVertex(v, make, ThetaVertex::Kind::Turn);
               const double tv = ThetaOf(vt.f);
               passTable(p, th, v, Wrap(tv - th));
               chain->push_back(vt);
-              ++theta_->nTurnPoints;
+              ++(*this->counters_)[Counter::ThetaTurnPoints];
               passTable(v, tv, e, Wrap(ThetaOf(ve.f) - tv));
             } else {
               passTable(p, th, e, d);
@@ -487,7 +473,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
             linkEnd(&found);  // the exit is an anchor: the link ends here or before
             if (found && chain->back().kind != ThetaVertex::Kind::End) return true;  // before the exit
           }
-          if (!this->UseEdgeTracker(e.uv)) this->Repaired(e.uv, &WalkStats::nUntrackedExits);
+          if (!this->UseEdgeTracker(e.uv)) this->Repaired(e.uv, Counter::UntrackedExits);
           return found;
         }
       }
@@ -513,13 +499,13 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
     WalkPoint s;
     if (!onSil && (p.j > 0) != (next.j > 0) && std::abs(next.jn) > 1e-9 && this->LocateSilhouette(p, next, &s)) {
       // The silhouette vertex; the table angles near it are within half a step of it.
-      ++this->stats_->nSilhouettes;
+      ++(*this->counters_)[Counter::SilhouettePoints];
       if (closed && (s.uv - start.uv).norm() <= kSameCrossingUv) {
         chain->push_back(chain->front());  // round: back at the start
         return true;
       }
       if (!this->UseSilhouetteTracker(s.uv)) {
-        this->Repaired(s.uv, &WalkStats::nUntrackedSilhouettes);
+        this->Repaired(s.uv, Counter::UntrackedSilhouettes);
         if (this->events_) this->events_->untrackedSilhouettes.push_back(s.uv);
       }
       chain->push_back(MakeVertex(s, make, ThetaVertex::Kind::Silhouette));
@@ -537,7 +523,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
     }
     if (std::abs(tiltNext - tiltAtVertex) >= table_) {
       chain->push_back({next.x, fn, ThetaVertex::Kind::Tilt, -1});
-      ++theta_->nTilts;
+      ++(*this->counters_)[Counter::ThetaTilts];
     }
     bool found = false;
     if (target && linkEnd(&found)) return found;
@@ -552,7 +538,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
 }
 
 template <class ShapeT>
-bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2& start, WalkPoint* out, long* iterations,
+bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2& start, WalkPoint* out, std::int64_t* iterations,
                                      TableResidual* residual) const {
   const Vec2 angle = Angle(i);
   const Affine3& world = World();
@@ -583,7 +569,7 @@ bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2& start, WalkPoint* out, l
 }
 
 template <class ShapeT>
-bool ThetaWalker<ShapeT>::SolveTurn(const Vec2& start, WalkPoint* out, long* iterations) const {
+bool ThetaWalker<ShapeT>::SolveTurn(const Vec2& start, WalkPoint* out, std::int64_t* iterations) const {
   const Affine3& world = World();
   NewtonOptions opt;
   opt.maxIterations = kThetaMaxIterations;
@@ -693,7 +679,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
                            (a.x - to->v[to->v.size() - 2].x) * (b.x - a.x) < 0.0;
         if (skipped || xBack || turnsWrong(a, b) || againstRate(a, b, rateB) ||
             Suspicious(A[lastK], A[k % A.size()], a, b)) {
-          ++theta_->nLinkRepairs;
+          ++(*this->counters_)[Counter::ThetaLinkRepairs];
           scratch->clear();
           if (!Crawl(last, sense, false, scratch, make, &b,
                      a.kind == ThetaVertex::Kind::Turn ? -lastD : lastD)) return false;
@@ -726,11 +712,11 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
         case ThetaVertex::Kind::Turn: {
           const Vec2& prev = from.before[c.begin + k];
           const Vec2 start = extrapolate && prev.allFinite() ? Vec2(2.0 * V.f.uv - prev) : V.f.uv;
-          ++theta_->nTurnTrackers;
+          ++(*this->counters_)[Counter::ThetaTurnTrackers];
           // A turn tracker with no root near (its pair has met it and both are gone) is
           // dropped, and the link across its place repaired sideways.
-          if (!SolveTurn(start, &p, &theta_->nTurnIterations)) {
-            ++theta_->nTurnFailures;
+          if (!SolveTurn(start, &p, &(*this->counters_)[Counter::ThetaTurnIterations])) {
+            ++(*this->counters_)[Counter::ThetaTurnsLost];
             skipped = true;
             continue;
           }
@@ -756,11 +742,11 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
         case ThetaVertex::Kind::Table: {
           const Vec2& prev = from.before[c.begin + k];
           const Vec2 start = extrapolate && prev.allFinite() ? Vec2(2.0 * V.f.uv - prev) : V.f.uv;
-          ++theta_->nTrackers;
+          ++(*this->counters_)[Counter::ThetaTrackers];
           // A tracker that leaves the patch or does not converge is dropped (§3.2: deleted
           // when it leaves [0,1]²); the link across its place is repaired sideways.
-          if (!SolveTable(V.index, start, &p, &theta_->nTrackerIterations, &residual)) {
-            ++theta_->nTrackerFailures;
+          if (!SolveTable(V.index, start, &p, &(*this->counters_)[Counter::ThetaTrackerIterations], &residual)) {
+            ++(*this->counters_)[Counter::ThetaTrackersLost];
             skipped = true;
             continue;
           }
@@ -784,7 +770,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
       if (!link(n, first, p0, NAN)) return false;
     }
     to->chains.push_back({begin, static_cast<std::uint32_t>(to->v.size()), c.closed});
-    theta_->nVertices += static_cast<long>(to->v.size() - begin);
+    (*this->counters_)[Counter::ThetaVertices] += static_cast<long>(to->v.size() - begin);
     if (sink_) sink_->Chain(this->ys_, steps_, to->Of(to->chains.back()));
   }
   // Every tracker of the line must be on a chain: one left over starts a chain the line

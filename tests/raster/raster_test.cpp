@@ -263,7 +263,7 @@ TEST(ScanlineRenderer, TrianglesHandedOverByADirectSourceRenderAsAMesh) {
     StreamedMesh source(m, spacing, aa == 1 ? 0.5 : 0.0);
     const auto stats = RenderFragments(source, s, streamed);
     ASSERT_TRUE(stats);
-    EXPECT_EQ(stats->nTriangles, kRing);
+    EXPECT_EQ((*stats)[Counter::Triangles], kRing);
     ASSERT_EQ(mesh.rgba.size(), streamed.rgba.size());
     double worst = 0;
     for (std::size_t k = 0; k < mesh.rgba.size(); ++k) {

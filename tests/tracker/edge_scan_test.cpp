@@ -61,7 +61,8 @@ TEST(EdgeScan, TrackersMatchBruteForceRootsOnTheTeapot) {
   for (size_t k = 0; k < t.scene.surfaces.size(); ++k) {
     const Surface& s = t.scene.surfaces[k];
     const ScreenMap map(t.camera, s.worldFromObject);
-    EdgeScan scan(s, map);
+    Counters counters;
+    EdgeScan scan(s, map, counters);
     for (int row = 0; row < t.camera.height; ++row) {
       const double y = row + 0.5;
       scan.Advance(y);
@@ -78,7 +79,7 @@ TEST(EdgeScan, TrackersMatchBruteForceRootsOnTheTeapot) {
         }
       }
     }
-    EXPECT_EQ(scan.Stats().nRepairs, 0) << "patch " << k + 1;
+    EXPECT_EQ(counters[Counter::EdgeRepairs], 0) << "patch " << k + 1;
   }
   EXPECT_GT(compared, 1000);
 }
@@ -92,10 +93,11 @@ TEST(EdgeScan, ExtrapolationCutsNewtonIterations) {
     long calls = 0, iterations = 0;
     for (const Surface& s : t.scene.surfaces) {
       const ScreenMap map(t.camera, s.worldFromObject);
-      EdgeScan scan(s, map, extrapolate, tol);
+      Counters counters;
+      EdgeScan scan(s, map, counters, extrapolate, tol);
       for (int row = 0; row < t.camera.height; ++row) scan.Advance(row + 0.5);
-      calls += scan.Stats().nNewtonCalls;
-      iterations += scan.Stats().nNewtonIterations;
+      calls += counters[Counter::EdgeNewtonCalls];
+      iterations += counters[Counter::EdgeNewtonIterations];
     }
     return double(iterations) / double(calls);
   };

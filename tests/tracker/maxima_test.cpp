@@ -57,16 +57,16 @@ TEST(Maxima, SphereHasOneStrictMaximumAtItsTop) {
   // Poles turned to the side so the top of the image is inside the (u,v) domain.
   Surface sphere{Sphere(1, -1, 1, 360), Affine3(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()))};
   const ScreenMap map(View(Vec3(0.5, -6, 2)), sphere.worldFromObject);
-  MaximaStats st;
+  Counters st;
   const auto found = FindStationaryPoints(sphere, map, &st);
   // Nothing else: in particular not the poles (collapsed edges) nor the seam's corners.
   ASSERT_EQ(found.size(), 1u) << Describe(found);
   ASSERT_EQ(found[0].kind, StationaryKind::StrictMaximum) << Describe(found);
-  EXPECT_GT(st.nRejectedCollapsed, 0);
+  EXPECT_GT(st[Counter::MaximaRejectedCollapsed], 0);
   const double brute = BruteTopY(sphere, map);
   EXPECT_LE(found[0].y, brute + 1e-9);
   EXPECT_GE(found[0].y, brute - kBruteTolPx);
-  EXPECT_GT(st.nDuplicates, 0);  // many seeds climb to the same top
+  EXPECT_GT(st[Counter::MaximaDuplicates], 0);  // many seeds climb to the same top
 }
 
 TEST(Maxima, TorusHasAMaximumAndTwoSaddles) {
@@ -119,7 +119,7 @@ TEST(Maxima, TeapotTopOfEveryPatchIsFoundAndApexesAreNotMaxima) {
   const Scene& scene = std::get<Scene>(loaded);
   const Camera cam = FrameBounds(scene.WorldBounds(), View(Vec3::Zero(), Vec3(1, 0, 0)),
                                  DefaultViewDirection(Vec3(0, 0, 1)));
-  MaximaStats st;
+  Counters st;
   for (size_t k = 0; k < scene.surfaces.size(); ++k) {
     const Surface& s = scene.surfaces[k];
     const ScreenMap map(cam, s.worldFromObject);
@@ -139,7 +139,7 @@ TEST(Maxima, TeapotTopOfEveryPatchIsFoundAndApexesAreNotMaxima) {
         }
     }
   }
-  EXPECT_GT(st.nRejectedCollapsed, 0);  // climbs stopped at the lid apex or bottom centre
+  EXPECT_GT(st[Counter::MaximaRejectedCollapsed], 0);  // climbs stopped at the lid apex or bottom centre
 }
 
 }  // namespace

@@ -37,10 +37,11 @@ bool OnCollapsedEdge(const Surface& s, const ScreenMap& map, const Vec2& p) {
 constexpr double kMatchUv = 1e-6;
 
 void ExpectTracksMatch(const Surface& s, const Camera& cam, const char* name,
-                       SilhouetteScanStats* statsOut = nullptr) {
+                       Counters* statsOut = nullptr) {
   const ScreenMap map(cam, s.worldFromObject);
-  EdgeScan edges(s, map);
-  SilhouetteScan sil(s, map, FindStationaryPoints(s, map));
+  Counters counters;
+  EdgeScan edges(s, map, counters);
+  SilhouetteScan sil(s, map, FindStationaryPoints(s, map), counters);
   long compared = 0;
   for (int row = 0; row < cam.height; ++row) {
     const double y = row + 0.5;
@@ -57,7 +58,7 @@ void ExpectTracksMatch(const Surface& s, const Camera& cam, const char* name,
     }
   }
   EXPECT_GT(compared, 50) << name;
-  if (statsOut) *statsOut = sil.Stats();
+  if (statsOut) *statsOut = counters;
 }
 
 TEST(SilhouetteScan, SphereBornAtItsMaximumAndThroughTheSeam) {
@@ -65,20 +66,20 @@ TEST(SilhouetteScan, SphereBornAtItsMaximumAndThroughTheSeam) {
   // crosses the seam u = 0 / u = 1, where folds on the edge trackers create trackers.
   Surface sphere{Sphere(1, -1, 1, 360), Affine3(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()))};
   sphere.worldFromObject.prerotate(Eigen::AngleAxisd(0.35, Vec3::UnitZ()));
-  SilhouetteScanStats st;
+  Counters st;
   ExpectTracksMatch(sphere, View(Vec3(0.5, -5, 1.5)), "sphere", &st);
-  EXPECT_EQ(st.nCreatedAtMaxima, 2);
-  EXPECT_GT(st.nCreatedAtFolds, 0);
-  EXPECT_GT(st.nDeletedLeft + st.nDeletedFailed, 0);
+  EXPECT_EQ(st[Counter::SilhouettesBornAtMaxima], 2);
+  EXPECT_GT(st[Counter::SilhouettesBornAtFolds], 0);
+  EXPECT_GT(st[Counter::SilhouettesLeft] + st[Counter::SilhouettesDied], 0);
 }
 
 TEST(SilhouetteScan, TorusWithSaddlesAndAnInnerSilhouette) {
   Surface torus{Torus(1.5, 0.5, 0, 360, 360), Affine3(Eigen::AngleAxisd(0.4, Vec3::UnitZ()))};
   torus.worldFromObject.prerotate(Eigen::AngleAxisd(0.9, Vec3::UnitX()));
-  SilhouetteScanStats st;
+  Counters st;
   ExpectTracksMatch(torus, View(Vec3(0.3, -9, 1.0)), "torus", &st);
-  EXPECT_GT(st.nCreatedAtSaddles, 0);
-  EXPECT_EQ(st.nCreatedAtMaxima, 2);
+  EXPECT_GT(st[Counter::SilhouettesBornAtSaddles], 0);
+  EXPECT_EQ(st[Counter::SilhouettesBornAtMaxima], 2);
 }
 
 TEST(SilhouetteScan, RepairSearchFindsWhatManyStartsFind) {
@@ -129,8 +130,9 @@ TEST(SilhouetteScan, TeapotAgreesWithBruteForceOnNearlyEveryScanLine) {
   for (size_t k = 0; k < scene.surfaces.size(); ++k) {
     const Surface& s = scene.surfaces[k];
     const ScreenMap map(cam, s.worldFromObject);
-    EdgeScan edges(s, map);
-    SilhouetteScan sil(s, map, FindStationaryPoints(s, map));
+    Counters counters;
+    EdgeScan edges(s, map, counters);
+    SilhouetteScan sil(s, map, FindStationaryPoints(s, map), counters);
     for (int row = 0; row < cam.height; ++row) {
       const double y = row + 0.5;
       edges.Advance(y);

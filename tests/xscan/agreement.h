@@ -68,7 +68,7 @@ inline Camera View(const Vec3& eye, int size = 96, const Vec3& up = Vec3(0, 0, 1
 struct Agreement {
   long samples = 0, covered = 0, nearEdge = 0, mismatches = 0;
   double worstDepthRel = 0.0;
-  ExactScanStats stats;
+  Counters stats;
   std::string firstMismatches;
 };
 
@@ -136,12 +136,12 @@ inline void ExpectAgree(std::span<const Surface> surfaces, const Camera& camera,
   const Agreement a = Compare(surfaces, camera);
   std::cout << name << ": " << a.samples << " samples, " << a.covered << " covered, "
             << a.nearEdge << " differ within " << kEdgePx << " px of an edge, worst depth "
-            << a.worstDepthRel << " relative; walks " << a.stats.walk.nWalks << ", silhouette points "
-            << a.stats.walk.nSilhouettes << ", repairs " << a.stats.walk.nUntrackedSilhouettes << "+"
-            << a.stats.walk.nUntrackedExits << ", failures " << a.stats.walk.nFailures << '\n';
+            << a.worstDepthRel << " relative; walks " << a.stats[Counter::Walks] << ", silhouette points "
+            << a.stats[Counter::SilhouettePoints] << ", repairs " << a.stats[Counter::UntrackedSilhouettes] << "+"
+            << a.stats[Counter::UntrackedExits] << ", failures " << a.stats[Counter::Failures] << '\n';
   EXPECT_EQ(a.mismatches, 0) << name << a.firstMismatches;
   EXPECT_GE(a.covered, minCovered) << name << ": the view misses the surface";
-  EXPECT_EQ(a.stats.walk.nFailures, 0) << name;
+  EXPECT_EQ(a.stats[Counter::Failures], 0) << name;
 }
 
 inline void ExpectAgree(const Surface& s, const Camera& camera, const std::string& name, long minCovered = 50) {

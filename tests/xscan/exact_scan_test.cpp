@@ -74,7 +74,7 @@ TEST(ExactScan, EdgeOnPatchMatchesRayCaster) {
                      Affine3::Identity()};
   const Agreement a = Compare(std::span<const Surface>(&flat, 1), View(Vec3(4, 0, 0)));
   EXPECT_EQ(a.mismatches, 0) << a.firstMismatches;
-  EXPECT_EQ(a.stats.walk.nFailures, 0);
+  EXPECT_EQ(a.stats[Counter::Failures], 0);
   // Tilted by a hair: a sliver a fraction of a pixel wide.
   Affine3 m = Affine3::Identity();
   m.rotate(Eigen::AngleAxisd(0.02, Vec3::UnitZ()));
@@ -124,7 +124,7 @@ TEST(ExactScan, TeapotOnTheSupersamplingLattice) {
             << a.nearEdge << " near an edge\n";
   EXPECT_EQ(a.mismatches, 0) << a.firstMismatches;
   EXPECT_GT(a.covered, 5000);
-  EXPECT_EQ(a.stats.walk.nFailures, 0);
+  EXPECT_EQ(a.stats[Counter::Failures], 0);
 }
 
 TEST(ExactScan, TeacupMatchesRayCaster) {
@@ -145,7 +145,7 @@ namespace {
 
 // The nearest fragment of every sample (pixel centres) of a scan of `surfaces`.
 std::vector<Nearest> NearestImage(std::span<const Surface> surfaces, const Camera& camera,
-                                  ExactScanOptions options, ExactScanStats* stats = nullptr) {
+                                  ExactScanOptions options, Counters* stats = nullptr) {
   ExactScan scan(surfaces, camera, options);
   const raster::SampleColumns cols{0.5, 1.0, camera.width};
   std::vector<Nearest> image(static_cast<size_t>(camera.width) * camera.height), row(camera.width);
@@ -172,11 +172,11 @@ ThetaAgreement CompareTheta(std::span<const Surface> surfaces, const Camera& cam
   ThetaAgreement a;
   ExactScanOptions theta;
   theta.thetaSteps = steps;
-  ExactScanStats st;
+  Counters st;
   const auto exact = NearestImage(surfaces, camera, {});
   const auto sampled = NearestImage(surfaces, camera, theta, &st);
-  EXPECT_EQ(st.walk.nFailures, 0);
-  EXPECT_GT(st.theta.nVertices, 0);
+  EXPECT_EQ(st[Counter::Failures], 0);
+  EXPECT_GT(st[Counter::ThetaVertices], 0);
   const test::RayCaster caster(surfaces, camera);
   for (int j = 0; j < camera.height; ++j)
     for (int i = 0; i < camera.width; ++i) {

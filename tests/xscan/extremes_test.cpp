@@ -263,11 +263,11 @@ std::vector<float> RenderDirect(const Case& c, int aa, int thetaSteps, const std
   ExactScan scan(c.surfaces, c.camera, o);
   CheckingSink sink(c.camera.width, what, coverage == nullptr);
   EXPECT_TRUE(raster::RenderFragments(scan, Settings(c.camera, aa), sink).has_value()) << what;
-  const ExactScanStats st = scan.Stats();
-  std::cout << what << ": walks " << st.walk.nWalks << ", x-scan Newton " << st.walk.nNewtonCalls << " calls / "
-            << st.walk.nNewtonIterations << " iterations, failures " << st.walk.nFailures << '\n';
+  const Counters st = scan.Stats();
+  std::cout << what << ": walks " << st[Counter::Walks] << ", x-scan Newton " << st[Counter::XscanNewtonCalls] << " calls / "
+            << st[Counter::XscanNewtonIterations] << " iterations, failures " << st[Counter::Failures] << '\n';
   if (c.knownGap.empty()) {
-    EXPECT_EQ(st.walk.nFailures, 0) << what;
+    EXPECT_EQ(st[Counter::Failures], 0) << what;
   }
   if (coverage) *coverage = sink.Coverage();
   return sink.Alpha();

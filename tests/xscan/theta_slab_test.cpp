@@ -206,7 +206,7 @@ class LayerCounter final : public raster::FragmentRow {
 // Layers per sample on a lattice `spacing` apart, from exact mode or θ mode with slabs
 // of `slabRows` rows.
 std::vector<int> Layers(std::span<const Surface> surfaces, const Camera& camera, double spacing, int thetaSteps,
-                        int slabRows, ExactScanStats* stats) {
+                        int slabRows, Counters* stats) {
   ExactScanOptions o;
   o.thetaSteps = thetaSteps;
   o.slabRows = slabRows;
@@ -238,7 +238,7 @@ struct SlabCase {
 };
 
 void ExpectLayersMatchExact(const SlabCase& c, double spacing, int slabRows) {
-  ExactScanStats exactStats, slabStats;
+  Counters exactStats, slabStats;
   const std::vector<int> exact = Layers(c.surfaces, c.camera, spacing, 0, 0, &exactStats);
   const std::vector<int> slab = Layers(c.surfaces, c.camera, spacing, 16, slabRows, &slabStats);
   const int nx = static_cast<int>(std::lround(c.camera.width / spacing)) + 1;
@@ -268,16 +268,16 @@ void ExpectLayersMatchExact(const SlabCase& c, double spacing, int slabRows) {
       }
       if (differ++ < 5) first << " (" << i * spacing << ", " << j * spacing << "): " << got << " layers, exact " << want << ";";
     }
-  std::cout << c.name << ", slabs " << h << " px high: " << slabStats.nSlabIntervals << " intervals as slabs, "
-            << slabStats.nRowIntervals << " row by row, " << slabStats.nSlabTriangles << " triangles; " << covered
+  std::cout << c.name << ", slabs " << h << " px high: " << slabStats[Counter::SlabIntervals] << " intervals as slabs, "
+            << slabStats[Counter::RowIntervals] << " row by row, " << slabStats[Counter::SlabTriangles] << " triangles; " << covered
             << " samples covered, " << nearEdge << " differ within " << reach << " px of an edge, " << differ
             << " elsewhere\n";
   EXPECT_EQ(differ, 0) << c.name << ", h " << h << ":" << first.str();
   EXPECT_GT(covered, 1000) << c.name;
   // The slabs were used: most intervals are slabs.
-  EXPECT_GT(slabStats.nSlabTriangles, 0) << c.name;
-  EXPECT_GT(slabStats.nSlabIntervals, slabStats.nRowIntervals) << c.name;
-  EXPECT_EQ(slabStats.walk.nFailures, 0) << c.name;
+  EXPECT_GT(slabStats[Counter::SlabTriangles], 0) << c.name;
+  EXPECT_GT(slabStats[Counter::SlabIntervals], slabStats[Counter::RowIntervals]) << c.name;
+  EXPECT_EQ(slabStats[Counter::Failures], 0) << c.name;
 }
 
 Scene Load(const char* file) {

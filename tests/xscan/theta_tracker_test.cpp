@@ -164,8 +164,8 @@ class LineScan {
     std::vector<Stationary> stationary = FindStationaryPoints(s, map_);
     yTop_ = INFINITY;
     for (const Stationary& p : stationary) yTop_ = std::min(yTop_, p.y);
-    edges_ = std::make_unique<EdgeScan>(s, map_, true);
-    silhouettes_ = std::make_unique<SilhouetteScan>(s, map_, std::move(stationary), true);
+    edges_ = std::make_unique<EdgeScan>(s, map_, counters, true);
+    silhouettes_ = std::make_unique<SilhouetteScan>(s, map_, std::move(stationary), counters, true);
   }
   double Top() const { return yTop_; }
   // Advances the trackers to y; the number of Y-scan events so far.
@@ -178,10 +178,7 @@ class LineScan {
       t_.edgeOf.push_back(edges_->Pieces()[t.piece].edge);
     }
     for (const SilhouetteTracker& t : silhouettes_->Trackers()) t_.silhouettePoints.push_back(t.uv);
-    const EdgeScanStats& e = edges_->Stats();
-    const SilhouetteScanStats& si = silhouettes_->Stats();
-    return e.nCreated + e.nDeleted + e.nFolds + e.nRepairs + si.nCreatedAtMaxima + si.nCreatedAtFolds +
-           si.nCreatedAtSaddles + si.nDeletedFailed + si.nDeletedLeft + si.nMerged + si.nAdopted + si.nRepairSearches;
+    return edges_->Events() + silhouettes_->Events();
   }
   // The chains crawled on line y (the trackers advanced to it).
   void Crawl(double y, ChainSet* out) {
@@ -199,15 +196,14 @@ class LineScan {
     });
     return ok;
   }
-  WalkStats walk;
-  ThetaStats theta;
+  Counters counters;
 
  private:
   template <class F>
   void With(double y, F&& f) {
     const raster::SampleColumns cols{0.0, 1.0, c_.width};
     VisitShape(s_, [&](const auto& shape) {
-      ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, map_, y, cols, &walk, nullptr, &theta, steps_, frame_);
+      ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, map_, y, cols, &counters, nullptr, steps_, frame_);
       auto make = [&](const WalkPoint& p) { return FragmentAt(p, s_, normalFromObject_, 0); };
       f(walker, make);
     });
@@ -275,7 +271,7 @@ TEST(ThetaTracker, SolvedTrackersSitAtTheirAnglesOnTheirLines) {
         const raster::SampleColumns cols{0.0, 1.0, c.camera.width};
         VisitShape(c.surface, [&](const auto& shape) {
           const ScreenMap map(c.camera, c.surface.worldFromObject);
-          ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, map, y, cols, &scan.walk, nullptr, &scan.theta, 16, frame);
+          ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, map, y, cols, &scan.counters, nullptr, 16, frame);
           for (const ThetaVertex& v : line.v) {
             if (v.kind != ThetaVertex::Kind::Table) continue;
             WalkPoint p;
@@ -337,7 +333,7 @@ TEST(ThetaTracker, SolvedTurnTrackersSitAtTurnPoints) {
       scan.AdvanceTo(y);
       const raster::SampleColumns cols{0.0, 1.0, c.camera.width};
       VisitShape(c.surface, [&](const auto& shape) {
-        ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, map, y, cols, &scan.walk, nullptr, &scan.theta, 16, frame);
+        ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, map, y, cols, &scan.counters, nullptr, 16, frame);
         for (const ThetaVertex& v : line.v) {
           if (v.kind != ThetaVertex::Kind::Turn) continue;
           WalkPoint p;
@@ -376,7 +372,7 @@ TEST(ThetaTracker, AdvancedChainsHaveTheCrawledChainsVertices) {
   // advance's starting guesses' differences, are far below kSameVertexPx).
   constexpr double kSameVertexPx = 1e-5;
   long linesCompared = 0, linesAdvanced = 0, linesWithTurns = 0, turnLinesDiffering = 0, trackersWithoutExtrapolation = 0, iterationsWithout = 0;
-  ThetaStats total;
+  Counters total;
   for (const TrackerCase& c : Cases()) {
     // Not compared: the orthographic torus, whose crawled chains near the inner silhouette
     // have θ stepping back across 0 without a silhouette vertex (a fault of the crawl
@@ -435,22 +431,22 @@ TEST(ThetaTracker, AdvancedChainsHaveTheCrawledChainsVertices) {
         events = e;
       }
       if (!extrapolate) {
-        trackersWithoutExtrapolation += scan.theta.nTrackers;
-        iterationsWithout += scan.theta.nTrackerIterations;
+        trackersWithoutExtrapolation += scan.counters[Counter::ThetaTrackers];
+        iterationsWithout += scan.counters[Counter::ThetaTrackerIterations];
       } else {
-        total.nTrackers += scan.theta.nTrackers;
-        total.nTrackerIterations += scan.theta.nTrackerIterations;
-        total.nLinkRepairs += scan.theta.nLinkRepairs;
-        total.nTrackerFailures += scan.theta.nTrackerFailures;
+        total[Counter::ThetaTrackers] += scan.counters[Counter::ThetaTrackers];
+        total[Counter::ThetaTrackerIterations] += scan.counters[Counter::ThetaTrackerIterations];
+        total[Counter::ThetaLinkRepairs] += scan.counters[Counter::ThetaLinkRepairs];
+        total[Counter::ThetaTrackersLost] += scan.counters[Counter::ThetaTrackersLost];
       }
     }
   }
-  const double with = static_cast<double>(total.nTrackerIterations) / static_cast<double>(total.nTrackers);
+  const double with = static_cast<double>(total[Counter::ThetaTrackerIterations]) / static_cast<double>(total[Counter::ThetaTrackers]);
   const double without = static_cast<double>(iterationsWithout) / static_cast<double>(trackersWithoutExtrapolation);
   std::cout << linesAdvanced << " of " << linesCompared << " quiet lines advanced (" << linesWithTurns
-            << " with turn points, " << turnLinesDiffering << " of them differing); " << total.nTrackers
+            << " with turn points, " << turnLinesDiffering << " of them differing); " << total[Counter::ThetaTrackers]
             << " trackers, Newton iterations per tracker " << with << " extrapolated, " << without
-            << " from the last position; " << total.nLinkRepairs << " links repaired, " << total.nTrackerFailures
+            << " from the last position; " << total[Counter::ThetaLinkRepairs] << " links repaired, " << total[Counter::ThetaTrackersLost]
             << " trackers lost\n";
   // Most quiet lines advance; extrapolation (§3.5) saves iterations.
   EXPECT_GT(linesAdvanced, linesCompared * 9 / 10);

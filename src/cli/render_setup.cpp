@@ -1,0 +1,180 @@
+#include "cli/render_setup.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <ostream>
+
+#include "cli/exit_codes.h"
+
+namespace patchscan::cli {
+namespace {
+
+// RenderMan light sources as the back end's lights: ambient lights sum into the rig's
+// ambient light; the others keep their colour (intensity times lightcolor).
+raster::LightRig SceneLights(const std::vector<SceneLight>& lights) {
+  raster::LightRig rig;
+  rig.ambient = raster::Rgb::Zero();
+  for (const SceneLight& l : lights) {
+    raster::Light out;
+    out.intensity = l.colour;
+    switch (l.kind) {
+      case SceneLight::Kind::Ambient:
+        rig.ambient += l.colour;
+        continue;
+      case SceneLight::Kind::Distant:
+        out.kind = raster::Light::Kind::Directional;
+        out.vector = (l.to - l.from).normalized();
+        break;
+      case SceneLight::Kind::Point:
+        out.kind = raster::Light::Kind::Point;
+        out.vector = l.from;
+        out.inverseSquare = true;
+        break;
+      case SceneLight::Kind::Spot:
+        out.kind = raster::Light::Kind::Spot;
+        out.vector = l.from;
+        out.inverseSquare = true;
+        out.axis = (l.to - l.from).normalized();
+        out.cosOutside = std::cos(l.coneAngle);
+        out.cosInside = std::cos(std::max(0.0, l.coneAngle - l.coneDelta));
+        out.beamDistribution = l.beamDistribution;
+        break;
+    }
+    rig.lights.push_back(out);
+  }
+  return rig;
+}
+
+// A scene file's appearance as a back-end material. The default shader keeps the
+// renderer's material, tinted by the colour.
+raster::Material SceneMaterial(const Appearance& a, const raster::Material& fallback) {
+  using S = Appearance::Shader;
+  using M = raster::Material::Model;
+  raster::Material m = fallback;
+  m.opacity = a.opacity.mean();
+  m.twoSided = a.twoSided;
+  m.reversed = a.reversed;
+  if (a.shader == S::Default) {
+    m.colour = fallback.colour.cwiseProduct(a.colour);
+    return m;
+  }
+  m.model = a.shader == S::Constant ? M::Constant
+            : a.shader == S::Matte  ? M::Matte
+            : a.shader == S::Metal  ? M::Metal
+                                    : M::Plastic;
+  m.colour = a.colour;
+  m.emission = raster::Rgb::Zero();
+  m.ka = a.ka;
+  m.kd = a.kd;
+  m.ks = a.ks;
+  m.roughness = a.roughness;
+  m.specularColour = a.specularColour;
+  return m;
+}
+
+double SecondsSinceEpoch() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
+
+std::string BackEndSetup::TextureError() const {
+  if (texture && !texture->Error().empty()) return texture->Error();
+  for (const auto& [name, t] : sceneTextures)
+    if (!t->Error().empty()) return t->Error();
+  return {};
+}
+
+std::string BackEndSetup::TextureReport() const {
+  if (!texture) return "none";
+  return std::string(texture->Opened() ? "opened" : "never needed") + ", " + std::to_string(texture->Lookups()) +
+         " lookups";
+}
+
+std::variant<std::unique_ptr<BackEndSetup>, int> SetUpBackEnd(const RenderOptions& o, const Scene& scene,
+                                                              const Camera& camera, int aa, std::ostream& err) {
+  auto setup = std::make_unique<BackEndSetup>();
+  raster::RenderSettings& s = setup->settings;
+  s.width = camera.width;
+  s.height = camera.height;
+  s.aa = aa;
+  s.shading = o.shading;
+  s.cullBackFaces = o.cullBackFaces;
+  s.hiddenLine = o.hiddenLine;
+  s.opacity = o.opacity;
+  s.seed = o.seed;
+  s.hither = camera.hither;
+  s.eye = EyePoint(camera);
+  s.orthographic = camera.orthographic;
+  s.forward = ViewForward(camera);
+  if (o.texture == "checker") {
+    s.material.checkerSquares = 8;
+  } else if (o.texture != "none") {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(o.texture, ec)) {
+      err << "patchscan: --texture: no such file '" << o.texture << "'\n";
+      return kExitUsage;
+    }
+    setup->texture = std::make_unique<raster::ImageTexture>(o.texture);
+    s.material.texture = setup->texture.get();
+  }
+  const Vec3 forward = ViewForward(camera), right = ViewRight(camera);
+  s.lights = scene.lights.empty() ? raster::DefaultLightRig(forward, right.cross(forward), right)
+                                  : SceneLights(scene.lights);
+  // The scene's own materials, each texture opened only when a visible sample needs it.
+  for (const Appearance& a : scene.appearances) {
+    raster::Material m = SceneMaterial(a, s.material);
+    if (!a.textureName.empty()) {
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(a.textureName, ec)) {
+        err << "patchscan: " << scene.source << ": paintedplastic texture '" << a.textureName << "' not found\n";
+        return kExitInputError;
+      }
+      auto& t = setup->sceneTextures[a.textureName];
+      if (!t) t = std::make_unique<raster::ImageTexture>(a.textureName);
+      m.texture = t.get();
+    }
+    s.materials.push_back(m);
+  }
+  s.materialOf = scene.appearanceOf;
+  return setup;
+}
+
+volatile std::sig_atomic_t gInterrupted = 0;
+extern "C" void OnInterrupt(int) { gInterrupted = 1; }
+
+void CatchInterrupts() {
+  struct sigaction action {};
+  action.sa_handler = OnInterrupt;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+ProgressSink::ProgressSink(raster::RowSink& next, int height, std::ostream& err)
+    : next_(next), height_(height), err_(err), show_(isatty(STDERR_FILENO) != 0), start_(SecondsSinceEpoch()) {}
+
+ProgressSink::~ProgressSink() {
+  if (shown_) err_ << "\r              \r" << std::flush;
+}
+
+bool ProgressSink::WriteRow(int y, const float* pixels) {
+  if (gInterrupted) return false;
+  // A few times a second: often enough to see it move, rarely enough to cost nothing.
+  constexpr double kShowEverySec = 0.25;
+  const double now = SecondsSinceEpoch();
+  if (show_ && now - std::max(lastShown_, start_) > kShowEverySec) {
+    lastShown_ = now;
+    shown_ = true;
+    err_ << "\rrender: " << (100 * (y + 1)) / height_ << "%" << std::flush;
+  }
+  const double t0 = SecondsSinceEpoch();
+  const bool ok = next_.WriteRow(y, pixels);
+  outputSeconds_ += SecondsSinceEpoch() - t0;
+  return ok;
+}
+
+}  // namespace patchscan::cli

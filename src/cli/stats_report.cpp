@@ -1,0 +1,57 @@
+#include "cli/stats_report.h"
+
+#include <cstdio>
+#include <ostream>
+#include <sstream>
+
+namespace patchscan::cli {
+namespace {
+
+// The counter groups a mode runs, in the table's order.
+bool Runs(RenderMode mode, CounterGroup g) {
+  switch (g) {
+    case CounterGroup::BackEnd: return true;
+    case CounterGroup::Theta:
+    case CounterGroup::Slabs: return mode == RenderMode::Theta;
+    default: return Direct(mode);
+  }
+}
+
+}  // namespace
+
+void PrintReport(const RenderReport& r, std::ostream& out) {
+  char line[256];
+  for (std::size_t g = 0; g < kCounterGroupTitles.size(); ++g) {
+    const auto group = static_cast<CounterGroup>(g);
+    if (!Runs(r.mode, group)) continue;
+    out << kCounterGroupTitles[g] << ":\n";
+    for (const CounterInfo& c : kCounterTable) {
+      if (c.group != group) continue;
+      std::snprintf(line, sizeof line, "  %-36s %12lld %-12s %.*s\n", std::string(c.key).c_str(),
+                    static_cast<long long>(r.counters[c.counter]), std::string(c.unit).c_str(),
+                    static_cast<int>(c.description.size()), c.description.data());
+      out << line;
+    }
+    for (const CounterRatio& q : kCounterRatios) {
+      if (q.group != group) continue;
+      std::snprintf(line, sizeof line, "  %-36s %12.3f %-12s %.*s\n", std::string(q.key).c_str(), r.counters.Ratio(q),
+                    "", static_cast<int>(q.description.size()), q.description.data());
+      out << line;
+    }
+  }
+  out << "time: load " << r.load << " s, " << (Direct(r.mode) ? "set up " : "tessellate ") << r.setUp
+      << " s, render " << r.render << " s (of which writing the image " << r.output << " s)\npeak memory: "
+      << r.peakKiB << " KiB\ntexture: " << r.texture << '\n';
+}
+
+std::string ReportJson(const RenderReport& r) {
+  std::ostringstream js;
+  js << "{\"mode\": \"" << NameOf(kRenderModeNames, r.mode) << '"';
+  for (const CounterInfo& c : kCounterTable) js << ", \"" << c.key << "\": " << r.counters[c.counter];
+  for (const CounterRatio& q : kCounterRatios) js << ", \"" << q.key << "\": " << r.counters.Ratio(q);
+  js << ", \"seconds_load\": " << r.load << ", \"seconds_tessellate\": " << r.setUp << ", \"seconds_render\": "
+     << r.render << ", \"seconds_output\": " << r.output << ", \"peak_rss_kib\": " << r.peakKiB << "}\n";
+  return js.str();
+}
+
+}  // namespace patchscan::cli

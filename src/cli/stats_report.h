@@ -1,0 +1,32 @@
+// What `render --stats` prints and `--stats-json` writes: every counter of the table
+// (core/counters.h) of the groups the mode runs, the ratios derived from them, the time
+// of each phase and the peak memory.
+#pragma once
+
+#include <iosfwd>
+#include <string>
+
+#include "cli/render.h"
+#include "core/counters.h"
+
+namespace patchscan::cli {
+
+struct RenderReport {
+  RenderMode mode = RenderMode::Exact;
+  Counters counters;  // the front end's and the back end's
+  // Seconds: reading the scene, setting up (the scan, or tessellation), rendering (with
+  // the output), of which encoding and writing the image.
+  double load = 0.0, setUp = 0.0, render = 0.0, output = 0.0;
+  long peakKiB = 0;
+  std::string texture;  // what became of the texture: "none", "opened, N lookups", ...
+};
+
+// The human-readable report (--stats), one group of counters after another.
+void PrintReport(const RenderReport& report, std::ostream& out);
+
+// The report as one JSON object: "mode", every counter and ratio by its key (all groups,
+// zero where the mode does not run them), "seconds_load", "seconds_tessellate" (the set-up),
+// "seconds_render", "seconds_output" and "peak_rss_kib".
+std::string ReportJson(const RenderReport& report);
+
+}  // namespace patchscan::cli
