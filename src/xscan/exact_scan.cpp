@@ -9,18 +9,12 @@
 
 namespace patchscan {
 
-// A surface being scanned: its screen map and its trackers.
+// A surface being scanned: its Y scan, and what its X scan keeps from line to line.
 struct ExactScan::Active {
-  Active(std::size_t i, const ScreenMap& m) : index(i), map(m) {}
   std::size_t index;
   double yMax = INFINITY;
-  ScreenMap map;
-  Mat3 normalFromObject;
-  std::unique_ptr<EdgeScan> edges;
-  std::unique_ptr<SilhouetteScan> silhouettes;
-  // For the trace: the stationary points in screen space, by y, and the next to pass.
-  std::vector<std::pair<TraceKind, Vec2>> stationary;
-  std::size_t nextStationary = 0;
+  std::unique_ptr<SurfaceScan> scan;
+  std::size_t nextStationary = 0;  // for the trace: the next stationary point to pass
   // θ slabs: the chains on the interval's top line and on its bottom line (whether a walk
   // there failed or repaired a tracker miss), the trackers on each of its sample rows,
   // and when it is taken row by row each row's chains.
@@ -34,11 +28,6 @@ struct ExactScan::Active {
 
 namespace {
 
-// When a surface is set up below its top (its top is above the image, or between two
-// rows), its trackers are first advanced from its topmost maximum in steps of at most a
-// pixel, so that they are born where the seeds of §3.2.2 are good; at most this many
-// pixels above the row.
-constexpr double kMaxPreAdvancePx = 1024.0;
 // A texture footprint longer than the whole domain per pixel says nothing more.
 constexpr double kMaxUvPerPixel = 1.0;
 
@@ -49,7 +38,7 @@ Vec2 ClampLength(const Vec2& v, double len) {
 
 }  // namespace
 
-raster::Fragment FragmentAt(const WalkPoint& p, const Surface& surface,
+raster::Fragment FragmentAt(const LevelPoint& p, const Surface& surface,
                             const Mat3& normalFromObject, std::uint32_t surfaceId) {
   const SurfaceDerivs& o = p.object;
   raster::Fragment f;
@@ -93,43 +82,24 @@ ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, Ex
 ExactScan::~ExactScan() = default;
 
 void ExactScan::Activate(std::size_t index, double y, double spacing) {
-  const Surface& s = surfaces_[index];
-  auto a = std::make_unique<Active>(index, ScreenMap(camera_, s.worldFromObject));
-  a->normalFromObject = s.worldFromObject.linear().inverse().transpose();
+  auto a = std::make_unique<Active>();
+  a->index = index;
   for (const Pending& p : pending_)
     if (p.index == index) a->yMax = p.yMax;
-  std::vector<Stationary> stationary = FindStationaryPoints(s, a->map, &counters_);
-  counters_[Counter::Stationary] += static_cast<std::int64_t>(stationary.size());
-  for (const Stationary& p : stationary) {
-    ScreenDerivs d;
-    EvaluateScreen(s, a->map, p.uv.x(), p.uv.y(), DerivOrder::Position, &d);
-    a->stationary.push_back({p.kind == StationaryKind::Saddle ? TraceKind::Saddle : TraceKind::Maximum,
-                             Vec2(d.p.x(), d.p.y())});
-  }  // FindStationaryPoints sorts by y
-  double yTop = y;
-  for (const Stationary& p : stationary) yTop = std::min(yTop, p.y);
-  a->edges = std::make_unique<EdgeScan>(s, a->map, counters_, options_.extrapolate);
-  a->silhouettes = std::make_unique<SilhouetteScan>(s, a->map, std::move(stationary), counters_, options_.extrapolate);
-  const double step = std::max(spacing, 1.0);
-  for (double yp = std::max(yTop, y - kMaxPreAdvancePx); yp < y; yp += step) {
-    a->edges->Advance(yp);
-    a->silhouettes->Advance(yp, *a->edges);
-  }
-  ++counters_[Counter::SurfacesSetUp];
+  a->scan = std::make_unique<SurfaceScan>(surfaces_[index], camera_, options_.extrapolate, counters_);
+  a->scan->StartAt(y, spacing);
   active_.push_back(std::move(a));
   counters_.Raise(Counter::MaxActiveSurfaces, static_cast<std::int64_t>(active_.size()));
 }
 
+void ExactScan::UpdateActive(double yLo, double yHi, double spacing) {
+  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yLo; });
+  for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= yHi; ++nextPending_)
+    if (pending_[nextPending_].yMax >= yLo) Activate(pending_[nextPending_].index, yLo, spacing);
+}
+
 void ExactScan::AdvanceTo(Active& a, double y) {
-  a.edges->Advance(y);
-  a.silhouettes->Advance(y, *a.edges);
-  rowTrackers_.Clear();
-  for (const EdgeTracker& t : a.edges->Trackers()) {
-    rowTrackers_.edgePoints.push_back(a.edges->Uv(t));
-    rowTrackers_.edgeOf.push_back(a.edges->Pieces()[t.piece].edge);
-  }
-  for (const SilhouetteTracker& t : a.silhouettes->Trackers()) rowTrackers_.silhouettePoints.push_back(t.uv);
-  counters_[Counter::TrackerRows] += static_cast<std::int64_t>(a.edges->Trackers().size() + a.silhouettes->Trackers().size());
+  a.scan->AdvanceTo(y);
   if (trace_) TraceTrackers(a, y);
 }
 
@@ -139,35 +109,35 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
   VisitShape(surface, [&](const auto& shape) {
     using ShapeT = std::decay_t<decltype(shape)>;
     const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_};
-    ThetaWalker<ShapeT> walker(shape, a.map, y, columns, &counters_, &walkEvents_, options_.thetaSteps, frame);
+    ThetaWalker<ShapeT> walker(shape, a.scan->Map(), y, columns, &counters_, &walkEvents_, options_.thetaSteps, frame);
     walker.SetChainSink(chainSink_);
-    f(walker, [&](const WalkPoint& p) {
-      return FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index));
+    f(walker, [&](const LevelPoint& p) {
+      return FragmentAt(p, surface, a.scan->NormalFromObject(), static_cast<std::uint32_t>(a.index));
     });
   });
 }
 
 void ExactScan::FinishWalk(Active& a) {
   // Silhouettes the walk found without a tracker are tracked from the next row on.
-  for (const Vec2& uv : walkEvents_.untrackedSilhouettes) a.silhouettes->Adopt(uv);
+  for (const Vec2& uv : walkEvents_.untrackedSilhouettes) a.scan->Adopt(uv);
   if (trace_) TraceWalk(a);
 }
 
 template <class Take>
-void ExactScan::WalkSurface(Active& a, double y, const raster::SampleColumns& columns, raster::FragmentRow& out,
-                            Take&& take) {
+void ExactScan::WalkSurface(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
+                            raster::FragmentRow& out, Take&& take) {
   walkEvents_.Clear();
   if (options_.thetaSteps > 0) {
     VisitTheta(a, y, columns, [&](auto& walker, auto&& make) {
-      walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, &chain_, make, take);
+      walker.WalkAll(t, &edgeUsed_, &silUsed_, &chain_, make, take);
     });
   } else {
     const Surface& surface = surfaces_[a.index];
     VisitShape(surface, [&](const auto& shape) {
-      LevelWalker walker(shape, a.map, y, columns, &counters_, &walkEvents_);
-      walker.WalkAll(rowTrackers_, &edgeUsed_, &silUsed_, [&](int column, const WalkPoint& p) {
+      LevelWalker walker(shape, a.scan->Map(), y, columns, &counters_, &walkEvents_);
+      walker.WalkAll(t, &edgeUsed_, &silUsed_, [&](int column, const LevelPoint& p) {
         ++counters_[Counter::Fragments];
-        out.Add(column, FragmentAt(p, surface, a.normalFromObject, static_cast<std::uint32_t>(a.index)));
+        out.Add(column, FragmentAt(p, surface, a.scan->NormalFromObject(), static_cast<std::uint32_t>(a.index)));
       });
     });
   }
@@ -178,7 +148,7 @@ bool ExactScan::AdvanceSurface(Active& a, double y, const raster::SampleColumns&
   walkEvents_.Clear();
   bool ok = false;
   VisitTheta(a, y, columns, [&](auto& walker, auto&& make) {
-    ok = walker.Advance(a.line, rowTrackers_, options_.extrapolate, &edgeUsed_, &silUsed_, &chain_, &a.next, make);
+    ok = walker.Advance(a.line, a.scan->Trackers(), options_.extrapolate, &edgeUsed_, &silUsed_, &chain_, &a.next, make);
   });
   FinishWalk(a);
   return ok;
@@ -187,10 +157,7 @@ bool ExactScan::AdvanceSurface(Active& a, double y, const raster::SampleColumns&
 bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   ++counters_[Counter::SampleRows];
   if (options_.thetaSteps > 0 && options_.slabRows > 0) return ScanRowSlabs(y, columns, out);
-  // Retire surfaces the scan has passed, set up those it has reached.
-  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < y; });
-  for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= y; ++nextPending_)
-    if (pending_[nextPending_].yMax >= y) Activate(pending_[nextPending_].index, y, columns.dx);
+  UpdateActive(y, y, columns.dx);
 
   auto emit = [&](int column, const raster::Fragment& f) {
     ++counters_[Counter::Fragments];
@@ -198,14 +165,12 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
   };
   for (const auto& ap : active_) {
     AdvanceTo(*ap, y);
-    WalkSurface(*ap, y, columns, out, [&](std::span<const ThetaVertex> chain, bool) {
+    WalkSurface(*ap, y, ap->scan->Trackers(), columns, out, [&](std::span<const ThetaVertex> chain, bool) {
       EmitThetaChain(chain, columns, camera_.orthographic, emit);
     });
   }
   return true;
 }
-
-long ExactScan::EventCount(const Active& a) { return a.edges->Events() + a.silhouettes->Events(); }
 
 void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   const int m = options_.slabRows;
@@ -216,13 +181,15 @@ void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, rast
   // above the interval's first row and below its last.
   const double yTop = columns.x0 + (static_cast<double>(j) - 0.5) * dy, yBottom = yTop + m * dy;
   auto rowY = [&](int r) { return columns.x0 + static_cast<double>(j + r) * dy; };
-  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yTop; });
-  const std::size_t firstNew = active_.size();
-  for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= yBottom; ++nextPending_)
-    if (pending_[nextPending_].yMax >= yTop) Activate(pending_[nextPending_].index, yTop, dy);
+  const std::size_t firstNew = [&] {
+    std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yTop; });
+    return active_.size();
+  }();
+  UpdateActive(yTop, yBottom, dy);
   auto walkLine = [&](Active& a, double y, ChainSet* set, bool* broken) {
     set->Clear();
-    WalkSurface(a, y, columns, out, [&](std::span<const ThetaVertex> chain, bool closed) { set->Add(chain, closed); });
+    WalkSurface(a, y, a.scan->Trackers(), columns, out,
+                [&](std::span<const ThetaVertex> chain, bool closed) { set->Add(chain, closed); });
     *broken = WalkBroken();
   };
   for (std::size_t k = firstNew; k < active_.size(); ++k) {
@@ -234,16 +201,16 @@ void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, rast
   bool slab = true;
   for (const auto& ap : active_) {
     Active& a = *ap;
-    const long events = EventCount(a);
+    const long events = a.scan->Events();
     a.rowTrackers.resize(static_cast<std::size_t>(m));
     for (int r = 0; r < m; ++r) {
       AdvanceTo(a, rowY(r));
-      a.rowTrackers[static_cast<std::size_t>(r)] = rowTrackers_;
+      a.rowTrackers[static_cast<std::size_t>(r)] = a.scan->Trackers();
     }
     AdvanceTo(a, yBottom);
-    bool quiet = !a.lineBroken && EventCount(a) == events;
-    for (const auto& st : a.stationary)
-      if (st.second.y() > yTop && st.second.y() <= yBottom) quiet = false;
+    bool quiet = !a.lineBroken && a.scan->Events() == events;
+    for (const ScreenStationary& st : a.scan->StationaryOnScreen())
+      if (st.p.y() > yTop && st.p.y() <= yBottom) quiet = false;
     // Between lines with no event the chains of the top line are advanced as θ trackers
     // (§4.1); a chain that cannot be, or any event, has the bottom line crawled afresh.
     if (quiet && AdvanceSurface(a, yBottom, columns)) {
@@ -275,10 +242,9 @@ void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, rast
       Active& a = *ap;
       a.rows.resize(static_cast<std::size_t>(m));
       for (int r = 0; r < m; ++r) {
-        rowTrackers_ = a.rowTrackers[static_cast<std::size_t>(r)];
         ChainSet& set = a.rows[static_cast<std::size_t>(r)];
         set.Clear();
-        WalkSurface(a, rowY(r), columns, out, [&](std::span<const ThetaVertex> chain, bool closed) { set.Add(chain, closed); });
+        WalkSurface(a, rowY(r), a.rowTrackers[static_cast<std::size_t>(r)], columns, out, [&](std::span<const ThetaVertex> chain, bool closed) { set.Add(chain, closed); });
       }
     }
   }
@@ -303,33 +269,30 @@ bool ExactScan::ScanRowSlabs(double y, const raster::SampleColumns& columns, ras
   return true;
 }
 
+void ExactScan::TraceMark(const Active& a, TraceKind kind, const Vec2& uv) {
+  ScreenDerivs d;
+  EvaluateScreen(surfaces_[a.index], a.scan->Map(), uv.x(), uv.y(), DerivOrder::Position, &d);
+  if (d.w > 0.0) trace_->Mark(kind, d.p.x(), d.p.y());
+}
+
 void ExactScan::TraceTrackers(Active& a, double y) {
-  const Surface& s = surfaces_[a.index];
-  auto mark = [&](TraceKind kind, const Vec2& uv) {
-    ScreenDerivs d;
-    EvaluateScreen(s, a.map, uv.x(), uv.y(), DerivOrder::Position, &d);
-    if (d.w > 0.0) trace_->Mark(kind, d.p.x(), d.p.y());
-  };
-  for (const Vec2& uv : rowTrackers_.edgePoints) mark(TraceKind::EdgeTracker, uv);
-  for (const Vec2& uv : rowTrackers_.silhouettePoints) mark(TraceKind::SilhouetteTracker, uv);
-  for (; a.nextStationary < a.stationary.size() && a.stationary[a.nextStationary].second.y() <= y; ++a.nextStationary)
-    trace_->Mark(a.stationary[a.nextStationary].first, a.stationary[a.nextStationary].second.x(),
-                 a.stationary[a.nextStationary].second.y());
-  for (const Vec2& uv : a.edges->Folds()) mark(TraceKind::Fold, uv);
-  for (const Vec2& uv : a.silhouettes->Births()) mark(TraceKind::Birth, uv);
-  for (const Vec2& uv : a.edges->Deaths()) mark(TraceKind::Death, uv);
-  for (const Vec2& uv : a.silhouettes->Deaths()) mark(TraceKind::Death, uv);
+  const RowTrackers& t = a.scan->Trackers();
+  for (const Vec2& uv : t.edgePoints) TraceMark(a, TraceKind::EdgeTracker, uv);
+  for (const Vec2& uv : t.silhouettePoints) TraceMark(a, TraceKind::SilhouetteTracker, uv);
+  const auto& stationary = a.scan->StationaryOnScreen();
+  for (; a.nextStationary < stationary.size() && stationary[a.nextStationary].p.y() <= y; ++a.nextStationary) {
+    const ScreenStationary& st = stationary[a.nextStationary];
+    trace_->Mark(st.saddle ? TraceKind::Saddle : TraceKind::Maximum, st.p.x(), st.p.y());
+  }
+  for (const Vec2& uv : a.scan->Edges().Folds()) TraceMark(a, TraceKind::Fold, uv);
+  for (const Vec2& uv : a.scan->Silhouettes().Births()) TraceMark(a, TraceKind::Birth, uv);
+  for (const Vec2& uv : a.scan->Edges().Deaths()) TraceMark(a, TraceKind::Death, uv);
+  for (const Vec2& uv : a.scan->Silhouettes().Deaths()) TraceMark(a, TraceKind::Death, uv);
 }
 
 void ExactScan::TraceWalk(Active& a) {
-  const Surface& s = surfaces_[a.index];
-  auto mark = [&](TraceKind kind, const Vec2& uv) {
-    ScreenDerivs d;
-    EvaluateScreen(s, a.map, uv.x(), uv.y(), DerivOrder::Position, &d);
-    if (d.w > 0.0) trace_->Mark(kind, d.p.x(), d.p.y());
-  };
-  for (const Vec2& uv : walkEvents_.repairs) mark(TraceKind::Repair, uv);
-  for (const Vec2& uv : walkEvents_.failures) mark(TraceKind::Failure, uv);
+  for (const Vec2& uv : walkEvents_.repairs) TraceMark(a, TraceKind::Repair, uv);
+  for (const Vec2& uv : walkEvents_.failures) TraceMark(a, TraceKind::Failure, uv);
 }
 
 }  // namespace patchscan

@@ -14,9 +14,7 @@
 #include "patch/camera.h"
 #include "patch/surface.h"
 #include "raster/fragment.h"
-#include "tracker/edge_scan.h"
-#include "tracker/maxima.h"
-#include "tracker/silhouette_scan.h"
+#include "tracker/surface_scan.h"
 #include "xscan/level_walk.h"
 #include "xscan/theta_slab.h"
 #include "xscan/theta_walk.h"
@@ -26,7 +24,7 @@ namespace patchscan {
 
 // The fragment of the surface point a walk found: world position, unit world normal (its
 // limit from inside at a collapsed edge), eye distance, uv and uv per pixel.
-raster::Fragment FragmentAt(const WalkPoint& p, const Surface& surface,
+raster::Fragment FragmentAt(const LevelPoint& p, const Surface& surface,
                             const Mat3& normalFromObject, std::uint32_t surfaceId);
 
 struct ExactScanOptions {
@@ -60,30 +58,34 @@ class ExactScan final : public raster::FragmentSource {
 
  private:
   struct Active;
+  // Retires the surfaces the scan has passed (below yLo) and sets up those it has reached
+  // (top at or above yHi, bottom at or below yLo), their trackers first advanced to yLo.
+  void UpdateActive(double yLo, double yHi, double spacing);
   void Activate(size_t index, double y, double spacing);
-  // Advances a surface's trackers to y and lists them in rowTrackers_.
+  // Advances a surface's trackers to y (and traces them).
   void AdvanceTo(Active& a, double y);
-  // The X scan of a surface on line y from rowTrackers_: exact fragments, or (θ) each
+  // The X scan of a surface on line y from its trackers `t`: exact fragments, or (θ) each
   // chain to Take(std::span<const ThetaVertex>, bool closed).
   template <class Take>
-  void WalkSurface(Active& a, double y, const raster::SampleColumns& columns, raster::FragmentRow& out, Take&& take);
-  // θ slabs: the chains of a surface's last line advanced to line y (rowTrackers_ its
-  // trackers) as θ trackers into a.next; false if the line must be crawled afresh.
+  void WalkSurface(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
+                   raster::FragmentRow& out, Take&& take);
+  // θ slabs: the chains of a surface's last line advanced to line y (its trackers there
+  // advanced already) as θ trackers into a.next; false if the line must be crawled afresh.
   bool AdvanceSurface(Active& a, double y, const raster::SampleColumns& columns);
   // Calls f(walker, make) with the θ walker of a surface on line y and its fragment maker.
   template <class F>
   void VisitTheta(Active& a, double y, const raster::SampleColumns& columns, F&& f);
   // After a surface's X scan: silhouettes found without a tracker are adopted; the trace.
   void FinishWalk(Active& a);
+  // Whether the last X scan of a surface gave up or repaired a tracker miss.
+  bool WalkBroken() const { return !walkEvents_.failures.empty() || !walkEvents_.repairs.empty(); }
   // θ slabs: the scan lines around sample rows [j, j + slabRows), their slab or each row's chains.
   void BeginInterval(long j, const raster::SampleColumns& columns, raster::FragmentRow& out);
   bool ScanRowSlabs(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
-  // The Y-scan events of a surface so far (a slab wants none between its lines).
-  static long EventCount(const Active& a);
-  // Whether the last X scan of a surface gave up or repaired a tracker miss.
-  bool WalkBroken() const { return !walkEvents_.failures.empty() || !walkEvents_.repairs.empty(); }
   void TraceTrackers(Active& a, double y);
   void TraceWalk(Active& a);
+  // Marks the surface point uv of `a` on the trace, if it is in front of the eye.
+  void TraceMark(const Active& a, TraceKind kind, const Vec2& uv);
 
   std::span<const Surface> surfaces_;
   Camera camera_;
@@ -97,7 +99,6 @@ class ExactScan final : public raster::FragmentSource {
   std::vector<Pending> pending_;  // by yMin
   std::size_t nextPending_ = 0;
   std::vector<std::unique_ptr<Active>> active_;
-  RowTrackers rowTrackers_;
   WalkEvents walkEvents_;
   std::vector<ThetaVertex> chain_;
   ThetaChainSink* chainSink_ = nullptr;

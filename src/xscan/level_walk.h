@@ -20,7 +20,9 @@
 #include "raster/fragment.h"
 #include "tracker/edge_scan.h"
 #include "tracker/newton.h"
+#include "tracker/level_point.h"
 #include "tracker/silhouette_scan.h"
+#include "tracker/surface_scan.h"
 
 namespace patchscan {
 
@@ -32,18 +34,6 @@ struct WalkEvents {
     repairs.clear();
     failures.clear();
     untrackedSilhouettes.clear();
-  }
-};
-
-// A scan line's trackers of one surface, the walk's starting points.
-struct RowTrackers {
-  std::vector<Vec2> edgePoints;        // on the boundary, y = ys
-  std::vector<PatchEdge> edgeOf;        // per edge point
-  std::vector<Vec2> silhouettePoints;  // inside, y = ys and J = 0
-  void Clear() {
-    edgePoints.clear();
-    edgeOf.clear();
-    silhouettePoints.clear();
   }
 };
 
@@ -64,22 +54,10 @@ constexpr double kSameCrossingUv = 1e-6;
 constexpr long kWalkMaxStepsPerColumn = 4;
 constexpr long kWalkMaxStepsBase = 4096;
 
-// The point of a walk and what the walk needs there.
-struct WalkPoint {
-  Vec2 uv;
-  double x = 0.0, y = 0.0;
-  Vec2 gradX, gradY;
-  double j = 0.0;   // J = x_u y_v - x_v y_u
-  double jn = 0.0;  // J / (|grad x| |grad y|): the sine of the angle, scale-free
-  double w = 0.0;   // eye distance
-  SurfaceDerivs object;  // position and first derivatives in object space (second on request)
-  bool ok = false;
-};
-
 template <class ShapeT>
 class LevelWalker {
  public:
-  // Emit(column, const WalkPoint&): the surface point at sample column `column` of the row.
+  // Emit(column, const LevelPoint&): the surface point at sample column `column` of the row.
   // `events` may be null.
   LevelWalker(const ShapeT& shape, const ScreenMap& map, double ys,
               const raster::SampleColumns& cols, Counters* counters, WalkEvents* events = nullptr)
@@ -107,25 +85,9 @@ class LevelWalker {
     }
   }
 
-  // `order` Second also fills in p.object's second derivatives (the θ trackers' G_i needs
-  // the normal's derivatives); the screen quantities are first order either way.
-  WalkPoint Eval(const Vec2& uv, DerivOrder order = DerivOrder::First) const {
-    WalkPoint p;
-    p.uv = uv;
-    ScreenDerivs d;
-    shape_.Evaluate(uv.x(), uv.y(), order, &p.object);
-    map_.FromObject(p.object, DerivOrder::First, &d);
-    p.w = d.w;
-    p.x = d.p.x();
-    p.y = d.p.y();
-    p.gradX = Vec2(d.dpdu.x(), d.dpdv.x());
-    p.gradY = Vec2(d.dpdu.y(), d.dpdv.y());
-    p.j = p.gradX.x() * p.gradY.y() - p.gradX.y() * p.gradY.x();
-    const double scale = p.gradX.norm() * p.gradY.norm();
-    p.jn = scale > 0.0 ? p.j / scale : 0.0;
-    p.ok = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.j) && d.w > 0.0 &&
-           p.gradY.squaredNorm() > 0.0;
-    return p;
+  // The point of the surface at uv (tracker/level_point.h).
+  LevelPoint Eval(const Vec2& uv, DerivOrder order = DerivOrder::First) const {
+    return EvalLevelPoint(shape_, map_, uv, order);
   }
 
  protected:
@@ -139,7 +101,7 @@ class LevelWalker {
   }
 
   // The unit tangent of the level curve, (-y_v, y_u) / |grad y|, times the walk's sense.
-  static Vec2 Tangent(const WalkPoint& p, double sense) {
+  static Vec2 Tangent(const LevelPoint& p, double sense) {
     return sense * Vec2(-p.gradY.y(), p.gradY.x()) / p.gradY.norm();
   }
   static bool Inside(const Vec2& uv) {
@@ -148,29 +110,29 @@ class LevelWalker {
 
   // Back onto the level curve from q, moving along grad y (the shortest way to first
   // order). Allowed to leave the domain slightly: the caller checks.
-  WalkPoint Correct(Vec2 q) const {
+  LevelPoint Correct(Vec2 q) const {
     constexpr int kMaxCorrections = 12;
     for (int k = 0; k < kMaxCorrections; ++k) {
-      const WalkPoint p = Eval(q);
+      const LevelPoint p = Eval(q);
       if (!p.ok) return p;
       const double f = p.y - ys_;
       if (std::abs(f) <= kEdgeTolPx) return p;
       q -= f * p.gradY / p.gradY.squaredNorm();
     }
-    WalkPoint p = Eval(q);
+    LevelPoint p = Eval(q);
     p.ok = p.ok && std::abs(p.y - ys_) <= kEdgeTolPx;
     return p;
   }
 
   // The point of the level curve at column c, by Newton from `seed`.
-  bool SolveColumn(int c, const Vec2& seed, WalkPoint* out) const {
+  bool SolveColumn(int c, const Vec2& seed, LevelPoint* out) const {
     const double xs = cols_.At(c);
     ++(*counters_)[Counter::XscanNewtonCalls];
     // The solver's last evaluation is at the point it returns: kept, not repeated.
     const auto r = SolveNewton2(
         [&](const Vec2& uv, Vec2* f, Mat2* jac) {
           *out = Eval(uv);
-          const WalkPoint& p = *out;
+          const LevelPoint& p = *out;
           *f = Vec2(p.x - xs, p.y - ys_);
           *jac << p.gradX.x(), p.gradX.y(), p.gradY.x(), p.gradY.y();
           if (!p.ok) *f = Vec2(NAN, NAN);
@@ -184,7 +146,7 @@ class LevelWalker {
 
   // The x direction in which the curve moves, going with `sense`: dx/ds = -J along
   // (-y_v, y_u).
-  static int DirX(const WalkPoint& p, double sense) { return -sense * p.j > 0.0 ? 1 : -1; }
+  static int DirX(const LevelPoint& p, double sense) { return -sense * p.j > 0.0 ? 1 : -1; }
 
   // The first column beyond x in direction dir, or -1 / n when there is none.
   int NextColumn(double x, int dir) const {
@@ -196,12 +158,12 @@ class LevelWalker {
   // those in (x_a, x_b] (kColumnEpsPx beyond each). Seeds interpolate a and b by x; a
   // failed solve splits the arc at its midpoint on the curve.
   template <class Emit>
-  void EmitBetween(const WalkPoint& a, const WalkPoint& b, Emit& emit, int depth = 0) {
+  void EmitBetween(const LevelPoint& a, const LevelPoint& b, Emit& emit, int depth = 0) {
     const int dir = b.x > a.x ? 1 : -1;
     int c = NextColumn(a.x, dir);
     for (; c >= 0 && c < cols_.n && dir * (cols_.At(c) - b.x) <= kColumnEpsPx; c += dir) {
       const double t = (cols_.At(c) - a.x) / (b.x - a.x);
-      WalkPoint p;
+      LevelPoint p;
       const double reach = (b.uv - a.uv).norm();
       if (SolveColumn(c, a.uv + std::clamp(t, 0.0, 1.0) * (b.uv - a.uv), &p) &&
           (p.uv - a.uv).norm() <= 2.0 * reach + kSameCrossingUv) {
@@ -210,9 +172,9 @@ class LevelWalker {
         continue;
       }
       // Split the arc at its midpoint and emit the rest of it in two halves.
-      const WalkPoint m = Correct(0.5 * (a.uv + b.uv));
+      const LevelPoint m = Correct(0.5 * (a.uv + b.uv));
       if (depth < 16 && m.ok && dir * (m.x - a.x) >= 0 && dir * (b.x - m.x) >= 0) {
-        WalkPoint start = a;
+        LevelPoint start = a;
         if (c != NextColumn(a.x, dir)) {  // columns before c are done: start just before c
           start.x = cols_.At(c - dir);
         }
@@ -228,11 +190,11 @@ class LevelWalker {
   // The silhouette point (J = 0) on the arc between a and b, whose J differ in sign:
   // bisection on the chord projected onto the curve, then Newton on the silhouette
   // trackers' system.
-  bool LocateSilhouette(WalkPoint a, WalkPoint b, WalkPoint* s) const {
+  bool LocateSilhouette(LevelPoint a, LevelPoint b, LevelPoint* s) const {
     constexpr double kBracketUv = 1e-5;  // Newton finishes from a bracket this small
     constexpr int kMaxBisections = 60;
     for (int k = 0; k < kMaxBisections && (b.uv - a.uv).norm() > kBracketUv; ++k) {
-      const WalkPoint m = Correct(0.5 * (a.uv + b.uv));
+      const LevelPoint m = Correct(0.5 * (a.uv + b.uv));
       if (!m.ok) return false;
       if ((m.j > 0) == (a.j > 0)) a = m;
       else b = m;
@@ -247,7 +209,7 @@ class LevelWalker {
     }
     // Newton did not settle inside the bracket: keep bisecting to rounding.
     for (int k = 0; k < kMaxBisections && (b.uv - a.uv).norm() > 1e-13; ++k) {
-      const WalkPoint m = Correct(0.5 * (a.uv + b.uv));
+      const LevelPoint m = Correct(0.5 * (a.uv + b.uv));
       if (!m.ok) break;
       if ((m.j > 0) == (a.j > 0)) a = m;
       else b = m;
@@ -278,7 +240,7 @@ class LevelWalker {
 
   // Where the straight step from a to q (outside) crosses the boundary, the crossing of
   // the level curve with that edge, by Newton along the edge.
-  bool ExitPoint(const WalkPoint& a, const Vec2& q, WalkPoint* e) const {
+  bool ExitPoint(const LevelPoint& a, const Vec2& q, LevelPoint* e) const {
     double tHit = 1.0;
     PatchEdge edge = PatchEdge::U0;
     const Vec2 d = q - a.uv;
@@ -298,7 +260,7 @@ class LevelWalker {
     const bool alongU = edge == PatchEdge::V0 || edge == PatchEdge::V1;  // t runs along u
     const auto r = SolveNewton1(
         [&](double t, double* f, double* df) {
-          const WalkPoint p = Eval(EdgePoint(edge, t));
+          const LevelPoint p = Eval(EdgePoint(edge, t));
           *f = p.ok ? p.y - ys_ : NAN;
           *df = alongU ? p.gradY.x() : p.gradY.y();
         },
@@ -312,10 +274,10 @@ class LevelWalker {
   // silhouette point where J changes sign. Returns the silhouette point when one was
   // passed (for closed walks), via *passed.
   template <class Emit>
-  bool Pass(const WalkPoint& a, const WalkPoint& b, Emit& emit, WalkPoint* passed) {
+  bool Pass(const LevelPoint& a, const LevelPoint& b, Emit& emit, LevelPoint* passed) {
     const bool aOnSil = std::abs(a.jn) <= kOnSilhouetteJn;
     if (!aOnSil && (a.j > 0) != (b.j > 0) && std::abs(b.jn) > kOnSilhouetteJn) {
-      WalkPoint s;
+      LevelPoint s;
       if (!LocateSilhouette(a, b, &s)) {
         Failed(a.uv);
         EmitBetween(a, b, emit);
@@ -343,7 +305,7 @@ class LevelWalker {
   // left the domain (the returned point is then the exit on the boundary).
   enum class Step { Ok, Exit, Lost };
   template <class Emit>
-  Step Advance(WalkPoint* p, double sense, double* h, Emit& emit, WalkPoint* passed, bool* didPass) {
+  Step Advance(LevelPoint* p, double sense, double* h, Emit& emit, LevelPoint* passed, bool* didPass) {
     *didPass = false;
     for (;;) {
       if (*h < kWalkStepMin) return Step::Lost;
@@ -358,7 +320,7 @@ class LevelWalker {
       const bool aimed = hColumn <= *h;
       const double step = aimed ? hColumn : *h;
       const Vec2 q = p->uv + step * tan;
-      WalkPoint next;
+      LevelPoint next;
       bool ok;
       if (aimed) {
         ++(*counters_)[Counter::ColumnSteps];
@@ -369,7 +331,7 @@ class LevelWalker {
         ok = next.ok;
       }
       if (!Inside(q) || (ok && !Inside(next.uv))) {
-        WalkPoint e;
+        LevelPoint e;
         if (ExitPoint(*p, Inside(q) ? next.uv : q, &e) && (e.uv - p->uv).norm() <= 2.0 * step + kSameCrossingUv &&
             Tangent(e, sense).dot(tan) >= std::cos(kWalkMaxTurn)) {
           *didPass = Pass(*p, e, emit, passed);
@@ -400,7 +362,7 @@ class LevelWalker {
 
   // The walk's sense whose tangent at p, on boundary edge `edge`, points into the domain;
   // 0 when the curve only touches the edge there (the scan line at an edge extremum).
-  static double InwardSense(const WalkPoint& p, PatchEdge edge) {
+  static double InwardSense(const LevelPoint& p, PatchEdge edge) {
     const Vec2 t = Tangent(p, 1.0);
     double inward = 0.0;
     switch (edge) {
@@ -419,7 +381,7 @@ class LevelWalker {
   template <class Emit>
   void WalkFromEdge(const Vec2& uv, PatchEdge edge, Emit& emit) {
     ++(*counters_)[Counter::Walks];
-    WalkPoint p = Eval(uv);
+    LevelPoint p = Eval(uv);
     if (!p.ok) {
       Failed(uv);
       return;
@@ -430,7 +392,7 @@ class LevelWalker {
     const int c0 = cols_.Ceil(p.x - kColumnEpsPx);
     if (c0 < cols_.n && std::abs(cols_.At(c0) - p.x) <= kColumnEpsPx) emit(c0, p);
     double h = kWalkStepStart;
-    WalkPoint passed;
+    LevelPoint passed;
     bool didPass;
     for (long k = 0; k < MaxSteps(); ++k) {
       const Step st = Advance(&p, sense, &h, emit, &passed, &didPass);
@@ -445,14 +407,14 @@ class LevelWalker {
 
   template <class Emit>
   void WalkClosed(const Vec2& uv, Emit& emit) {
-    WalkPoint start = Eval(uv);
+    LevelPoint start = Eval(uv);
     if (!start.ok || std::abs(start.y - ys_) > 1e3 * kEdgeTolPx) return;  // not a crossing
     ++(*counters_)[Counter::Walks];
     ++(*counters_)[Counter::ClosedWalks];
-    WalkPoint p = start;
+    LevelPoint p = start;
     p.jn = 0.0;  // the start is on the silhouette whatever rounding says
     double h = kWalkStepStart;
-    WalkPoint passed;
+    LevelPoint passed;
     bool didPass;
     for (long k = 0; k < MaxSteps(); ++k) {
       const Step st = Advance(&p, 1.0, &h, emit, &passed, &didPass);
@@ -462,7 +424,7 @@ class LevelWalker {
         // Not closed after all: it reached the boundary, whose edge walks did not reach
         // this tracker. Walk the other way too, and count a miss.
         if (!UseEdgeTracker(p.uv)) Repaired(p.uv, Counter::UntrackedExits);
-        WalkPoint back = start;
+        LevelPoint back = start;
         back.jn = 0.0;
         double hb = kWalkStepStart;
         for (long kb = 0; kb < MaxSteps(); ++kb) {

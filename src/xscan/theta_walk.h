@@ -44,6 +44,7 @@
 #include <span>
 #include <vector>
 
+#include "tracker/theta_tracker.h"
 #include "xscan/level_walk.h"
 
 namespace patchscan {
@@ -67,29 +68,6 @@ class ThetaChainSink {
 
  protected:
   ~ThetaChainSink() = default;
-};
-
-// The frame the angle θ is measured in: the eye and the camera's right vector (world).
-struct ThetaFrame {
-  Vec3 eye, right, forward;
-  bool orthographic = false;  // view rays all along `forward`
-  // The surface's object-to-world map (the θ trackers differentiate the world normal),
-  // and (cos θ_i, sin θ_i) for i < N (empty: computed when needed).
-  const Affine3* worldFromObject = nullptr;
-  std::span<const Vec2> angles;
-  // θ of world normal n at world point p, in (-π, π].
-  double Theta(const Vec3& p, const Vec3& n) const {
-    const Vec3 r = orthographic ? forward : Vec3((p - eye).normalized());
-    const Vec3 plane = right.cross(r).normalized();
-    const Vec3 side = r.cross(plane);
-    return std::atan2(-n.dot(r), n.dot(side));
-  }
-  // The angle of unit normal n out of the scan plane at p, in [-π/2, π/2]: what θ does
-  // not see.
-  double Tilt(const Vec3& p, const Vec3& n) const {
-    const Vec3 r = orthographic ? forward : Vec3((p - eye).normalized());
-    return std::asin(std::clamp(n.dot(right.cross(r).normalized()), -1.0, 1.0));
-  }
 };
 
 // The side of the domain [0,1]² a boundary point lies on: 0 v = 0, 1 u = 1, 2 v = 1, 3 u = 0.
@@ -122,46 +100,6 @@ struct ChainSet {
   std::span<const ThetaVertex> Of(const Chain& c) const { return {v.data() + c.begin, c.end - c.begin}; }
 };
 
-// G_i of a θ tracker at a surface point (§4.1 in the perspective form of DESIGN.md): with
-// N the world normal, r the unit view ray and s the sideways direction in the scan plane,
-// G_i = S sin θ_i - T cos θ_i = N·(s sin θ_i + r cos θ_i), here divided by |N| so that it
-// is the sine of the angle from θ_i times the in-plane part of the unit normal. `grad` is
-// its (u,v) gradient (the normal's derivatives and, in perspective, the turning of r and
-// s along the surface); `along` = (S cos θ_i + T sin θ_i) / |N| is positive on θ_i's own
-// side (negative at θ_i + π, the other root of G_i), and t = T / |N|.
-struct TableResidual {
-  double g = 0.0, along = 0.0, t = 0.0;
-  Vec2 grad = Vec2::Zero();
-};
-TableResidual TableFunction(const SurfaceDerivs& object, const Affine3& worldFromObject, const ThetaFrame& frame,
-                            const Vec2& angle);
-
-// §4.3's turn function: θ's derivative along the level curve y = const at a surface
-// point, per unit (u,v) length along the curve's tangent (-y_v, y_u)/|∇y| (radians per
-// unit of (u,v)); zero at a turn point. NaN where the normal is perpendicular to the scan
-// plane (θ undefined). `gradY` is screen y's (u,v) gradient there.
-double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const Affine3& worldFromObject,
-                    const ThetaFrame& frame);
-// The same from G_i's residual at a point where θ = θ_i (a solved θ tracker): there G_i's
-// gradient is -ρ ∇θ, with ρ = `along`.
-double TurnRate(const TableResidual& atOwnAngle, const Vec2& gradY);
-
-// A turn tracker's turn function is solved to this (radians per unit of (u,v)): where θ
-// turns at a rate of 1 per unit² of (u,v) (a gentle crinkle), the point is within 1e-7 of
-// (u,v) of the turn.
-constexpr double kTurnTol = 1e-7;
-// The turn function's (u,v) gradient is taken by forward differences this wide (it would
-// need the surface's third derivatives): truncation ~h |T''| / 2 and rounding ~1e-16 / h
-// make its relative error about 1e-6, which slows Newton's convergence by as little (the
-// residual, not the Jacobian, decides where it ends).
-constexpr double kTurnDiffUv = 1e-6;
-
-// A θ tracker's G_i is solved to this: the sine of the angle from θ_i (radians near 0),
-// far below the 1e-3 px a vertex may move for a section of radius 1e4 px.
-constexpr double kThetaTol = 1e-10;
-// A Newton iteration of a θ tracker runs at most this long (a start one line away
-// converges in two or three).
-constexpr int kThetaMaxIterations = 12;
 // Below this θ did not move (a step, or a link between two vertices).
 constexpr double kTurnRad = 1e-9;
 // A link crawled sideways has reached its end tracker when the crawl makes the same
@@ -185,7 +123,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
 
   using Vertex = ThetaVertex;
 
-  // Walks every chain of the row: Make(const WalkPoint&) -> raster::Fragment;
+  // Walks every chain of the row: Make(const LevelPoint&) -> raster::Fragment;
   // Take(std::span<const Vertex> chain, bool closed) receives each chain. `chain` is
   // scratch.
   template <class Make, class Take>
@@ -205,16 +143,15 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   bool Advance(const ChainSet& from, const RowTrackers& t, bool extrapolate, std::vector<char>* edgeUsed,
                std::vector<char>* silUsed, std::vector<Vertex>* scratch, ChainSet* to, Make&& make);
 
-  // The θ tracker of table angle i on this line by damped Newton from `start`: false if
-  // it does not converge (or leaves the domain). Counts the iterations into *iterations.
-  // `residual`, if given, receives G_i's residual at the solution.
-  bool SolveTable(int i, const Vec2& start, WalkPoint* out, std::int64_t* iterations,
-                  TableResidual* residual = nullptr) const;
-
-  // The turn tracker of this line (§4.3: y = ys and the turn function zero) by Newton from
-  // `start`: false if it does not converge (a turn pair has met and gone) or leaves the
-  // domain. Counts the iterations into *iterations.
-  bool SolveTurn(const Vec2& start, WalkPoint* out, std::int64_t* iterations) const;
+  // The θ tracker of table angle i on this line, and the turn tracker, from `start`
+  // (tracker/theta_tracker.h).
+  bool SolveTable(int i, const Vec2& start, LevelPoint* out, std::int64_t* iterations,
+                  TableResidual* residual = nullptr) const {
+    return SolveThetaTracker(this->shape_, this->map_, this->ys_, frame_, Angle(i), start, out, iterations, residual);
+  }
+  bool SolveTurn(const Vec2& start, LevelPoint* out, std::int64_t* iterations) const {
+    return SolveTurnTracker(this->shape_, this->map_, this->ys_, frame_, start, out, iterations);
+  }
 
   // (cos θ_i, sin θ_i).
   Vec2 Angle(int i) const {
@@ -224,20 +161,13 @@ class ThetaWalker : public LevelWalker<ShapeT> {
 
  private:
   template <class Make>
-  Vertex MakeVertex(const WalkPoint& p, Make& make, ThetaVertex::Kind kind = ThetaVertex::Kind::End,
+  Vertex MakeVertex(const LevelPoint& p, Make& make, ThetaVertex::Kind kind = ThetaVertex::Kind::End,
                     int index = -1) const {
     return {p.x, make(p), kind, index};
   }
   double ThetaOf(const raster::Fragment& f) const { return frame_.Theta(f.position, f.normal); }
   // The turn function at (u,v) (NaN where undefined).
-  double TurnAt(const Vec2& uv) const {
-    const WalkPoint p = this->Eval(uv, DerivOrder::Second);
-    return p.ok ? TurnFunction(p.object, p.gradY, World(), frame_) : NAN;
-  }
-  const Affine3& World() const {
-    static const Affine3 kIdentity = Affine3::Identity();
-    return frame_.worldFromObject ? *frame_.worldFromObject : kIdentity;
-  }
+  double TurnAt(const Vec2& uv) const { return patchscan::TurnAt(this->shape_, this->map_, frame_, uv); }
   static double Wrap(double a) {  // into (-π, π]
     while (a > std::numbers::pi) a -= 2.0 * std::numbers::pi;
     while (a <= -std::numbers::pi) a += 2.0 * std::numbers::pi;
@@ -250,11 +180,11 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   template <class Make>
   // `turning`: the sense θ was turning in on arrival at `start` (0: unknown), so that a
   // turn point within the first step is seen.
-  bool Crawl(const WalkPoint& start, double sense, bool closed, std::vector<Vertex>* chain, Make& make,
+  bool Crawl(const LevelPoint& start, double sense, bool closed, std::vector<Vertex>* chain, Make& make,
              const Vertex* target = nullptr, double turning = 0.0);
   // Whether v lies on the step from a to b: along the chord between its ends, and
   // within a quarter of its length off it.
-  static bool WithinStep(const WalkPoint& a, const WalkPoint& b, const WalkPoint& v) {
+  static bool WithinStep(const LevelPoint& a, const LevelPoint& b, const LevelPoint& v) {
     const Vec2 d = b.uv - a.uv;
     const double len2 = d.squaredNorm();
     if (!(len2 > 0.0)) return (v.uv - a.uv).norm() <= kSameCrossingUv;
@@ -293,7 +223,7 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
     if ((*edgeUsed)[k]) continue;
     (*edgeUsed)[k] = 1;
     ++(*this->counters_)[Counter::Walks];
-    const WalkPoint p = this->Eval(t.edgePoints[k]);
+    const LevelPoint p = this->Eval(t.edgePoints[k]);
     if (!p.ok) {
       this->Failed(t.edgePoints[k]);
       continue;
@@ -309,7 +239,7 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
   for (size_t k = 0; k < t.silhouettePoints.size(); ++k) {
     if ((*silUsed)[k]) continue;
     (*silUsed)[k] = 1;
-    WalkPoint p = this->Eval(t.silhouettePoints[k]);
+    LevelPoint p = this->Eval(t.silhouettePoints[k]);
     if (!p.ok || std::abs(p.y - this->ys_) > 1e3 * kEdgeTolPx) continue;  // not a crossing
     ++(*this->counters_)[Counter::Walks];
     ++(*this->counters_)[Counter::ClosedWalks];
@@ -324,7 +254,7 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
 
 template <class ShapeT>
 template <class Make>
-bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool closed,
+bool ThetaWalker<ShapeT>::Crawl(const LevelPoint& start, double sense, bool closed,
                                 std::vector<Vertex>* chain, Make& make, const Vertex* target,
                                 double turning) {
   if (!target) ++(*this->counters_)[Counter::ThetaChains];
@@ -346,7 +276,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
     }
     return false;
   };
-  WalkPoint p = start;
+  LevelPoint p = start;
   double th = ThetaOf(chain->back().f);
   double tilt = frame_.Tilt(chain->back().f.position, chain->back().f.normal);  // at p
   std::size_t tiltCount = chain->size();  // chain size when tiltAtVertex was taken
@@ -355,7 +285,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
   const double cosTurn = std::cos(kWalkMaxTurn);
   // The tabulated angles passed going from θ = a by d (|d| < π), silhouettes aside
   // (they are found by the sign of J), each as a vertex on the arc from p to q.
-  auto passTable = [&](const WalkPoint& from, double a, const WalkPoint& to, double d) {
+  auto passTable = [&](const LevelPoint& from, double a, const LevelPoint& to, double d) {
     const double lo = std::min(a, a + d), hi = std::max(a, a + d);
     for (double i = std::floor(lo / table_) + 1.0; i * table_ <= hi; i += 1.0) {
       const double angle = Wrap(i * table_);
@@ -371,10 +301,10 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       // interpolated point; if that lands outside the step (near a turn point θ_i may be
       // crossed again close by), the interpolated point.
       const Vec2 guess = from.uv + t * (to.uv - from.uv);
-      WalkPoint v;
+      LevelPoint v;
       // It must also lie on from's side of `to` after the chain's last vertex (x runs one
       // way between anchors; a turn just placed beyond `from` may have passed it).
-      auto inOrder = [&](const WalkPoint& w) { return w.ok && (w.x == chain->back().x || Between(w.x, chain->back().x, to.x)); };
+      auto inOrder = [&](const LevelPoint& w) { return w.ok && (w.x == chain->back().x || Between(w.x, chain->back().x, to.x)); };
       if (!SolveTable(k, guess, &v, &(*this->counters_)[Counter::ThetaCrawlIterations]) || !WithinStep(from, to, v) || !inOrder(v))
         v = this->Correct(guess);
       if (inOrder(v)) chain->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, k));
@@ -387,13 +317,13 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
     const double r = sense * TurnAt(start.uv);
     if (std::isfinite(r)) lastTurn = r;
   }
-  WalkPoint before = start;  // the crawl point before p
+  LevelPoint before = start;  // the crawl point before p
   // A turn point (§4.3: T = 0, the derivative of θ along the curve vanishes) between two
   // steps is a vertex, so the chain follows the crinkle even when no tabulated angle is
   // passed: the turn tracker itself, by Newton from the crawl point (if that lands off the
   // two steps around it, the crawl point). Every step that passes table angles notes its
   // change of θ, d, here first.
-  auto noteTurn = [&](const WalkPoint& at, const WalkPoint& to, double d) {
+  auto noteTurn = [&](const LevelPoint& at, const LevelPoint& to, double d) {
     if (std::abs(d) <= kTurnRad) return;
     if (lastTurn != 0.0 && (d > 0) != (lastTurn > 0) && std::abs(at.jn) > 1e-9) {
       // A tilt vertex made at `at` gives way to the turn.
@@ -406,7 +336,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
       // x runs one way between anchors: the turn tracker must lie between the chain's last
       // vertex and the next crawl point (else it is another turn, and the crawl point is
       // taken).
-      WalkPoint v;
+      LevelPoint v;
       if (!SolveTurn(at.uv, &v, &(*this->counters_)[Counter::ThetaCrawlIterations]) || !WithinStep(before, to, v) || std::abs(v.jn) <= 1e-9 ||
           !Between(v.x, chain->back().x, to.x))
         v = at;
@@ -417,9 +347,9 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
   };
   // A link ending at a turn tracker ends on the step that passes it: θ may turn back
   // within a step and the crawl not see it (a turn point one step from the boundary).
-  WalkPoint turnTarget;
+  LevelPoint turnTarget;
   if (target && target->kind == ThetaVertex::Kind::Turn) turnTarget = this->Eval(target->f.uv);
-  auto endsAtTurn = [&](const WalkPoint& to) {
+  auto endsAtTurn = [&](const LevelPoint& to) {
     if (!turnTarget.ok || !WithinStep(p, to, turnTarget)) return false;
     passTable(p, th, turnTarget, Wrap(ThetaOf(target->f) - th));
     chain->push_back(*target);
@@ -430,14 +360,14 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
     ++(*this->counters_)[Counter::ThetaSteps];
     const Vec2 tan = Base::Tangent(p, sense);
     const Vec2 q = p.uv + h * tan;
-    WalkPoint next;
+    LevelPoint next;
     bool ok = false;
     if (Base::Inside(q)) {
       next = this->Correct(q);
       ok = next.ok;
     }
     if (!Base::Inside(q) || (ok && !Base::Inside(next.uv))) {
-      WalkPoint e;
+      LevelPoint e;
       if (this->ExitPoint(p, Base::Inside(q) ? next.uv : q, &e) &&
           (e.uv - p.uv).norm() <= 2.0 * h + kSameCrossingUv && Base::Tangent(e, sense).dot(tan) >= cosTurn) {
         const Vertex ve = MakeVertex(e, make);
@@ -445,7 +375,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
         const double dTilt = frame_.Tilt(ve.f.position, ve.f.normal) - tilt;
         if ((std::abs(d) <= table_ && std::abs(dTilt) <= table_) || h <= 4.0 * kWalkStepMin) {
           if (endsAtTurn(e)) return true;
-          WalkPoint s;
+          LevelPoint s;
           if (std::abs(p.jn) > 1e-9 && (p.j > 0) != (e.j > 0) && this->LocateSilhouette(p, e, &s)) {
             if (!this->UseSilhouetteTracker(s.uv)) this->Repaired(s.uv, Counter::UntrackedSilhouettes);
             chain->push_back(MakeVertex(s, make, ThetaVertex::Kind::Silhouette));
@@ -453,7 +383,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
             noteTurn(p, e, d);
             // A turn within the last step, before the boundary (θ's rate along the curve
             // changes sign between p and e): the steps are not continued to see it.
-            WalkPoint v;
+            LevelPoint v;
             const double rp = TurnAt(p.uv), re = TurnAt(e.uv);
             if (rp * re < 0.0 && SolveTurn(0.5 * (p.uv + e.uv), &v, &(*this->counters_)[Counter::ThetaCrawlIterations]) &&
                 WithinStep(p, e, v) && std::abs(v.jn) > 1e-9 && Between(v.x, chain->back().x, e.x)) {
@@ -496,7 +426,7 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
     }
     if (endsAtTurn(next)) return true;
     const bool onSil = std::abs(p.jn) <= 1e-9;
-    WalkPoint s;
+    LevelPoint s;
     if (!onSil && (p.j > 0) != (next.j > 0) && std::abs(next.jn) > 1e-9 && this->LocateSilhouette(p, next, &s)) {
       // The silhouette vertex; the table angles near it are within half a step of it.
       ++(*this->counters_)[Counter::SilhouettePoints];
@@ -535,63 +465,6 @@ bool ThetaWalker<ShapeT>::Crawl(const WalkPoint& start, double sense, bool close
   }
   this->Failed(p.uv);
   return false;
-}
-
-template <class ShapeT>
-bool ThetaWalker<ShapeT>::SolveTable(int i, const Vec2& start, WalkPoint* out, std::int64_t* iterations,
-                                     TableResidual* residual) const {
-  const Vec2 angle = Angle(i);
-  const Affine3& world = World();
-  NewtonOptions opt;
-  opt.maxIterations = kThetaMaxIterations;
-  opt.domain = DomainRule::Fail;  // a tracker leaving [0,1]² has left the patch
-  const auto r = SolveNewton2(
-      [&](const Vec2& uv, Vec2* f, Mat2* jac) {
-        *out = this->Eval(uv, DerivOrder::Second);
-        const TableResidual g = TableFunction(out->object, world, frame_, angle);
-        if (residual) *residual = g;
-        *f = Vec2(out->y - this->ys_, g.g);
-        jac->row(0) = out->gradY.transpose();
-        jac->row(1) = g.grad.transpose();
-        // Blinn's damping (§4.1): a point where the normal's in-plane direction has
-        // flipped (the other root θ_i + π of G_i) or T has changed sign is no decrease,
-        // so the solver halves the step that reached it.
-        if (!out->ok || !(g.along > 0.0) || !(g.t * angle.y() > 0.0)) *f = Vec2(NAN, NAN);
-      },
-      start, Vec2(kEdgeTolPx, kThetaTol), opt);
-  *iterations += r.iterations;
-  if (r.status != NewtonStatus::Converged) return false;
-  if (out->uv != r.uv) {
-    *out = this->Eval(r.uv, DerivOrder::Second);
-    if (residual && out->ok) *residual = TableFunction(out->object, world, frame_, angle);
-  }
-  return out->ok;
-}
-
-template <class ShapeT>
-bool ThetaWalker<ShapeT>::SolveTurn(const Vec2& start, WalkPoint* out, std::int64_t* iterations) const {
-  const Affine3& world = World();
-  NewtonOptions opt;
-  opt.maxIterations = kThetaMaxIterations;
-  opt.domain = DomainRule::Fail;
-  const auto r = SolveNewton2(
-      [&](const Vec2& uv, Vec2* f, Mat2* jac) {
-        *out = this->Eval(uv, DerivOrder::Second);
-        const double tau = out->ok ? TurnFunction(out->object, out->gradY, world, frame_) : NAN;
-        *f = Vec2(out->y - this->ys_, tau);
-        jac->row(0) = out->gradY.transpose();
-        // Forward differences, stepping back from the domain's far edges.
-        const double hu = uv.x() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
-        const double hv = uv.y() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
-        (*jac)(1, 0) = (TurnAt(uv + Vec2(hu, 0.0)) - tau) / hu;
-        (*jac)(1, 1) = (TurnAt(uv + Vec2(0.0, hv)) - tau) / hv;
-        if (!out->ok) *f = Vec2(NAN, NAN);
-      },
-      start, Vec2(kEdgeTolPx, kTurnTol), opt);
-  *iterations += r.iterations;
-  if (r.status != NewtonStatus::Converged) return false;
-  if (out->uv != r.uv) *out = this->Eval(r.uv);
-  return out->ok;
 }
 
 template <class ShapeT>
@@ -648,7 +521,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
     if (c.closed && (A.back().f.uv - A.front().f.uv).norm() > kSameCrossingUv) return false;
     const auto begin = static_cast<std::uint32_t>(to->v.size());
     double sense = 1.0;  // along the chain's order (a ring is crawled with sense 1)
-    WalkPoint last;      // the last vertex advanced, and its index in A
+    LevelPoint last;      // the last vertex advanced, and its index in A
     std::size_t lastK = 0;
     bool skipped = false;  // tilt vertices or lost trackers of A since lastK
     double lastD = 0.0;    // θ's change along the chain's last link (0: none yet)
@@ -670,7 +543,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
       return std::abs(d) > kTurnRad && (lastRate * d < 0.0 || rateB * d < 0.0);
     };
     // The link from `last` to b, repaired sideways if it looks suspicious; then b.
-    auto link = [&](std::size_t k, const Vertex& b, const WalkPoint& pb, double rateB) {
+    auto link = [&](std::size_t k, const Vertex& b, const LevelPoint& pb, double rateB) {
       if (to->v.size() > begin) {
         const Vertex& a = to->v.back();
         // x runs one way through a vertex that is not an anchor.
@@ -703,7 +576,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
     };
     for (std::size_t k = 0; k < n; ++k) {
       const Vertex& V = A[k];
-      WalkPoint p;
+      LevelPoint p;
       TableResidual residual;  // a Table vertex's G_i at its solution
       switch (V.kind) {
         case ThetaVertex::Kind::Tilt:
@@ -765,7 +638,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
     if (c.closed) {  // back round to the first vertex
       if (n + 1 > A.size() || to->v.size() == begin) return false;
       const Vertex first = to->v[begin];
-      WalkPoint p0 = this->Eval(first.f.uv);
+      LevelPoint p0 = this->Eval(first.f.uv);
       p0.jn = 0.0;
       if (!link(n, first, p0, NAN)) return false;
     }
@@ -779,7 +652,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
     if (!used) return false;
   for (std::size_t k = 0; k < t.silhouettePoints.size(); ++k)
     if (!(*silUsed)[k]) {
-      const WalkPoint p = this->Eval(t.silhouettePoints[k]);
+      const LevelPoint p = this->Eval(t.silhouettePoints[k]);
       if (p.ok && std::abs(p.y - this->ys_) <= 1e3 * kEdgeTolPx) return false;  // a crossing (as WalkAll)
     }
   return true;

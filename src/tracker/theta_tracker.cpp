@@ -1,4 +1,4 @@
-#include "xscan/theta_walk.h"
+#include "tracker/theta_tracker.h"
 
 namespace patchscan {
 

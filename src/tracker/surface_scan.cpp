@@ -1,0 +1,59 @@
+#include "tracker/surface_scan.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace patchscan {
+namespace {
+
+// A surface set up below its top is first advanced from its topmost maximum: at most this
+// many pixels above the first line (a surface towering far above the image starts there
+// with its trackers found by repair instead).
+constexpr double kMaxPreAdvancePx = 1024.0;
+
+}  // namespace
+
+SurfaceScan::SurfaceScan(const Surface& surface, const Camera& camera, bool extrapolate, Counters& counters)
+    : surface_(surface),
+      map_(camera, surface.worldFromObject),
+      normalFromObject_(surface.worldFromObject.linear().inverse().transpose()),
+      counters_(counters),
+      edges_(surface, map_, counters, extrapolate),
+      silhouettes_(surface, map_, PrePass(), counters, extrapolate) {
+  ++counters_[Counter::SurfacesSetUp];
+}
+
+void SurfaceScan::StartAt(double yStart, double spacing) {
+  const double step = std::max(spacing, 1.0);
+  for (double y = std::max(std::min(yTop_, yStart), yStart - kMaxPreAdvancePx); y < yStart; y += step) {
+    edges_.Advance(y);
+    silhouettes_.Advance(y, edges_);
+  }
+}
+
+std::vector<Stationary> SurfaceScan::PrePass() {
+  std::vector<Stationary> stationary = FindStationaryPoints(surface_, map_, &counters_);
+  counters_[Counter::Stationary] += static_cast<std::int64_t>(stationary.size());
+  yTop_ = INFINITY;
+  for (const Stationary& p : stationary) {  // FindStationaryPoints sorts by y
+    ScreenDerivs d;
+    EvaluateScreen(surface_, map_, p.uv.x(), p.uv.y(), DerivOrder::Position, &d);
+    stationary_.push_back({p.kind == StationaryKind::Saddle, Vec2(d.p.x(), d.p.y())});
+    yTop_ = std::min(yTop_, p.y);
+  }
+  return stationary;
+}
+
+void SurfaceScan::AdvanceTo(double y) {
+  edges_.Advance(y);
+  silhouettes_.Advance(y, edges_);
+  row_.Clear();
+  for (const EdgeTracker& t : edges_.Trackers()) {
+    row_.edgePoints.push_back(edges_.Uv(t));
+    row_.edgeOf.push_back(edges_.Pieces()[t.piece].edge);
+  }
+  for (const SilhouetteTracker& t : silhouettes_.Trackers()) row_.silhouettePoints.push_back(t.uv);
+  counters_[Counter::TrackerRows] += static_cast<std::int64_t>(row_.edgePoints.size() + row_.silhouettePoints.size());
+}
+
+}  // namespace patchscan

@@ -1,0 +1,91 @@
+// One surface's Y scan (paper 001 §3.2): the maxima pre-pass when the scan reaches the
+// surface, then line by line its boundary-edge and silhouette trackers advanced by Newton,
+// with the events of the scan (births at maxima, folds and saddles, deaths, repairs). The
+// exact and θ X scans both start from its trackers; a worker owns the scans of its share
+// of the surfaces.
+#pragma once
+
+#include <vector>
+
+#include "core/counters.h"
+#include "patch/camera.h"
+#include "patch/screen.h"
+#include "patch/surface.h"
+#include "tracker/edge_scan.h"
+#include "tracker/maxima.h"
+#include "tracker/silhouette_scan.h"
+
+namespace patchscan {
+
+// A scan line's trackers of one surface: where the X scan's walks start.
+struct RowTrackers {
+  std::vector<Vec2> edgePoints;        // on the boundary, y = ys
+  std::vector<PatchEdge> edgeOf;       // per edge point
+  std::vector<Vec2> silhouettePoints;  // inside, y = ys and J = 0
+  void Clear() {
+    edgePoints.clear();
+    edgeOf.clear();
+    silhouettePoints.clear();
+  }
+};
+
+// A maximum or saddle of the pre-pass where the screen shows it.
+struct ScreenStationary {
+  bool saddle;
+  Vec2 p;  // screen x, y
+};
+
+class SurfaceScan {
+ public:
+  // Sets up the Y scan of `surface` seen by `camera`: the maxima pre-pass and the edges'
+  // monotone pieces. `extrapolate`: start each tracker's Newton from its last lines (§3.5).
+  // Counts into `counters`. `surface` and `counters` must outlive the scan.
+  SurfaceScan(const Surface& surface, const Camera& camera, bool extrapolate, Counters& counters);
+  SurfaceScan(const SurfaceScan&) = delete;
+  SurfaceScan& operator=(const SurfaceScan&) = delete;
+
+  // The topmost maximum's y (+inf if the pre-pass found none): where the scan begins.
+  double Top() const { return yTop_; }
+  // For a scan that begins at line yStart below Top() (the surface's top is above the
+  // image, or between two lines): advances the trackers from Top() towards yStart in steps
+  // of max(spacing, 1) px, so that they are born where the seeds of §3.2.2 are good.
+  void StartAt(double yStart, double spacing);
+
+  // Advances every tracker to line y (non-decreasing from call to call) and lists them in
+  // Trackers(). Allocation-free once the lists have their size.
+  void AdvanceTo(double y);
+  const RowTrackers& Trackers() const { return row_; }
+
+  // Events so far (births, deaths, folds, merges, adoptions, repairs): two calls that
+  // return the same number bracket lines whose level curves kept their topology.
+  long Events() const { return edges_.Events() + silhouettes_.Events(); }
+
+  // Takes up a silhouette crossing of the current line that the X scan found and no
+  // tracker held: tracked from the next line on.
+  void Adopt(const Vec2& uv) { silhouettes_.Adopt(uv); }
+
+  const Surface& Shape() const { return surface_; }
+  const ScreenMap& Map() const { return map_; }
+  const Mat3& NormalFromObject() const { return normalFromObject_; }  // world normals from dp/du x dp/dv
+  // The pre-pass's maxima and saddles on the screen, by y.
+  const std::vector<ScreenStationary>& StationaryOnScreen() const { return stationary_; }
+  // The trackers themselves (their folds, births and deaths at the latest line).
+  const EdgeScan& Edges() const { return edges_; }
+  const SilhouetteScan& Silhouettes() const { return silhouettes_; }
+
+ private:
+  // The maxima pre-pass: fills stationary_ and yTop_, returns the points for the trackers.
+  std::vector<Stationary> PrePass();
+
+  const Surface& surface_;
+  ScreenMap map_;
+  Mat3 normalFromObject_;
+  Counters& counters_;
+  std::vector<ScreenStationary> stationary_;
+  double yTop_ = 0.0;  // the topmost stationary point's y
+  EdgeScan edges_;
+  SilhouetteScan silhouettes_;
+  RowTrackers row_;
+};
+
+}  // namespace patchscan

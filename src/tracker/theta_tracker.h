@@ -1,0 +1,168 @@
+// θ trackers and turn trackers (paper 001 §4.1, §4.3) as kernels: each solves for one point
+// of a scan line by bivariate Newton, from a start on the line before (or from a crawl's
+// interpolated point), so the X scan can carry θ-sampled chains from line to line.
+//
+// In perspective (DESIGN.md) the surface normal N is resolved in the scan plane (the plane
+// through the eye and the scan line) into T = -N·r, towards the eye along the view ray r
+// (zero on the silhouette), and S = N·s, sideways along s = r × q, q the scan plane's unit
+// normal; θ = atan2(T, S). A θ tracker of table angle θ_i follows G_i = S sin θ_i -
+// T cos θ_i = 0 on the scan line; a turn tracker follows the zeros of θ's derivative along
+// the level curve (§4.3's T(u,v), here called the turn function to keep T for the toward-
+// eye component).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <span>
+
+#include <Eigen/Geometry>
+
+#include "core/vec.h"
+#include "patch/surface.h"
+#include "tracker/edge_scan.h"
+#include "tracker/level_point.h"
+#include "tracker/newton.h"
+
+namespace patchscan {
+
+// The frame the angle θ is measured in: the eye and the camera's right vector (world).
+struct ThetaFrame {
+  Vec3 eye, right, forward;
+  bool orthographic = false;  // view rays all along `forward`
+  // The surface's object-to-world map (the θ trackers differentiate the world normal),
+  // and (cos θ_i, sin θ_i) for i < N (empty: computed when needed).
+  const Affine3* worldFromObject = nullptr;
+  std::span<const Vec2> angles;
+  // θ of world normal n at world point p, in (-π, π].
+  double Theta(const Vec3& p, const Vec3& n) const {
+    const Vec3 r = orthographic ? forward : Vec3((p - eye).normalized());
+    const Vec3 plane = right.cross(r).normalized();
+    const Vec3 side = r.cross(plane);
+    return std::atan2(-n.dot(r), n.dot(side));
+  }
+  // The angle of unit normal n out of the scan plane at p, in [-π/2, π/2]: what θ does
+  // not see.
+  double Tilt(const Vec3& p, const Vec3& n) const {
+    const Vec3 r = orthographic ? forward : Vec3((p - eye).normalized());
+    return std::asin(std::clamp(n.dot(right.cross(r).normalized()), -1.0, 1.0));
+  }
+  const Affine3& World() const {
+    static const Affine3 kIdentity = Affine3::Identity();
+    return worldFromObject ? *worldFromObject : kIdentity;
+  }
+};
+
+// G_i of a θ tracker at a surface point (§4.1 in the perspective form above): G_i =
+// N·(s sin θ_i + r cos θ_i), here divided by |N| so that it is the sine of the angle from
+// θ_i times the in-plane part of the unit normal. `grad` is its (u,v) gradient (the
+// normal's derivatives and, in perspective, the turning of r and s along the surface);
+// `along` = (S cos θ_i + T sin θ_i) / |N| is positive on θ_i's own side (negative at
+// θ_i + π, the other root of G_i), and t = T / |N|.
+struct TableResidual {
+  double g = 0.0, along = 0.0, t = 0.0;
+  Vec2 grad = Vec2::Zero();
+};
+TableResidual TableFunction(const SurfaceDerivs& object, const Affine3& worldFromObject, const ThetaFrame& frame,
+                            const Vec2& angle);
+
+// §4.3's turn function: θ's derivative along the level curve y = const at a surface
+// point, per unit (u,v) length along the curve's tangent (-y_v, y_u)/|∇y| (radians per
+// unit of (u,v)); zero at a turn point. NaN where the normal is perpendicular to the scan
+// plane (θ undefined). `gradY` is screen y's (u,v) gradient there.
+double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const Affine3& worldFromObject,
+                    const ThetaFrame& frame);
+// The same from G_i's residual at a point where θ = θ_i (a solved θ tracker): there G_i's
+// gradient is -ρ ∇θ, with ρ = `along`.
+double TurnRate(const TableResidual& atOwnAngle, const Vec2& gradY);
+
+// A turn tracker's turn function is solved to this (radians per unit of (u,v)): where θ
+// turns at a rate of 1 per unit² of (u,v) (a gentle crinkle), the point is within 1e-7 of
+// (u,v) of the turn.
+constexpr double kTurnTol = 1e-7;
+// The turn function's (u,v) gradient is taken by forward differences this wide (it would
+// need the surface's third derivatives): truncation ~h |T''| / 2 and rounding ~1e-16 / h
+// make its relative error about 1e-6, which slows Newton's convergence by as little (the
+// residual, not the Jacobian, decides where it ends).
+constexpr double kTurnDiffUv = 1e-6;
+// A θ tracker's G_i is solved to this: the sine of the angle from θ_i (radians near 0),
+// far below the 1e-3 px a vertex may move for a section of radius 1e4 px.
+constexpr double kThetaTol = 1e-10;
+// A Newton iteration of a θ tracker runs at most this long (a start one line away
+// converges in two or three).
+constexpr int kThetaMaxIterations = 12;
+
+// The turn function at uv (NaN where undefined, or where the point is not ok).
+template <class ShapeT>
+double TurnAt(const ShapeT& shape, const ScreenMap& map, const ThetaFrame& frame, const Vec2& uv) {
+  const LevelPoint p = EvalLevelPoint(shape, map, uv, DerivOrder::Second);
+  return p.ok ? TurnFunction(p.object, p.gradY, frame.World(), frame) : NAN;
+}
+
+// The θ tracker of angle (cos θ_i, sin θ_i) on scan line ys by damped Newton on
+// (y - ys, G_i) from `start`: false if it does not converge or leaves [0,1]² (the tracker
+// has left the patch). Adds its iterations to *iterations; `residual`, if given, receives
+// G_i's residual at the solution. Never allocates.
+template <class ShapeT>
+bool SolveThetaTracker(const ShapeT& shape, const ScreenMap& map, double ys, const ThetaFrame& frame,
+                       const Vec2& angle, const Vec2& start, LevelPoint* out, std::int64_t* iterations,
+                       TableResidual* residual = nullptr) {
+  const Affine3& world = frame.World();
+  NewtonOptions opt;
+  opt.maxIterations = kThetaMaxIterations;
+  opt.domain = DomainRule::Fail;  // a tracker leaving [0,1]² has left the patch
+  const auto r = SolveNewton2(
+      [&](const Vec2& uv, Vec2* f, Mat2* jac) {
+        *out = EvalLevelPoint(shape, map, uv, DerivOrder::Second);
+        const TableResidual g = TableFunction(out->object, world, frame, angle);
+        if (residual) *residual = g;
+        *f = Vec2(out->y - ys, g.g);
+        jac->row(0) = out->gradY.transpose();
+        jac->row(1) = g.grad.transpose();
+        // Blinn's damping (§4.1): a point where the normal's in-plane direction has
+        // flipped (the other root θ_i + π of G_i) or T has changed sign is no decrease,
+        // so the solver halves the step that reached it.
+        if (!out->ok || !(g.along > 0.0) || !(g.t * angle.y() > 0.0)) *f = Vec2(NAN, NAN);
+      },
+      start, Vec2(kEdgeTolPx, kThetaTol), opt);
+  *iterations += r.iterations;
+  if (r.status != NewtonStatus::Converged) return false;
+  if (out->uv != r.uv) {
+    *out = EvalLevelPoint(shape, map, r.uv, DerivOrder::Second);
+    if (residual && out->ok) *residual = TableFunction(out->object, world, frame, angle);
+  }
+  return out->ok;
+}
+
+// The turn tracker of scan line ys (§4.3: y = ys and the turn function zero) by Newton
+// from `start`, the turn function's gradient by forward differences: false if it does not
+// converge (a turn pair has met and gone) or leaves [0,1]². Adds its iterations to
+// *iterations. Never allocates.
+template <class ShapeT>
+bool SolveTurnTracker(const ShapeT& shape, const ScreenMap& map, double ys, const ThetaFrame& frame,
+                      const Vec2& start, LevelPoint* out, std::int64_t* iterations) {
+  const Affine3& world = frame.World();
+  NewtonOptions opt;
+  opt.maxIterations = kThetaMaxIterations;
+  opt.domain = DomainRule::Fail;
+  const auto r = SolveNewton2(
+      [&](const Vec2& uv, Vec2* f, Mat2* jac) {
+        *out = EvalLevelPoint(shape, map, uv, DerivOrder::Second);
+        const double tau = out->ok ? TurnFunction(out->object, out->gradY, world, frame) : NAN;
+        *f = Vec2(out->y - ys, tau);
+        jac->row(0) = out->gradY.transpose();
+        // Forward differences, stepping back from the domain's far edges.
+        const double hu = uv.x() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
+        const double hv = uv.y() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
+        (*jac)(1, 0) = (TurnAt(shape, map, frame, uv + Vec2(hu, 0.0)) - tau) / hu;
+        (*jac)(1, 1) = (TurnAt(shape, map, frame, uv + Vec2(0.0, hv)) - tau) / hv;
+        if (!out->ok) *f = Vec2(NAN, NAN);
+      },
+      start, Vec2(kEdgeTolPx, kTurnTol), opt);
+  *iterations += r.iterations;
+  if (r.status != NewtonStatus::Converged) return false;
+  if (out->uv != r.uv) *out = EvalLevelPoint(shape, map, r.uv);
+  return out->ok;
+}
+
+}  // namespace patchscan
