@@ -54,6 +54,9 @@ constexpr double kSameCrossingUv = 1e-6;
 constexpr long kWalkMaxStepsPerColumn = 4;
 constexpr long kWalkMaxStepsBase = 4096;
 
+// What one try at a step along a level curve came to (LevelWalker::TryStep).
+enum class StepResult { Moved, Exit, Rejected };
+
 template <class ShapeT>
 class LevelWalker {
  public:
@@ -67,11 +70,7 @@ class LevelWalker {
   template <class Emit>
   void WalkAll(const RowTrackers& t, std::vector<char>* edgeUsed, std::vector<char>* silUsed,
                Emit&& emit) {
-    trackers_ = &t;
-    edgeUsed_ = edgeUsed;
-    silUsed_ = silUsed;
-    edgeUsed->assign(t.edgePoints.size(), 0);
-    silUsed->assign(t.silhouettePoints.size(), 0);
+    Bind(t, edgeUsed, silUsed);
     for (size_t k = 0; k < t.edgePoints.size(); ++k) {
       if ((*edgeUsed)[k]) continue;
       (*edgeUsed)[k] = 1;
@@ -219,23 +218,25 @@ class LevelWalker {
   }
 
   // Marks the silhouette tracker at s as passed; false if none holds it.
-  bool UseSilhouetteTracker(const Vec2& uv) {
+  bool UseSilhouetteTracker(const Vec2& uv) { return UseTracker(trackers_->silhouettePoints, silUsed_, uv); }
+  bool UseEdgeTracker(const Vec2& uv) { return UseTracker(trackers_->edgePoints, edgeUsed_, uv); }
+  static bool UseTracker(const std::vector<Vec2>& points, std::vector<char>* used, const Vec2& uv) {
     bool found = false;
-    for (size_t k = 0; k < trackers_->silhouettePoints.size(); ++k)
-      if ((trackers_->silhouettePoints[k] - uv).norm() <= kSameCrossingUv) {
-        (*silUsed_)[k] = 1;
+    for (size_t k = 0; k < points.size(); ++k)
+      if ((points[k] - uv).norm() <= kSameCrossingUv) {
+        (*used)[k] = 1;
         found = true;
       }
     return found;
   }
-  bool UseEdgeTracker(const Vec2& uv) {
-    bool found = false;
-    for (size_t k = 0; k < trackers_->edgePoints.size(); ++k)
-      if ((trackers_->edgePoints[k] - uv).norm() <= kSameCrossingUv) {
-        (*edgeUsed_)[k] = 1;
-        found = true;
-      }
-    return found;
+
+  // Takes the line's trackers `t` as the walks' starting points, none used yet.
+  void Bind(const RowTrackers& t, std::vector<char>* edgeUsed, std::vector<char>* silUsed) {
+    trackers_ = &t;
+    edgeUsed_ = edgeUsed;
+    silUsed_ = silUsed;
+    edgeUsed->assign(t.edgePoints.size(), 0);
+    silUsed->assign(t.silhouettePoints.size(), 0);
   }
 
   // Where the straight step from a to q (outside) crosses the boundary, the crossing of
@@ -301,51 +302,69 @@ class LevelWalker {
   // closed walk): its sign says nothing.
   static constexpr double kOnSilhouetteJn = 1e-9;
 
-  // One step from p along the curve. Returns the next point; sets *exit when the curve
-  // left the domain (the returned point is then the exit on the boundary).
+  // One try at a step of length `step` along the curve from p (aimed at sample column
+  // `column` when it is >= 0: the point of the curve on that column), into *next: Moved
+  // (the point reached), Exit (the curve left the domain within the step: the exit on the
+  // boundary), or Rejected (the correction failed, jumped to another branch, turned the
+  // tangent more than kWalkMaxTurn, or an aimed step crossed the silhouette): try again
+  // shorter. The one step of both walks, the exact X scan's and the θ crawl's.
+  StepResult TryStep(const LevelPoint& p, double sense, double step, int column, LevelPoint* next) const {
+    const Vec2 tan = Tangent(p, sense);
+    const Vec2 q = p.uv + step * tan;
+    const double cosTurn = std::cos(kWalkMaxTurn);
+    bool ok = false;
+    if (Inside(q)) {
+      if (column >= 0) {
+        ok = SolveColumn(column, q, next);
+      } else {
+        *next = Correct(q);
+        ok = next->ok;
+      }
+    }
+    if (!Inside(q) || (ok && !Inside(next->uv))) {
+      LevelPoint e;
+      if (ExitPoint(p, Inside(q) ? next->uv : q, &e) && (e.uv - p.uv).norm() <= 2.0 * step + kSameCrossingUv &&
+          Tangent(e, sense).dot(tan) >= cosTurn) {
+        *next = e;
+        return StepResult::Exit;
+      }
+      return StepResult::Rejected;
+    }
+    if (!ok || (next->uv - p.uv).norm() > 2.0 * step + kSameCrossingUv || Tangent(*next, sense).dot(tan) < cosTurn ||
+        (column >= 0 && (next->j > 0) != (p.j > 0)))
+      return StepResult::Rejected;
+    return StepResult::Moved;
+  }
+
+  // One step of the exact X scan from p along the curve, aimed at the next sample column
+  // when it is within *h (emitting it), else an arc step that emits the columns passed on
+  // the way. Returns Ok (*p the next point), Exit (*p the exit on the boundary) or Lost.
+  // *passed and *didPass: the silhouette point passed on the way, if any (closed walks).
   enum class Step { Ok, Exit, Lost };
   template <class Emit>
   Step Advance(LevelPoint* p, double sense, double* h, Emit& emit, LevelPoint* passed, bool* didPass) {
     *didPass = false;
     for (;;) {
       if (*h < kWalkStepMin) return Step::Lost;
-      const Vec2 tan = Tangent(*p, sense);
       // Aim at the next column when it is within the step (first order).
       const bool onSil = std::abs(p->jn) <= kOnSilhouetteJn;
-      const int dir = DirX(*p, sense);
-      const int c = NextColumn(p->x, dir);
+      const int c = NextColumn(p->x, DirX(*p, sense));
       double hColumn = INFINITY;
       if (!onSil && c >= 0 && c < cols_.n)
         hColumn = std::abs(cols_.At(c) - p->x) * p->gradY.norm() / std::abs(p->j);
       const bool aimed = hColumn <= *h;
       const double step = aimed ? hColumn : *h;
-      const Vec2 q = p->uv + step * tan;
+      ++(*counters_)[aimed ? Counter::ColumnSteps : Counter::ArcSteps];
       LevelPoint next;
-      bool ok;
-      if (aimed) {
-        ++(*counters_)[Counter::ColumnSteps];
-        ok = Inside(q) && SolveColumn(c, q, &next);
-      } else {
-        ++(*counters_)[Counter::ArcSteps];
-        next = Correct(q);
-        ok = next.ok;
-      }
-      if (!Inside(q) || (ok && !Inside(next.uv))) {
-        LevelPoint e;
-        if (ExitPoint(*p, Inside(q) ? next.uv : q, &e) && (e.uv - p->uv).norm() <= 2.0 * step + kSameCrossingUv &&
-            Tangent(e, sense).dot(tan) >= std::cos(kWalkMaxTurn)) {
-          *didPass = Pass(*p, e, emit, passed);
-          *p = e;
-          return Step::Exit;
-        }
+      const StepResult r = TryStep(*p, sense, step, aimed ? c : -1, &next);
+      if (r == StepResult::Rejected) {
         *h = 0.5 * step;
         continue;
       }
-      if (!ok || (next.uv - p->uv).norm() > 2.0 * step + kSameCrossingUv ||
-          Tangent(next, sense).dot(tan) < std::cos(kWalkMaxTurn) ||
-          (aimed && (next.j > 0) != (p->j > 0))) {
-        *h = 0.5 * step;
-        continue;
+      if (r == StepResult::Exit) {
+        *didPass = Pass(*p, next, emit, passed);
+        *p = next;
+        return Step::Exit;
       }
       if (aimed) {
         ++(*counters_)[Counter::ColumnsSolved];

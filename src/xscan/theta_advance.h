@@ -1,0 +1,200 @@
+// The θ walker's advance from one scan line to the next (paper 001 §4.1, §4.2, §3.5): each
+// chain of the line before is carried over vertex by vertex, its θ and turn trackers
+// solved by Newton from extrapolated starts and its ends and silhouettes taken from the Y
+// scan's trackers, and a link that looks suspicious is repaired sideways by a crawl
+// (theta_crawl.h). Included by theta_walk.h; not for use on its own.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+namespace patchscan {
+
+template <class ShapeT>
+bool ThetaWalker<ShapeT>::Suspicious(const Vertex& A, const Vertex& B, const Vertex& a, const Vertex& b) const {
+  // A tabulated angle strictly between the link's ends (θ is monotone along a link with
+  // no turn point), or the tilt turning a table step: a vertex is missing.
+  constexpr double kOnAngleRad = 1e-8;
+  const double ta = ThetaOf(a.f), d = Wrap(ThetaOf(b.f) - ta);
+  if (std::abs(d) > table_ + kOnAngleRad) return true;
+  const double lo = std::min(ta, ta + d) + kOnAngleRad, hi = std::max(ta, ta + d) - kOnAngleRad;
+  for (double i = std::floor(lo / table_) + 1.0; i * table_ < hi; i += 1.0)
+    if (std::abs(std::sin(i * table_)) > 1e-12) return true;  // 0 and π are silhouettes
+  if (std::abs(frame_.Tilt(b.f.position, b.f.normal) - frame_.Tilt(a.f.position, a.f.normal)) >= table_) return true;
+  // A silhouette between two vertices that are none.
+  const bool silA = a.kind == ThetaVertex::Kind::Silhouette, silB = b.kind == ThetaVertex::Kind::Silhouette;
+  if (!silA && !silB && (a.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(a.f.position - frame_.eye)) > 0.0) !=
+                            (b.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(b.f.position - frame_.eye)) > 0.0))
+    return true;
+  // x running the other way along the link, or the link stretched onto another stretch.
+  const double dxTop = B.x - A.x, dx = b.x - a.x;
+  if (std::abs(dxTop) > kColumnEpsPx && std::abs(dx) > kColumnEpsPx && (dxTop > 0) != (dx > 0)) return true;
+  return (b.f.uv - a.f.uv).norm() > 2.0 * (B.f.uv - A.f.uv).norm() + kLinkStretchUv;
+}
+
+template <class ShapeT>
+template <class Make>
+bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bool extrapolate,
+                                  std::vector<char>* edgeUsed, std::vector<char>* silUsed,
+                                  std::vector<Vertex>* scratch, ChainSet* to, Make&& make) {
+  this->Bind(t, edgeUsed, silUsed);
+  to->Clear();
+  // The unused tracker of the line nearest to uv: an edge tracker on the same side of
+  // the domain, or a silhouette tracker.
+  auto nearest = [&](const std::vector<Vec2>& points, std::vector<char>* used, const Vec2& uv, int side) {
+    int best = -1;
+    double bestD = INFINITY;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if ((*used)[k] || (side >= 0 && DomainSide(points[k]) != side)) continue;
+      const double d = (points[k] - uv).squaredNorm();
+      if (d < bestD) bestD = d, best = static_cast<int>(k);
+    }
+    if (best >= 0) (*used)[static_cast<std::size_t>(best)] = 1;
+    return best;
+  };
+  for (const ChainSet::Chain& c : from.chains) {
+    const auto A = from.Of(c);
+    if (A.size() < 2) return false;
+    // A ring's last vertex repeats its first.
+    const std::size_t n = c.closed ? A.size() - 1 : A.size();
+    if (c.closed && (A.back().f.uv - A.front().f.uv).norm() > kSameCrossingUv) return false;
+    const auto begin = static_cast<std::uint32_t>(to->v.size());
+    double sense = 1.0;  // along the chain's order (a ring is crawled with sense 1)
+    LevelPoint last;      // the last vertex advanced, and its index in A
+    std::size_t lastK = 0;
+    bool skipped = false;  // tilt vertices or lost trackers of A since lastK
+    double lastD = 0.0;    // θ's change along the chain's last link (0: none yet)
+    // θ keeps its sense of rotation through a Table or Tilt vertex and reverses it at a
+    // Turn (§4.3): the link from a to b breaks that rule.
+    auto turnsWrong = [&](const Vertex& a, const Vertex& b) {
+      const double d = Wrap(ThetaOf(b.f) - ThetaOf(a.f));
+      if (std::abs(d) <= kTurnRad || lastD == 0.0) return false;
+      const bool flips = (d > 0.0) != (lastD > 0.0);
+      if (a.kind == ThetaVertex::Kind::Turn) return !flips;
+      return (a.kind == ThetaVertex::Kind::Table || a.kind == ThetaVertex::Kind::Tilt) && flips;
+    };
+    // θ's rate along the chain at a vertex other than a turn must have the sense of the
+    // links on both sides: against it, a turn has been born between (a pair across a
+    // Table vertex, or one come in across the boundary beside an end).
+    double lastRate = NAN;  // at `last` (NaN: a turn)
+    auto againstRate = [&](const Vertex& a, const Vertex& b, double rateB) {
+      const double d = Wrap(ThetaOf(b.f) - ThetaOf(a.f));
+      return std::abs(d) > kTurnRad && (lastRate * d < 0.0 || rateB * d < 0.0);
+    };
+    // The link from `last` to b, repaired sideways if it looks suspicious; then b.
+    auto link = [&](std::size_t k, const Vertex& b, const LevelPoint& pb, double rateB) {
+      if (to->v.size() > begin) {
+        const Vertex& a = to->v.back();
+        // x runs one way through a vertex that is not an anchor.
+        const bool xBack = to->v.size() >= begin + 2 && a.kind != ThetaVertex::Kind::End &&
+                           a.kind != ThetaVertex::Kind::Silhouette &&
+                           (a.x - to->v[to->v.size() - 2].x) * (b.x - a.x) < 0.0;
+        if (skipped || xBack || turnsWrong(a, b) || againstRate(a, b, rateB) ||
+            Suspicious(A[lastK], A[k % A.size()], a, b)) {
+          ++(*this->counters_)[Counter::ThetaLinkRepairs];
+          scratch->clear();
+          if (!Crawl(last, sense, false, scratch, make, &b,
+                     a.kind == ThetaVertex::Kind::Turn ? -lastD : lastD)) return false;
+          for (std::size_t i = 1; i + 1 < scratch->size(); ++i) {
+            to->v.push_back((*scratch)[i]);
+            to->before.push_back(Vec2(NAN, NAN));
+          }
+        }
+      }
+      to->v.push_back(b);
+      to->before.push_back(A[k % A.size()].f.uv);
+      if (to->v.size() >= begin + 2) {
+        const double d = Wrap(ThetaOf(b.f) - ThetaOf(to->v[to->v.size() - 2].f));
+        if (std::abs(d) > kTurnRad) lastD = d;
+      }
+      last = pb;
+      lastRate = rateB;
+      lastK = k;
+      skipped = false;
+      return true;
+    };
+    for (std::size_t k = 0; k < n; ++k) {
+      const Vertex& V = A[k];
+      LevelPoint p;
+      TableResidual residual;  // a Table vertex's G_i at its solution
+      switch (V.kind) {
+        case ThetaVertex::Kind::Tilt:
+          skipped = true;
+          continue;
+        case ThetaVertex::Kind::Turn: {
+          const Vec2& prev = from.before[c.begin + k];
+          const Vec2 start = extrapolate && prev.allFinite() ? Vec2(2.0 * V.f.uv - prev) : V.f.uv;
+          ++(*this->counters_)[Counter::ThetaTurnTrackers];
+          // A turn tracker with no root near (its pair has met it and both are gone) is
+          // dropped, and the link across its place repaired sideways.
+          if (!SolveTurn(start, &p, &(*this->counters_)[Counter::ThetaTurnIterations])) {
+            ++(*this->counters_)[Counter::ThetaTurnsLost];
+            skipped = true;
+            continue;
+          }
+          break;
+        }
+        case ThetaVertex::Kind::End: {
+          const int e = nearest(t.edgePoints, edgeUsed, V.f.uv, DomainSide(V.f.uv));
+          if (e < 0) return false;
+          p = this->Eval(t.edgePoints[static_cast<std::size_t>(e)]);
+          if (!p.ok) return false;
+          if (k == 0) sense = Base::InwardSense(p, t.edgeOf[static_cast<std::size_t>(e)]);
+          if (sense == 0.0) return false;
+          break;
+        }
+        case ThetaVertex::Kind::Silhouette: {
+          const int e = nearest(t.silhouettePoints, silUsed, V.f.uv, -1);
+          if (e < 0) return false;
+          p = this->Eval(t.silhouettePoints[static_cast<std::size_t>(e)]);
+          if (!p.ok) return false;
+          p.jn = 0.0;  // on the silhouette whatever rounding says
+          break;
+        }
+        case ThetaVertex::Kind::Table: {
+          const Vec2& prev = from.before[c.begin + k];
+          const Vec2 start = extrapolate && prev.allFinite() ? Vec2(2.0 * V.f.uv - prev) : V.f.uv;
+          ++(*this->counters_)[Counter::ThetaTrackers];
+          // A tracker that leaves the patch or does not converge is dropped (§3.2: deleted
+          // when it leaves [0,1]²); the link across its place is repaired sideways.
+          if (!SolveTable(V.index, start, &p, &(*this->counters_)[Counter::ThetaTrackerIterations], &residual)) {
+            ++(*this->counters_)[Counter::ThetaTrackersLost];
+            skipped = true;
+            continue;
+          }
+          break;
+        }
+      }
+      // θ's rate along the chain (the sense it is walked in), but at a turn.
+      double rate = NAN;
+      if (V.kind == ThetaVertex::Kind::Table) {
+        rate = sense * TurnRate(residual, p.gradY);
+      } else if (V.kind != ThetaVertex::Kind::Turn) {
+        rate = sense * TurnAt(p.uv);
+      }
+      if (!link(k, MakeVertex(p, make, V.kind, V.index), p, rate)) return false;
+    }
+    if (c.closed) {  // back round to the first vertex
+      if (n + 1 > A.size() || to->v.size() == begin) return false;
+      const Vertex first = to->v[begin];
+      LevelPoint p0 = this->Eval(first.f.uv);
+      p0.jn = 0.0;
+      if (!link(n, first, p0, NAN)) return false;
+    }
+    to->chains.push_back({begin, static_cast<std::uint32_t>(to->v.size()), c.closed});
+    (*this->counters_)[Counter::ThetaVertices] += static_cast<long>(to->v.size() - begin);
+    if (sink_) sink_->Chain(this->ys_, steps_, to->Of(to->chains.back()));
+  }
+  // Every tracker of the line must be on a chain: one left over starts a chain the line
+  // before did not have.
+  for (char used : *edgeUsed)
+    if (!used) return false;
+  for (std::size_t k = 0; k < t.silhouettePoints.size(); ++k)
+    if (!(*silUsed)[k]) {
+      const LevelPoint p = this->Eval(t.silhouettePoints[k]);
+      if (p.ok && std::abs(p.y - this->ys_) <= 1e3 * kEdgeTolPx) return false;  // a crossing (as WalkAll)
+    }
+  return true;
+}
+
+}  // namespace patchscan

@@ -1,0 +1,272 @@
+// The θ walker's crawl (paper 001 §4.1–4.3): one chain walked sideways along its level
+// curve from a boundary end or a silhouette, or one link of a chain crawled from its first
+// vertex to the tracker at its other end (§4.2). Each step of the walk (LevelWalker::
+// TryStep) turns θ, and the normal out of the scan plane, by at most half a table step; a
+// vertex is made where θ passes a tabulated angle (the θ tracker there, by Newton), where
+// θ turns back (the turn tracker), at each silhouette (found by the sign of J), where the
+// normal has turned a table step out of the plane since the last vertex (a tilt), and at
+// the boundary. Included by theta_walk.h; not for use on its own.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <vector>
+
+namespace patchscan {
+
+template <class ShapeT>
+template <class Make>
+class ThetaWalker<ShapeT>::Crawler {
+ public:
+  Crawler(ThetaWalker& w, const LevelPoint& start, double sense, bool closed, std::vector<Vertex>* chain, Make& make,
+          const Vertex* target, double turning)
+      : w_(w), start_(start), sense_(sense), closed_(closed), chain_(*chain), make_(make), target_(target) {
+    chain_.push_back(w_.MakeVertex(start, make_, closed ? ThetaVertex::Kind::Silhouette : ThetaVertex::Kind::End));
+    checked_ = chain_.size();
+    p_ = before_ = start;
+    th_ = w_.ThetaOf(chain_.back().f);
+    tilt_ = tiltAtVertex_ = w_.frame_.Tilt(chain_.back().f.position, chain_.back().f.normal);
+    tiltCount_ = chain_.size();
+    // The sense θ last moved in (0: not known); at the start θ's rate along the walk, so
+    // that a turn within the first step is seen.
+    lastTurn_ = turning;
+    if (lastTurn_ == 0.0) {
+      const double r = sense * w_.TurnAt(start.uv);
+      if (std::isfinite(r)) lastTurn_ = r;
+    }
+    // A link ending at a turn tracker ends on the step that passes it.
+    if (target_ && target_->kind == ThetaVertex::Kind::Turn) turnTarget_ = w_.Eval(target_->f.uv);
+  }
+
+  // Walks until the boundary, the start again (a ring) or the link's target: true then;
+  // false if lost, or (a link) at any other anchor.
+  bool Run() {
+    for (long k = 0; k < w_.MaxSteps(); ++k) {
+      if (h_ < kWalkStepMin) break;
+      ++w_.Count(Counter::ThetaSteps);
+      LevelPoint next;
+      const StepResult r = w_.TryStep(p_, sense_, h_, -1, &next);
+      if (r == StepResult::Rejected) {
+        h_ *= 0.5;
+        continue;
+      }
+      // A step that turned θ too far is tried again at half the length (AtExit, AtStep).
+      if (const std::optional<bool> done = r == StepResult::Exit ? AtExit(next) : AtStep(next)) return *done;
+    }
+    w_.Failed(p_.uv);
+    return false;
+  }
+
+ private:
+  // A link's crawl: done at its target, lost at any other anchor. Whether the vertices made
+  // since the last call hold either (*found: the target).
+  bool LinkEnd(bool* found) {
+    for (; checked_ < chain_.size(); ++checked_) {
+      const Vertex& v = chain_[checked_];
+      if (SameVertex(v, *target_)) {
+        chain_.resize(checked_ + 1);
+        *found = true;
+        return true;
+      }
+      if (v.kind == ThetaVertex::Kind::End || v.kind == ThetaVertex::Kind::Silhouette) {
+        *found = false;
+        return true;
+      }
+    }
+    return false;
+  }
+
+  // The tabulated angles passed going from θ = a by d (|d| < π), silhouettes aside (they are
+  // found by the sign of J), each as a vertex on the arc from `from` to `to`.
+  void PassTable(const LevelPoint& from, double a, const LevelPoint& to, double d) {
+    const double table = w_.table_;
+    const double lo = std::min(a, a + d), hi = std::max(a, a + d);
+    for (double i = std::floor(lo / table) + 1.0; i * table <= hi; i += 1.0) {
+      const double angle = Wrap(i * table);
+      if (std::abs(std::sin(angle)) < 1e-12) continue;  // 0 or π: a silhouette
+      // A crawl that starts at a tracker (a link's repair) starts on its angle: that
+      // vertex is the start itself.
+      constexpr double kOnAngleRad = 1e-8;
+      if (std::abs(i * table - a) <= kOnAngleRad) continue;
+      const double t = (i * table - a) / d;
+      const long index = static_cast<long>(i) % w_.steps_;
+      const int k = static_cast<int>(index < 0 ? index + w_.steps_ : index);
+      // The vertex is the θ tracker itself (G_i = 0 on the line), by Newton from the
+      // interpolated point; if that lands outside the step (near a turn point θ_i may be
+      // crossed again close by), the interpolated point. It must also lie on from's side
+      // of `to` after the chain's last vertex (x runs one way between anchors; a turn just
+      // placed beyond `from` may have passed it).
+      const Vec2 guess = from.uv + t * (to.uv - from.uv);
+      LevelPoint v;
+      auto inOrder = [&](const LevelPoint& q) {
+        return q.ok && (q.x == chain_.back().x || Between(q.x, chain_.back().x, to.x));
+      };
+      if (!w_.SolveTable(k, guess, &v, &w_.Count(Counter::ThetaCrawlIterations)) || !WithinStep(from, to, v) ||
+          !inOrder(v))
+        v = w_.Correct(guess);
+      if (inOrder(v)) chain_.push_back(w_.MakeVertex(v, make_, ThetaVertex::Kind::Table, k));
+    }
+  }
+
+  // A turn point (§4.3: θ's derivative along the curve vanishes) between two steps is a
+  // vertex, so the chain follows the crinkle even when no tabulated angle is passed: the
+  // turn tracker itself, by Newton from the crawl point `at` (if that lands off the two
+  // steps around it, the crawl point). Every step that passes table angles notes its
+  // change of θ, d, here first.
+  void NoteTurn(const LevelPoint& at, const LevelPoint& to, double d) {
+    if (std::abs(d) <= kTurnRad) return;
+    if (lastTurn_ != 0.0 && (d > 0) != (lastTurn_ > 0) && std::abs(at.jn) > ThetaWalker::kOnSilhouetteJn) {
+      // A tilt vertex made at `at` gives way to the turn.
+      const bool tiltAt =
+          chain_.size() > 1 && chain_.back().kind == ThetaVertex::Kind::Tilt && chain_.back().f.uv == at.uv;
+      if (tiltAt) {
+        chain_.pop_back();
+        --w_.Count(Counter::ThetaTilts);
+        checked_ = std::min(checked_, chain_.size());
+      }
+      // x runs one way between anchors: the turn tracker must lie between the chain's last
+      // vertex and the next crawl point (else it is another turn, and the crawl point is
+      // taken).
+      LevelPoint v;
+      if (!w_.SolveTurn(at.uv, &v, &w_.Count(Counter::ThetaCrawlIterations)) || !WithinStep(before_, to, v) ||
+          std::abs(v.jn) <= ThetaWalker::kOnSilhouetteJn || !Between(v.x, chain_.back().x, to.x))
+        v = at;
+      chain_.push_back(w_.MakeVertex(v, make_, ThetaVertex::Kind::Turn));
+      ++w_.Count(Counter::ThetaTurnPoints);
+    }
+    lastTurn_ = d;
+  }
+
+  // A link ending at a turn tracker ends on the step that passes it: θ may turn back within
+  // a step and the crawl not see it (a turn point one step from the boundary).
+  bool EndsAtTurn(const LevelPoint& to) {
+    if (!turnTarget_.ok || !WithinStep(p_, to, turnTarget_)) return false;
+    PassTable(p_, th_, turnTarget_, Wrap(w_.ThetaOf(target_->f) - th_));
+    chain_.push_back(*target_);
+    return true;
+  }
+
+  // The step left the domain at e: the chain's last vertices and its end there. The crawl's
+  // result, or nothing if the step turned θ too far (halved).
+  std::optional<bool> AtExit(const LevelPoint& e) {
+    const Vertex ve = w_.MakeVertex(e, make_);
+    const double d = Wrap(w_.ThetaOf(ve.f) - th_);
+    const double dTilt = w_.frame_.Tilt(ve.f.position, ve.f.normal) - tilt_;
+    if (!((std::abs(d) <= w_.table_ && std::abs(dTilt) <= w_.table_) || h_ <= 4.0 * kWalkStepMin)) {
+      h_ *= 0.5;
+      return std::nullopt;
+    }
+    if (EndsAtTurn(e)) return true;
+    LevelPoint s;
+    if (std::abs(p_.jn) > ThetaWalker::kOnSilhouetteJn && (p_.j > 0) != (e.j > 0) && w_.LocateSilhouette(p_, e, &s)) {
+      if (!w_.UseSilhouetteTracker(s.uv)) w_.Repaired(s.uv, Counter::UntrackedSilhouettes);
+      chain_.push_back(w_.MakeVertex(s, make_, ThetaVertex::Kind::Silhouette));
+    } else {
+      NoteTurn(p_, e, d);
+      // A turn within the last step, before the boundary (θ's rate along the curve changes
+      // sign between p and e): the steps are not continued to see it.
+      LevelPoint v;
+      const double rp = w_.TurnAt(p_.uv), re = w_.TurnAt(e.uv);
+      if (rp * re < 0.0 && w_.SolveTurn(0.5 * (p_.uv + e.uv), &v, &w_.Count(Counter::ThetaCrawlIterations)) &&
+          WithinStep(p_, e, v) && std::abs(v.jn) > ThetaWalker::kOnSilhouetteJn && Between(v.x, chain_.back().x, e.x)) {
+        const Vertex vt = w_.MakeVertex(v, make_, ThetaVertex::Kind::Turn);
+        const double tv = w_.ThetaOf(vt.f);
+        PassTable(p_, th_, v, Wrap(tv - th_));
+        chain_.push_back(vt);
+        ++w_.Count(Counter::ThetaTurnPoints);
+        PassTable(v, tv, e, Wrap(w_.ThetaOf(ve.f) - tv));
+      } else {
+        PassTable(p_, th_, e, d);
+      }
+    }
+    chain_.push_back(ve);
+    bool found = true;
+    if (target_) {
+      LinkEnd(&found);  // the exit is an anchor: the link ends here or before
+      if (found && chain_.back().kind != ThetaVertex::Kind::End) return true;  // before the exit
+    }
+    if (!w_.UseEdgeTracker(e.uv)) w_.Repaired(e.uv, Counter::UntrackedExits);
+    return found;
+  }
+
+  // The step reached `next` inside the domain: the vertices on the way. The crawl's result
+  // if it ends here, else nothing (the next step is tried).
+  std::optional<bool> AtStep(const LevelPoint& next) {
+    const raster::Fragment fn = make_(next);
+    const double thn = w_.ThetaOf(fn);
+    const double d = Wrap(thn - th_);
+    const double tiltNext = w_.frame_.Tilt(fn.position, fn.normal);
+    // Steps turn θ, and the normal out of the scan plane, by at most half a table step.
+    if ((std::abs(d) > 0.5 * w_.table_ || std::abs(tiltNext - tilt_) > 0.5 * w_.table_) && h_ > 4.0 * kWalkStepMin) {
+      h_ *= 0.5;
+      return std::nullopt;
+    }
+    if (EndsAtTurn(next)) return true;
+    const bool onSil = std::abs(p_.jn) <= ThetaWalker::kOnSilhouetteJn;
+    LevelPoint s;
+    if (!onSil && (p_.j > 0) != (next.j > 0) && std::abs(next.jn) > ThetaWalker::kOnSilhouetteJn &&
+        w_.LocateSilhouette(p_, next, &s)) {
+      // The silhouette vertex; the table angles near it are within half a step of it.
+      ++w_.Count(Counter::SilhouettePoints);
+      if (closed_ && (s.uv - start_.uv).norm() <= kSameCrossingUv) {
+        chain_.push_back(chain_.front());  // round: back at the start
+        return true;
+      }
+      if (!w_.UseSilhouetteTracker(s.uv)) {
+        w_.Repaired(s.uv, Counter::UntrackedSilhouettes);
+        if (w_.events_) w_.events_->untrackedSilhouettes.push_back(s.uv);
+      }
+      chain_.push_back(w_.MakeVertex(s, make_, ThetaVertex::Kind::Silhouette));
+    } else {
+      NoteTurn(p_, next, d);
+      PassTable(p_, th_, next, d);
+    }
+    // The chord interpolates normals between its vertices: where θ stays within a table
+    // step but the normal leaves the scan plane (a section crossing a ridge of the surface
+    // at a slant), a vertex once it has turned a table step out of the plane bounds that
+    // error too.
+    if (chain_.size() != tiltCount_) {
+      tiltCount_ = chain_.size();
+      tiltAtVertex_ = w_.frame_.Tilt(chain_.back().f.position, chain_.back().f.normal);
+    }
+    if (std::abs(tiltNext - tiltAtVertex_) >= w_.table_) {
+      chain_.push_back({next.x, fn, ThetaVertex::Kind::Tilt, -1});
+      ++w_.Count(Counter::ThetaTilts);
+    }
+    bool found = false;
+    if (target_ && LinkEnd(&found)) return found;
+    before_ = p_;
+    p_ = next;
+    th_ = thn;
+    tilt_ = tiltNext;
+    h_ = std::min(2.0 * h_, kWalkStepMax);
+    return std::nullopt;
+  }
+
+  ThetaWalker& w_;
+  const LevelPoint start_;
+  const double sense_;
+  const bool closed_;
+  std::vector<Vertex>& chain_;
+  Make& make_;
+  const Vertex* target_;  // a link's crawl: the tracker at its other end
+  std::size_t checked_;   // chain vertices LinkEnd has looked at
+  LevelPoint p_, before_;  // the crawl point, and the one before it
+  double th_ = 0.0, tilt_ = 0.0;  // θ and the tilt at p_
+  std::size_t tiltCount_;         // the chain's size when tiltAtVertex_ was taken
+  double tiltAtVertex_;           // the tilt of the chain's last vertex
+  double lastTurn_;               // the sense θ last moved in (0: not known)
+  double h_ = kWalkStepStart;
+  LevelPoint turnTarget_;  // a link's target that is a turn tracker (ok: there is one)
+};
+
+template <class ShapeT>
+template <class Make>
+bool ThetaWalker<ShapeT>::Crawl(const LevelPoint& start, double sense, bool closed, std::vector<Vertex>* chain,
+                                Make& make, const Vertex* target, double turning) {
+  if (!target) ++Count(Counter::ThetaChains);
+  return Crawler<Make>(*this, start, sense, closed, chain, make, target, turning).Run();
+}
+
+}  // namespace patchscan
