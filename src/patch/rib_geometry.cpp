@@ -1,0 +1,228 @@
+// The RIB geometry requests: bases, patches, patch meshes, quadrics and Geometry "teapot".
+#include "patch/bpt_reader.h"
+#include "patch/rib_parser.h"
+#include "patch/rib_reader.h"
+#include "patch/text_file.h"
+
+namespace patchscan::rib {
+
+bool RibParser::InWorld(const Request& r) {
+  if (!sawWorldOpen()) return Fail(r.line, r.name + " outside WorldBegin/WorldEnd");
+  return true;
+}
+
+void RibParser::AddSurface(const Request& r, Shape shape) {
+  Surface s{std::move(shape), Affine3(attr_.transform)};
+  scene_.surfaces.push_back(std::move(s));
+  scene_.sourceLines.push_back(r.line);
+  scene_.sourceFiles.push_back(file_);
+  Appearance a = attr_.appearance;
+  // RenderMan Interface 3.2, "Orientation": the normal is flipped where the orientation
+  // differs from the handedness of the current coordinate system (left-handed unless
+  // the camera and object transformations together mirror it).
+  const bool mirrored = (cameraFromWorld_ * attr_.transform).block<3, 3>(0, 0).determinant() < 0.0;
+  a.reversed = attr_.insideOrientation != mirrored;
+  // Distinct appearances, found by hash: a scene may give each of its surfaces its own.
+  std::vector<std::uint32_t>& same = appearanceIndex_[HashOf(a)];
+  std::uint32_t index = 0;
+  for (const std::uint32_t k : same)
+    if (scene_.appearances[k] == a) index = k + 1;
+  if (index == 0) {
+    same.push_back(static_cast<std::uint32_t>(scene_.appearances.size()));
+    scene_.appearances.push_back(a);
+    index = static_cast<std::uint32_t>(scene_.appearances.size());
+  }
+  scene_.appearanceOf.push_back(index - 1);
+}
+
+std::size_t RibParser::HashOf(const Appearance& a) {
+  std::size_t h = std::hash<std::string>()(a.textureName) ^ (static_cast<std::size_t>(a.shader) << 1) ^
+                  (static_cast<std::size_t>(a.twoSided) << 5) ^ (static_cast<std::size_t>(a.reversed) << 6);
+  for (const double x : {a.colour.x(), a.colour.y(), a.colour.z(), a.opacity.x(), a.opacity.y(), a.opacity.z(), a.ka,
+                         a.kd, a.ks, a.roughness, a.specularColour.x(), a.specularColour.y(), a.specularColour.z()})
+    h = h * 1000003u ^ std::hash<double>()(x);
+  return h;
+}
+
+bool RibParser::BasisRequest(const Request& r) {
+  // Basis ubasis ustep vbasis vstep: each basis a name or 16 numbers.
+  if (r.args.size() != 4) return Fail(r.line, "Basis expects 4 arguments (ubasis ustep vbasis vstep), found " + std::to_string(r.args.size()));
+  Basis b[2];
+  for (int k = 0; k < 2; ++k) {
+    const Value& basis = r.args[2 * k];
+    const Value& step = r.args[2 * k + 1];
+    if (basis.Textual()) {
+      const auto named = basis.strings.size() == 1 ? BasisByName(basis.strings[0]) : std::nullopt;
+      if (!named)
+        return Fail(basis.line, "Basis: unknown basis " + Shown(basis.strings.empty() ? "" : basis.strings[0]) +
+                                    " (known: bezier, b-spline, catmull-rom, hermite, power)");
+      b[k] = *named;
+    } else {
+      if (basis.numbers.size() != 16) return Fail(basis.line, "Basis: a basis matrix has 16 numbers, found " + std::to_string(basis.numbers.size()));
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) b[k].m(i, j) = basis.numbers[4 * i + j];
+      b[k].name = "matrix";
+    }
+    if (step.kind != Value::Kind::Number || step.numbers[0] != std::floor(step.numbers[0]) ||
+        step.numbers[0] < 1 || step.numbers[0] > 4)
+      return Fail(step.line, "Basis: a step is a whole number from 1 to 4");
+    b[k].step = static_cast<int>(step.numbers[0]);
+  }
+  attr_.uBasis = b[0];
+  attr_.vBasis = b[1];
+  return true;
+}
+
+bool RibParser::Points(const Request& r, size_t first, size_t count) {
+  std::vector<Param> params;
+  if (!Params(r, first, &params)) return false;
+  const Value* p = nullptr;
+  for (const Param& q : params) {
+    if (q.name == "P") p = q.value;
+    else if (q.name == "Pw") return Fail(q.value->line, r.name + ": \"Pw\" (rational patches) is not supported; give \"P\"");
+    else if (q.name == "Pz") return Fail(q.value->line, r.name + ": \"Pz\" (height fields) is not supported; give \"P\"");
+    else IgnoreParam(r, q);
+  }
+  if (!p) return Fail(r.line, r.name + ": no \"P\"");
+  if (!p->Numeric() || p->numbers.size() != 3 * count)
+    return Fail(p->line, r.name + ": \"P\" expects " + std::to_string(3 * count) + " numbers (" +
+                             std::to_string(count) + " points), found " + std::to_string(p->Size()));
+  pts_.resize(count);
+  for (size_t k = 0; k < count; ++k) pts_[k] = Vec3(p->numbers[3 * k], p->numbers[3 * k + 1], p->numbers[3 * k + 2]);
+  return true;
+}
+
+bool RibParser::PatchType(const Request& r, bool* bicubic) {
+  std::string type;
+  if (!StringArg(r, 0, &type)) return false;
+  if (type != "bilinear" && type != "bicubic")
+    return Fail(r.line, r.name + ": unknown type " + Shown(type) + " (known: \"bilinear\", \"bicubic\")");
+  *bicubic = type == "bicubic";
+  return true;
+}
+
+bool RibParser::Patch(const Request& r) {
+  bool bicubic = false;
+  if (!InWorld(r) || !PatchType(r, &bicubic) || !Points(r, 1, bicubic ? 16 : 4)) return false;
+  if (bicubic) {
+    std::array<Vec3, 16> cv;
+    std::copy(pts_.begin(), pts_.end(), cv.begin());
+    AddSurface(r, BicubicPatch(cv, attr_.uBasis, attr_.vBasis));
+  } else {
+    AddSurface(r, BilinearPatch({pts_[0], pts_[1], pts_[2], pts_[3]}));
+  }
+  return true;
+}
+
+bool RibParser::MeshCount(const Request& r, int n, bool periodic, bool bicubic, int step, const char* dir, int* count) {
+  if (!bicubic) {
+    if (n < (periodic ? 1 : 2)) return Fail(r.line, std::string("PatchMesh: too few points in ") + dir);
+    *count = periodic ? n : n - 1;
+    return true;
+  }
+  if (periodic) {
+    if (n < 4 || n % step != 0) return Fail(r.line, std::string("PatchMesh: a periodic bicubic mesh needs a multiple of the ") + dir + " step (" + std::to_string(step) + ") of at least 4 points in " + dir + ", found " + std::to_string(n));
+    *count = n / step;
+  } else {
+    if (n < 4 || (n - 4) % step != 0) return Fail(r.line, std::string("PatchMesh: a nonperiodic bicubic mesh needs 4 + k * ") + std::to_string(step) + " points in " + dir + ", found " + std::to_string(n));
+    *count = (n - 4) / step + 1;
+  }
+  return true;
+}
+
+bool RibParser::PatchMesh(const Request& r) {
+  bool bicubic = false;
+  if (!InWorld(r) || !PatchType(r, &bicubic)) return false;
+  if (r.args.size() < 5) return Fail(r.line, "PatchMesh expects type nu uwrap nv vwrap, then \"P\"");
+  int n[2];
+  bool periodic[2];
+  for (int k = 0; k < 2; ++k) {
+    const Value& count = r.args[1 + 2 * k];
+    const Value& wrap = r.args[2 + 2 * k];
+    if (count.kind != Value::Kind::Number || count.numbers[0] != std::floor(count.numbers[0]) || count.numbers[0] < 1 || count.numbers[0] > 1e7)
+      return Fail(count.line, "PatchMesh: a point count is a whole number from 1 to 10000000");
+    if (wrap.kind != Value::Kind::String || (wrap.strings[0] != "periodic" && wrap.strings[0] != "nonperiodic"))
+      return Fail(wrap.line, "PatchMesh: wrap is \"periodic\" or \"nonperiodic\"");
+    n[k] = static_cast<int>(count.numbers[0]);
+    periodic[k] = wrap.strings[0] == "periodic";
+  }
+  const int nu = n[0], nv = n[1];
+  if (static_cast<long long>(nu) * nv > 10'000'000LL) return Fail(r.line, "PatchMesh: more than 10000000 points");
+  if (!Points(r, 5, static_cast<size_t>(nu) * nv)) return false;
+  const int uStep = bicubic ? attr_.uBasis.step : 1, vStep = bicubic ? attr_.vBasis.step : 1;
+  int nuPatches = 0, nvPatches = 0;
+  if (!MeshCount(r, nu, periodic[0], bicubic, uStep, "u", &nuPatches) ||
+      !MeshCount(r, nv, periodic[1], bicubic, vStep, "v", &nvPatches))
+    return false;
+  const int order = bicubic ? 4 : 2;
+  for (int pv = 0; pv < nvPatches; ++pv)
+    for (int pu = 0; pu < nuPatches; ++pu) {
+      std::array<Vec3, 16> cv;
+      for (int j = 0; j < order; ++j)
+        for (int i = 0; i < order; ++i) {
+          const int iu = (pu * uStep + i) % nu, iv = (pv * vStep + j) % nv;
+          cv[static_cast<size_t>(order * j + i)] = pts_[static_cast<size_t>(iv) * nu + iu];
+        }
+      if (bicubic) AddSurface(r, BicubicPatch(cv, attr_.uBasis, attr_.vBasis));
+      else AddSurface(r, BilinearPatch({cv[0], cv[1], cv[2], cv[3]}));
+    }
+  return true;
+}
+
+bool RibParser::Quadric(const Request& r) {
+  if (!InWorld(r)) return false;
+  const std::string& n = r.name;
+  const size_t count = n == "Hyperboloid" ? 7 : n == "Torus" ? 5 : (n == "Cone" || n == "Disk") ? 3 : 4;
+  size_t used = 0;
+  if (!Numbers(r, count, &used)) return false;
+  std::vector<Param> params;
+  if (!Params(r, used, &params)) return false;
+  for (const Param& p : params) IgnoreParam(r, p);
+  const double* a = num_.data();
+  const double thetaMax = a[count - 1];
+  // Sweeps are angles of at most a turn either way (RenderMan Interface 3.2, "Quadrics").
+  if (!(std::abs(thetaMax) <= 360.0)) return Fail(r.line, n + ": thetamax must be from -360 to 360 degrees");
+  if (n == "Torus" && !(std::abs(a[2]) <= 360.0 && std::abs(a[3]) <= 360.0))
+    return Fail(r.line, "Torus: phimin and phimax must be from -360 to 360 degrees");
+  auto positive = [&](double x, const char* what) {
+    return x > 0 ? true : Fail(r.line, n + ": " + what + " must be positive");
+  };
+  if (n == "Sphere") {
+    if (!positive(a[0], "the radius")) return false;
+    AddSurface(r, Sphere(a[0], a[1], a[2], thetaMax));
+  } else if (n == "Cylinder") {
+    if (!positive(a[0], "the radius")) return false;
+    AddSurface(r, Cylinder(a[0], a[1], a[2], thetaMax));
+  } else if (n == "Cone") {
+    if (!positive(a[1], "the radius")) return false;
+    AddSurface(r, Cone(a[0], a[1], thetaMax));
+  } else if (n == "Paraboloid") {
+    if (!positive(a[0], "rmax") || !positive(a[2] - a[1], "zmax - zmin")) return false;
+    AddSurface(r, Paraboloid(a[0], a[1], a[2], thetaMax));
+  } else if (n == "Hyperboloid") {
+    AddSurface(r, Hyperboloid(Vec3(a[0], a[1], a[2]), Vec3(a[3], a[4], a[5]), thetaMax));
+  } else if (n == "Disk") {
+    if (!positive(a[1], "the radius")) return false;
+    AddSurface(r, Disk(a[0], a[1], thetaMax));
+  } else {
+    if (!positive(a[0], "the major radius") || !positive(a[1], "the minor radius")) return false;
+    AddSurface(r, Torus(a[0], a[1], a[2], a[3], thetaMax));
+  }
+  return true;
+}
+
+bool RibParser::Geometry(const Request& r) {
+  std::string name;
+  if (!InWorld(r) || !StringArg(r, 0, &name)) return false;
+  if (name != "teapot") {
+    Warn(r.line, "geometry " + name, "Geometry: unknown geometry " + Shown(name) + ": skipped");
+    return true;
+  }
+  // Parsed once per program: a scene may hold a thousand teapots.
+  static const auto teapot = ParseBpt(TeapotBptText(), "teapot");
+  if (auto* e = std::get_if<SourceError>(&teapot)) return Fail(r.line, "Geometry \"teapot\": " + e->What());
+  for (const BptPatch& p : std::get<BptFile>(teapot).patches) AddSurface(r, BicubicPatch(p.cv));
+  return true;
+}
+
+}  // namespace patchscan::rib

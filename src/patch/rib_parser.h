@@ -1,0 +1,185 @@
+// The RIB reader's parser (rib_reader.h): the graphics state and one member per request,
+// fed by the tokenizer (rib_lexer.h). Its requests are defined by job: structure and the
+// request table in rib_reader.cpp, camera, transformations and appearance in rib_state.cpp,
+// geometry in rib_geometry.cpp. Private to the reader.
+#pragma once
+
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <set>
+#include <string>
+#include <unordered_map>
+#include <variant>
+#include <vector>
+
+#include "patch/basis.h"
+#include "patch/rib_lexer.h"
+#include "patch/scene.h"
+
+namespace patchscan::rib {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+// ReadArchive nesting deeper than this is taken as an archive that reads itself.
+constexpr int kMaxArchiveDepth = 16;
+// RenderMan's default field of view (RenderMan Interface 3.2, "Projection").
+constexpr double kRibDefaultFovDeg = 90.0;
+// The light and shader parameter defaults of the standard shaders (RenderMan Interface
+// 3.2, appendix A): a spotlight's cone half-angle 30 degrees and its soft edge 5 degrees.
+constexpr double kSpotConeDeg = 30.0, kSpotDeltaDeg = 5.0;
+
+// Column-vector matrices throughout: RIB writes row-vector matrices (p' = p M, the
+// translation in elements 12..14), which are transposed on reading.
+struct Attributes {
+  Mat4 transform = Mat4::Identity();  // before WorldBegin: camera from current; after: world from object
+  Appearance appearance;
+  Basis uBasis = BezierBasis(), vBasis = BezierBasis();
+  bool insideOrientation = false;  // Orientation "inside" / ReverseOrientation
+};
+
+struct Block {
+  enum class Kind { Attribute, Transform, World, Frame };
+  Kind kind;
+  int line;
+  std::string file;
+  Attributes saved;
+};
+
+const char* BlockName(Block::Kind k);
+
+// Requests read and skipped: the rest of the RenderMan Interface that does not change
+// what a parametric surface looks like here.
+const std::set<std::string, std::less<>>& SkippedRequests();
+Mat4 Translation(double x, double y, double z);
+
+class RibParser {
+ public:
+  RibParser(const LoadOptions& options) : options_(options) {}
+
+  std::variant<Scene, SourceError> Run(std::string_view text, const std::string& name);
+
+ private:
+  // ---- errors and warnings ----
+  bool Fail(int line, std::string message);
+  void Warn(int line, const std::string& kind, const std::string& what);
+
+  // ---- reading ----
+  bool ReadText(std::string_view text, const std::string& name, int depth);
+
+  // One request: frames, world and object blocks first (they decide what is read), then
+  // the request table; skipped and unknown requests warn once per kind.
+  bool Handle(const Request& r, int depth);
+  using Handler = bool (RibParser::*)(const Request&);
+  static const std::unordered_map<std::string_view, Handler>& RequestTable();
+
+  // ---- argument checks ----
+  bool Args(const Request& r, size_t count);
+  // Exactly `count` leading numbers, given loose or as one array, into num_.
+  bool Numbers(const Request& r, size_t count, size_t* used = nullptr);
+  bool StringArg(const Request& r, size_t k, std::string* out);
+  template <class F>
+  bool MatrixArg(const Request& r, F&& then) {
+    if (!Numbers(r, 16)) return false;
+    Mat4 m;
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) m(j, i) = num_[4 * i + j];  // transposed: row vectors in RIB
+    if (m.row(3) != Vec4(0, 0, 0, 1).transpose())
+      return Fail(r.line, r.name + ": projective matrices are not supported (the last column must be 0 0 0 1)");
+    return then(m);
+  }
+  bool ColourArg(const Request& r, Vec3* out);
+
+  // The parameter list after the `first` positional arguments: "name" value pairs. The
+  // name may carry an inline declaration ("uniform float Ka"): its last word counts.
+  struct Param {
+    std::string name;
+    const Value* value;
+  };
+  bool Params(const Request& r, size_t first, std::vector<Param>* out);
+  bool ParamNumbers(const Request& r, const Param& p, size_t count, double* out);
+  bool ParamVec3(const Request& r, const Param& p, Vec3* out);
+  bool ParamString(const Request& r, const Param& p, std::string* out);
+  void IgnoreParam(const Request& r, const Param& p);
+
+  // ---- structure ----
+  bool FrameBegin(const Request& r);
+  bool FrameEnd(const Request& r);
+  bool ReadArchive(const Request& r, int depth);
+  bool WorldBegin(const Request& r);
+  bool Begin(const Request& r, Block::Kind kind);
+  bool End(const Request& r, Block::Kind kind);
+  bool SkipObject(const Request& r);
+  bool EndObject(const Request& r);
+
+  // ---- camera and image ----
+  bool Format(const Request& r);
+  bool Projection(const Request& r);
+  bool ScreenWindow(const Request& r);
+  bool Clipping(const Request& r);
+  bool PixelSamples(const Request& r);
+  bool Display(const Request& r);
+
+  // ---- transformations ----
+  bool SetTransform(const Request& r, const Mat4& m);
+  bool Concat(const Request& r, const Mat4& m);
+  bool CheckTransform(const Request& r);
+  bool sawWorldOpen() const;
+  bool Rotate(const Request& r);
+  bool Orientation(const Request& r);
+  bool Sides(const Request& r);
+  bool Identity(const Request& r) { return Args(r, 0) && SetTransform(r, Mat4::Identity()); }
+  bool TransformRequest(const Request& r) {
+    return MatrixArg(r, [&](const Mat4& m) { return SetTransform(r, m); });
+  }
+  bool ConcatTransform(const Request& r) {
+    return MatrixArg(r, [&](const Mat4& m) { return Concat(r, m); });
+  }
+  bool Translate(const Request& r) { return Numbers(r, 3) && Concat(r, Translation(num_[0], num_[1], num_[2])); }
+  bool Scale(const Request& r) {
+    return Numbers(r, 3) && Concat(r, Vec4(num_[0], num_[1], num_[2], 1).asDiagonal().toDenseMatrix());
+  }
+  bool ReverseOrientation(const Request& r) {
+    if (!Args(r, 0)) return false;
+    attr_.insideOrientation = !attr_.insideOrientation;
+    return true;
+  }
+  bool Color(const Request& r) { return ColourArg(r, &attr_.appearance.colour); }
+  bool Opacity(const Request& r) { return ColourArg(r, &attr_.appearance.opacity); }
+
+  // ---- appearance ----
+  bool SurfaceShader(const Request& r);
+  bool LightSource(const Request& r);
+
+  // ---- geometry ----
+  bool InWorld(const Request& r);
+  void AddSurface(const Request& r, Shape shape);
+  static std::size_t HashOf(const Appearance& a);
+  bool BasisRequest(const Request& r);
+  // The "P" of a patch's parameter list: exactly `count` points into pts_.
+  bool Points(const Request& r, size_t first, size_t count);
+  bool PatchType(const Request& r, bool* bicubic);
+  bool Patch(const Request& r);
+  // Patches along one direction of a mesh of n points: RenderMan Interface 3.2,
+  // "PatchMesh": bicubic nonperiodic (n - 4) / step + 1, periodic n / step; bilinear
+  // nonperiodic n - 1, periodic n.
+  bool MeshCount(const Request& r, int n, bool periodic, bool bicubic, int step, const char* dir, int* count);
+  bool PatchMesh(const Request& r);
+  bool Quadric(const Request& r);
+  bool Geometry(const Request& r);
+
+  LoadOptions options_;
+  Scene scene_;
+  std::optional<SourceError> error_;
+  std::string file_;
+  Attributes attr_;
+  std::vector<Block> blocks_;
+  std::set<std::string, std::less<>> warned_;
+  std::vector<double> num_;
+  std::vector<Vec3> pts_;
+  std::unordered_map<std::size_t, std::vector<std::uint32_t>> appearanceIndex_;
+  Mat4 cameraFromWorld_ = Mat4::Identity();
+  bool sawWorld_ = false, skippingWorld_ = false, skippingFrame_ = false, done_ = false;
+  int objectDepth_ = 0;
+};
+
+}  // namespace patchscan::rib
