@@ -42,6 +42,7 @@ struct RenderOptions {
   double opacity = 1.0;
   bool aov = false;
   std::uint64_t seed = 1;
+  int threads = 0;  // 0: one per core
   bool stats = false;
   std::string statsJson;
   CameraOptions camera;

@@ -25,7 +25,8 @@ enum class CounterGroup : std::uint8_t {
 inline constexpr std::array<std::string_view, 6> kCounterGroupTitles = {
     "set up", "y scan", "x scan", "theta", "slabs", "back end"};
 
-// How the counts of two workers (or two surfaces) combine.
+// How the counts of two workers combine: added, or (Max) the larger: counts every worker
+// keeps alike (the rows and intervals all of them scan) and peaks (the most active at once).
 enum class CounterMerge : std::uint8_t { Sum, Max };
 
 // X(group, Name, key, description, unit, merge)
@@ -39,7 +40,7 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(Setup, MaximaDuplicates, "maxima_duplicates", "climbs that found a point already found", "climbs", Sum)         \
   X(Setup, MaximaRejectedCollapsed, "maxima_rejected_collapsed", "climbs stopped on a collapsed edge that is no maximum", "climbs", Sum) \
   X(Setup, Stationary, "stationary_points", "maxima and saddles", "points", Sum)                                   \
-  X(YScan, SampleRows, "sample_rows", "sample rows scanned", "rows", Sum)                                          \
+  X(YScan, SampleRows, "sample_rows", "sample rows scanned", "rows", Max)                                          \
   X(YScan, TrackerRows, "tracker_rows", "edge and silhouette trackers advanced, summed over rows", "tracker-rows", Sum) \
   X(YScan, EdgeNewtonCalls, "edge_newton_calls", "edge-tracker Newton solves", "calls", Sum)                        \
   X(YScan, EdgeNewtonIterations, "edge_newton_iterations", "edge-tracker Newton iterations", "iterations", Sum)     \
@@ -84,8 +85,8 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(Theta, ThetaTurnsLost, "theta_turns_lost", "turn trackers lost (the turn pair met)", "trackers", Sum)          \
   X(Theta, ThetaLinkRepairs, "theta_link_repairs", "links repaired sideways (§4.2)", "links", Sum)                 \
   X(Theta, ThetaLineRepairs, "theta_line_repairs", "quiet lines crawled afresh (a chain could not be advanced)", "lines", Sum) \
-  X(Slabs, SlabIntervals, "slab_intervals", "intervals between two lines taken as slabs", "intervals", Sum)        \
-  X(Slabs, RowIntervals, "row_intervals", "intervals taken row by row", "intervals", Sum)                          \
+  X(Slabs, SlabIntervals, "slab_intervals", "intervals between two lines taken as slabs", "intervals", Max)        \
+  X(Slabs, RowIntervals, "row_intervals", "intervals taken row by row", "intervals", Max)                          \
   X(Slabs, SlabTriangles, "slab_triangles", "slab triangles made", "triangles", Sum)                               \
   X(BackEnd, Triangles, "triangles", "triangles (n)", "triangles", Sum)                                            \
   X(BackEnd, TrianglesSetUp, "triangles_set_up", "triangles set up", "triangles", Sum)                              \

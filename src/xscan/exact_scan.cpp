@@ -58,25 +58,40 @@ raster::Fragment FragmentAt(const LevelPoint& p, const Surface& surface,
   return f;
 }
 
-ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options)
-    : surfaces_(surfaces), camera_(camera), eye_(EyePoint(camera)), right_(ViewRight(camera)), forward_(ViewForward(camera)), options_(options) {
-  counters_[Counter::Surfaces] = static_cast<std::int64_t>(surfaces.size());
-  for (int i = 0; i < options_.thetaSteps; ++i) {
-    const double a = 2.0 * std::numbers::pi * i / options_.thetaSteps;
-    angles_.emplace_back(std::cos(a), std::sin(a));
-  }
-  pending_.reserve(surfaces.size());
+std::vector<ScanEntry> ScanOrder(std::span<const Surface> surfaces, const Camera& camera) {
+  std::vector<ScanEntry> order;
+  order.reserve(surfaces.size());
   for (std::size_t k = 0; k < surfaces.size(); ++k) {
     const ScreenMap map(camera, surfaces[k].worldFromObject);
     // Wholly nearer than the hither plane (or behind the eye): never set up.
     if (WhollyBeforeHither(surfaces[k], map, camera.hither)) continue;
     const auto box = ScreenBounds(surfaces[k], map);
     // A surface reaching behind the eye has no finite screen box: active throughout.
-    if (box) pending_.push_back({box->lo.y(), box->hi.y(), k});
-    else pending_.push_back({-INFINITY, INFINITY, k});
+    if (box) {
+      const auto d = box->Diagonal();
+      order.push_back({k, box->lo.y(), box->hi.y(), d.x() * d.y()});
+    } else {
+      order.push_back({k, -INFINITY, INFINITY, INFINITY});
+    }
   }
-  std::stable_sort(pending_.begin(), pending_.end(),
-                   [](const Pending& a, const Pending& b) { return a.yMin < b.yMin; });
+  std::stable_sort(order.begin(), order.end(), [](const ScanEntry& a, const ScanEntry& b) { return a.yMin < b.yMin; });
+  return order;
+}
+
+ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options)
+    : ExactScan(surfaces, camera, options, ScanOrder(surfaces, camera)) {
+  counters_[Counter::Surfaces] = static_cast<std::int64_t>(surfaces.size());
+}
+
+ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
+                     std::vector<ScanEntry> share)
+    : surfaces_(surfaces), camera_(camera), eye_(EyePoint(camera)), right_(ViewRight(camera)), forward_(ViewForward(camera)), options_(options),
+      pending_(std::move(share)) {
+  counters_[Counter::Surfaces] = static_cast<std::int64_t>(pending_.size());
+  for (int i = 0; i < options_.thetaSteps; ++i) {
+    const double a = 2.0 * std::numbers::pi * i / options_.thetaSteps;
+    angles_.emplace_back(std::cos(a), std::sin(a));
+  }
 }
 
 ExactScan::~ExactScan() = default;
@@ -84,7 +99,7 @@ ExactScan::~ExactScan() = default;
 void ExactScan::Activate(std::size_t index, double y, double spacing) {
   auto a = std::make_unique<Active>();
   a->index = index;
-  for (const Pending& p : pending_)
+  for (const ScanEntry& p : pending_)
     if (p.index == index) a->yMax = p.yMax;
   a->scan = std::make_unique<SurfaceScan>(surfaces_[index], camera_, options_.extrapolate, counters_);
   a->scan->StartAt(y, spacing);
@@ -172,7 +187,13 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
   return true;
 }
 
-void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+bool ExactScan::BeginsInterval(double y, const raster::SampleColumns& columns) const {
+  const long j = RowIndex(y, columns);
+  return j < intervalStart_ || j >= intervalEnd_;
+}
+
+bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  const long j = RowIndex(y, columns);
   const int m = options_.slabRows;
   intervalStart_ = j;
   intervalEnd_ = j + m;
@@ -221,6 +242,15 @@ void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, rast
     }
     slab = slab && quiet && !a.nextBroken && PairChains(a.line, a.next, &a.pairs, &a.ordered);
   }
+  return slab;
+}
+
+void ExactScan::FinishInterval(bool slab, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  const long j = intervalStart_;
+  const int m = options_.slabRows;
+  const double dy = columns.dx;
+  const double yTop = columns.x0 + (static_cast<double>(j) - 0.5) * dy, yBottom = yTop + m * dy;
+  auto rowY = [&](int r) { return columns.x0 + static_cast<double>(j + r) * dy; };
   byRows_ = !slab;
   if (slab) {
     ++counters_[Counter::SlabIntervals];
@@ -255,8 +285,8 @@ void ExactScan::BeginInterval(long j, const raster::SampleColumns& columns, rast
 }
 
 bool ExactScan::ScanRowSlabs(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  const long j = std::lround((y - columns.x0) / columns.dx);
-  if (j < intervalStart_ || j >= intervalEnd_) BeginInterval(j, columns, out);
+  const long j = RowIndex(y, columns);
+  if (BeginsInterval(y, columns)) FinishInterval(PrepareInterval(y, columns, out), columns, out);
   if (!byRows_) return true;
   auto emit = [&](int column, const raster::Fragment& f) {
     ++counters_[Counter::Fragments];

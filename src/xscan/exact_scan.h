@@ -6,6 +6,7 @@
 // active set, not the scene.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -39,13 +40,40 @@ struct ExactScanOptions {
   int slabRows = 0;
 };
 
+// A surface as the scan meets it: its index, and the y extent and area (pixels) of its
+// conservative screen box; a surface reaching behind the eye has an unbounded box.
+struct ScanEntry {
+  std::size_t index;
+  double yMin, yMax;
+  double area;
+  bool operator==(const ScanEntry&) const = default;
+};
+// The surfaces of `surfaces` the scan will meet, in the order it meets them: by the top of
+// the screen box, then by index. Surfaces wholly nearer than the hither plane (or behind
+// the eye) are left out: never set up. Set-up only (allocates).
+std::vector<ScanEntry> ScanOrder(std::span<const Surface> surfaces, const Camera& camera);
+
 class ExactScan final : public raster::FragmentSource {
  public:
-  // `surfaces` must outlive the scan; fragment surface ids are indices into it.
+  // `surfaces` must outlive the scan; fragment surface ids are indices into it. The scan
+  // covers `share` (entries of ScanOrder, in its order), or every surface when omitted.
   ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options = {});
+  ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
+            std::vector<ScanEntry> share);
   ~ExactScan() override;
 
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
+
+  // θ slabs shared with other scans of the same rows (a partition of one scene's surfaces:
+  // PartitionedScan): whether sample row y begins an interval of slabRows rows; the
+  // interval's first phase (trackers and chains advanced to its lines: whether this scan's
+  // surfaces allow a slab), and its second, given whether every scan's surfaces do. A slab
+  // needs all surfaces' agreement (shared boundaries stay watertight), and ScanRow does
+  // both phases itself when the scan is alone.
+  bool SlabMode() const { return options_.thetaSteps > 0 && options_.slabRows > 0; }
+  bool BeginsInterval(double y, const raster::SampleColumns& columns) const;
+  bool PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  void FinishInterval(bool slab, const raster::SampleColumns& columns, raster::FragmentRow& out);
 
   // Marks every tracker position and event on `trace` from the next row on (null: none).
   void SetTrace(TraceSink* trace) { trace_ = trace; }
@@ -79,8 +107,10 @@ class ExactScan final : public raster::FragmentSource {
   void FinishWalk(Active& a);
   // Whether the last X scan of a surface gave up or repaired a tracker miss.
   bool WalkBroken() const { return !walkEvents_.failures.empty() || !walkEvents_.repairs.empty(); }
-  // θ slabs: the scan lines around sample rows [j, j + slabRows), their slab or each row's chains.
-  void BeginInterval(long j, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // The sample row index of line y.
+  static long RowIndex(double y, const raster::SampleColumns& columns) {
+    return std::lround((y - columns.x0) / columns.dx);
+  }
   bool ScanRowSlabs(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
   void TraceTrackers(Active& a, double y);
   void TraceWalk(Active& a);
@@ -92,11 +122,7 @@ class ExactScan final : public raster::FragmentSource {
   Vec3 eye_, right_, forward_;  // EyePoint, ViewRight and ViewForward of camera_, for the θ frame
   std::vector<Vec2> angles_;   // (cos θ_i, sin θ_i): the θ trackers' table (§4.1)
   ExactScanOptions options_;
-  struct Pending {
-    double yMin, yMax;
-    std::size_t index;
-  };
-  std::vector<Pending> pending_;  // by yMin
+  std::vector<ScanEntry> pending_;  // in scan order
   std::size_t nextPending_ = 0;
   std::vector<std::unique_ptr<Active>> active_;
   WalkEvents walkEvents_;

@@ -1,6 +1,11 @@
 #include "xscan/tess_feed.h"
 
 #include <Eigen/Geometry>
+#include <oneapi/tbb/info.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
+
+#include <atomic>
 
 namespace patchscan {
 
@@ -18,6 +23,42 @@ raster::TriangleMesh ToRasterMesh(const TessMesh& mesh, const Camera& camera) {
     r.triangles.push_back({{mesh.triangles[k][0], mesh.triangles[k][1], mesh.triangles[k][2]},
                            mesh.surfaceOf[k]});
   return r;
+}
+
+std::optional<TessMesh> TessellateScene(std::span<const Surface> surfaces, const Camera& camera,
+                                        const TessSettings& settings, int threads,
+                                        const std::function<bool()>& stop) {
+  std::vector<TessMesh> parts(surfaces.size());
+  std::atomic<bool> stopped = false;
+  auto one = [&](std::size_t k) {
+    if (stopped || (stop && stop())) {
+      stopped = true;
+      return;
+    }
+    const auto id = static_cast<std::uint32_t>(k);
+    if (settings.pixels > 0)
+      TessellateToScreen(surfaces[k], camera, settings.pixels, id, &parts[k]);
+    else
+      TessellateUniform(surfaces[k], settings.rate, id, &parts[k]);
+  };
+  threads = std::min(threads, tbb::info::default_concurrency());
+  if (threads > 1) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] { tbb::parallel_for(std::size_t{0}, surfaces.size(), one); });
+  } else {
+    for (std::size_t k = 0; k < surfaces.size(); ++k) one(k);
+  }
+  if (stopped) return std::nullopt;
+  // Appended in surface order, each part's vertex indices moved past those before it.
+  TessMesh mesh;
+  for (TessMesh& part : parts) {
+    const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+    mesh.vertices.insert(mesh.vertices.end(), part.vertices.begin(), part.vertices.end());
+    for (auto t : part.triangles) mesh.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+    mesh.surfaceOf.insert(mesh.surfaceOf.end(), part.surfaceOf.begin(), part.surfaceOf.end());
+    part = TessMesh();
+  }
+  return mesh;
 }
 
 }  // namespace patchscan

@@ -2,6 +2,10 @@
 // screen space for one camera.
 #pragma once
 
+#include <functional>
+#include <optional>
+#include <span>
+
 #include "patch/camera.h"
 #include "patch/tessellate.h"
 #include "raster/mesh.h"
@@ -9,5 +13,19 @@
 namespace patchscan {
 
 raster::TriangleMesh ToRasterMesh(const TessMesh& mesh, const Camera& camera);
+
+// How a scene is tessellated: uniformly at `rate` segments per patch edge, or (pixels > 0)
+// with edges about `pixels` long on the screen of the camera.
+struct TessSettings {
+  int rate = 8;
+  double pixels = 0.0;
+};
+
+// Every surface of the scene tessellated, on up to `threads` threads, the surfaces' meshes
+// appended in surface order (the same mesh for any number of threads); shared boundary
+// vertices are not welded yet. nullopt if stop() said so between surfaces.
+std::optional<TessMesh> TessellateScene(std::span<const Surface> surfaces, const Camera& camera,
+                                        const TessSettings& settings, int threads,
+                                        const std::function<bool()>& stop);
 
 }  // namespace patchscan

@@ -1,4 +1,5 @@
 // The patchscan program end to end: exit codes, messages naming file:line, help, version.
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -38,6 +39,16 @@ Result Patchscan(const std::string& args) {
 }
 
 const std::string kTeapot = PATCHSCAN_SURFACES_DIR "/teapot.bpt";
+
+// Every channel of every pixel of an image file (empty if it cannot be read).
+std::vector<float> Pixels(const std::string& path) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) return {};
+  const OIIO::ImageSpec& spec = in->spec();
+  std::vector<float> px(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
+  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data())) return {};
+  return px;
+}
 
 // The value --stats prints for a counter of the table (core/counters.h), by its key; -1 if
 // it is not printed.
@@ -170,6 +181,34 @@ TEST(Cli, ExactModeIsTheDefaultAndReportsItsTrackers) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Cli, SameBytesForAnyNumberOfThreads) {
+  // --threads N deals the surfaces out to N workers and composites their rows in a fixed
+  // order (tests/xscan/partition_test.cpp): the files are the same bytes for every N, in
+  // every mode, with the AOVs.
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_threads";
+  std::filesystem::create_directories(dir);
+  for (const char* mode : {"exact", "theta", "tess"}) {
+    for (const char* ext : {".png", ".exr"}) {
+      const std::string aov = std::string(ext) == ".exr" ? " --aov" : "";
+      const std::string one = (dir / (std::string("one") + ext)).string();
+      ASSERT_EQ(Patchscan("render " + kTeapot + " --size 80x60 --mode " + mode + aov + " --threads 1 -o " + one).code, 0);
+      for (int n : {2, 3, 7}) {
+        const std::string many = (dir / (std::string("many") + ext)).string();
+        const Result r = Patchscan("render " + kTeapot + " --size 80x60 --mode " + mode + aov + " --threads " +
+                                   std::to_string(n) + " -o " + many);
+        ASSERT_EQ(r.code, 0) << r.err;
+        // (An EXR's header carries the time it was written: its pixels are compared.)
+        if (std::string(ext) == ".png") {
+          EXPECT_EQ(Slurp(one), Slurp(many)) << mode << ext << ", --threads " << n;
+        } else {
+          EXPECT_EQ(Pixels(one), Pixels(many)) << mode << ext << ", --threads " << n;
+        }
+      }
+    }
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Cli, ThetaSlabsTradeSilhouetteAccuracyForScanLines) {
   // --y-step h: the silhouette between two lines h px apart is a chord, within
   // h/4 + h^2/(8R) px of the curve (tests/xscan/theta_slab_test.cpp); the tightest
@@ -189,7 +228,9 @@ TEST(Cli, ThetaSlabsTradeSilhouetteAccuracyForScanLines) {
     const std::string json = Slurp(js);
     // (At 3 px nearly every interval of this small teapot holds an event of some patch
     // and is taken row by row.)
-    if (h <= 1.0) EXPECT_EQ(json.find("\"slab_triangles\": 0,") != std::string::npos, h == 0.0) << json;
+    if (h <= 1.0) {
+      EXPECT_EQ(json.find("\"slab_triangles\": 0,") != std::string::npos, h == 0.0) << json;
+    }
     const double bound = h == 0.0 ? 1e-9 : h / 4 + h * h / (8 * 3.0);
     std::ostringstream fail;
     fail << " --fail-silhouette " << bound << " --fail-rmse 1 --fail-depth 1 --fail-normal 180 --warn-silhouette " << bound

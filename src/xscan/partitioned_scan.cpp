@@ -1,0 +1,183 @@
+#include "xscan/partitioned_scan.h"
+
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/info.h>
+#include <oneapi/tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace patchscan {
+
+std::vector<std::vector<ScanEntry>> PartitionSurfaces(const std::vector<ScanEntry>& order, const Camera& camera,
+                                                      int workers) {
+  const auto n = static_cast<std::size_t>(std::max(workers, 1));
+  // A surface's work: the pixels its screen box covers within the image (what its walks
+  // and samples cost), plus its set-up (the maxima pre-pass and edge pieces, about as much
+  // as a few hundred pixels of scanning).
+  constexpr double kSetUpPixels = 256.0;
+  const double imageArea = static_cast<double>(camera.width) * camera.height;
+  std::vector<double> work(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) work[k] = std::min(order[k].area, imageArea) + kSetUpPixels;
+  std::vector<std::size_t> byWork(order.size());
+  std::iota(byWork.begin(), byWork.end(), 0);
+  std::stable_sort(byWork.begin(), byWork.end(), [&](std::size_t a, std::size_t b) { return work[a] > work[b]; });
+  std::vector<double> load(n, 0.0);
+  std::vector<std::vector<std::size_t>> picks(n);
+  for (std::size_t k : byWork) {
+    const auto w = static_cast<std::size_t>(std::min_element(load.begin(), load.end()) - load.begin());
+    load[w] += work[k];
+    picks[w].push_back(k);
+  }
+  std::vector<std::vector<ScanEntry>> shares(n);
+  for (std::size_t w = 0; w < n; ++w) {
+    std::sort(picks[w].begin(), picks[w].end());  // back into scan order
+    for (std::size_t k : picks[w]) shares[w].push_back(order[k]);
+  }
+  return shares;
+}
+
+namespace {
+
+// One worker's share of a row, as its scan handed it over: fragments and triangles, each
+// with the rank of its surface in the scan order (non-decreasing: a scan hands over its
+// surfaces one after another, in that order).
+class RowBuffer final : public raster::FragmentRow {
+ public:
+  struct BufferedFragment {
+    std::uint32_t rank;
+    int column;
+    raster::Fragment f;
+  };
+  struct BufferedTriangle {
+    std::uint32_t rank;
+    raster::RasterVertex a, b, c;
+    std::uint32_t surfaceId;
+  };
+  explicit RowBuffer(const std::vector<std::uint32_t>& rank) : rank_(rank) {}
+  void Clear() {
+    fragments.clear();
+    triangles.clear();
+  }
+  void Add(int column, const raster::Fragment& f) override { fragments.push_back({rank_[f.surfaceId], column, f}); }
+  void AddTriangle(const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c,
+                   std::uint32_t surfaceId) override {
+    triangles.push_back({rank_[surfaceId], a, b, c, surfaceId});
+  }
+  std::vector<BufferedFragment> fragments;
+  std::vector<BufferedTriangle> triangles;
+
+ private:
+  const std::vector<std::uint32_t>& rank_;
+};
+
+// Hands the buffers' entries of one kind to `take` in rank order: a k-way merge of lists
+// that are each in rank order already (a surface belongs to one worker, so no two lists
+// hold the same rank). `next` is scratch.
+template <class Entries, class Take>
+void MergeByRank(std::size_t nLists, Entries&& entries, std::vector<std::size_t>* next, Take&& take) {
+  next->assign(nLists, 0);
+  for (;;) {
+    std::size_t best = nLists;
+    std::uint32_t bestRank = 0;
+    for (std::size_t w = 0; w < nLists; ++w) {
+      const auto& list = entries(w);
+      if ((*next)[w] < list.size() && (best == nLists || list[(*next)[w]].rank < bestRank)) {
+        best = w;
+        bestRank = list[(*next)[w]].rank;
+      }
+    }
+    if (best == nLists) return;
+    // Everything of that worker up to the next surface of another worker goes at once.
+    const auto& list = entries(best);
+    std::uint32_t limit = UINT32_MAX;
+    for (std::size_t w = 0; w < nLists; ++w)
+      if (w != best && (*next)[w] < entries(w).size()) limit = std::min(limit, entries(w)[(*next)[w]].rank);
+    std::size_t& i = (*next)[best];
+    for (; i < list.size() && list[i].rank < limit; ++i) take(list[i]);
+  }
+}
+
+}  // namespace
+
+struct PartitionedScan::Worker {
+  Worker(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
+         std::vector<ScanEntry> share, const std::vector<std::uint32_t>& rank)
+      : scan(surfaces, camera, options, std::move(share)), buffer(rank) {}
+  ExactScan scan;
+  RowBuffer buffer;
+  bool slab = false;  // this worker's vote for the current θ slab interval
+  bool ok = true;     // its last ScanRow's answer
+};
+
+struct PartitionedScan::Arena {
+  explicit Arena(int threads) : arena(threads) {}
+  tbb::task_arena arena;
+};
+
+PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
+                                 int workers, int threads) {
+  const std::vector<ScanEntry> order = ScanOrder(surfaces, camera);
+  rank_.assign(surfaces.size(), 0);
+  for (std::size_t k = 0; k < order.size(); ++k) rank_[order[k].index] = static_cast<std::uint32_t>(k);
+  for (std::vector<ScanEntry>& share : PartitionSurfaces(order, camera, workers))
+    workers_.push_back(std::make_unique<Worker>(surfaces, camera, options, std::move(share), rank_));
+  // More threads than the machine has cores would only queue (and oneTBB warns): the
+  // arena is capped there; the partition, and so the image, follows `workers` alone.
+  threads = std::min(threads, tbb::info::default_concurrency());
+  if (threads > 1 && workers_.size() > 1) arena_ = std::make_unique<Arena>(threads);
+}
+
+PartitionedScan::~PartitionedScan() = default;
+
+template <class F>
+void PartitionedScan::ForEachWorker(F&& f) {
+  if (!arena_) {
+    for (auto& w : workers_) f(*w);
+    return;
+  }
+  arena_->arena.execute([&] {
+    tbb::parallel_for(std::size_t{0}, workers_.size(), [&](std::size_t k) { f(*workers_[k]); });
+  });
+}
+
+void PartitionedScan::SetTrace(TraceSink* trace) {
+  if (workers_.size() == 1) workers_.front()->scan.SetTrace(trace);
+}
+
+bool PartitionedScan::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  ExactScan& first = workers_.front()->scan;
+  if (workers_.size() == 1) return first.ScanRow(y, columns, out);  // alone: no compositing
+  // Step 1: a θ slab interval beginning here is a slab only if every worker's surfaces
+  // allow it; the workers vote, then all take the verdict.
+  const bool interval = first.SlabMode() && first.BeginsInterval(y, columns);
+  ForEachWorker([&](Worker& w) {
+    w.buffer.Clear();
+    if (interval) w.slab = w.scan.PrepareInterval(y, columns, w.buffer);
+  });
+  bool slab = true;
+  for (const auto& w : workers_) slab = slab && w->slab;
+  // Step 2: every worker's row, into its own buffer.
+  ForEachWorker([&](Worker& w) {
+    if (interval) w.scan.FinishInterval(slab, columns, w.buffer);
+    w.ok = w.scan.ScanRow(y, columns, w.buffer);
+  });
+  // Step 3: composite, in scan order.
+  const std::size_t n = workers_.size();
+  MergeByRank(n, [&](std::size_t w) -> const auto& { return workers_[w]->buffer.fragments; }, &next_,
+              [&](const RowBuffer::BufferedFragment& e) { out.Add(e.column, e.f); });
+  MergeByRank(n, [&](std::size_t w) -> const auto& { return workers_[w]->buffer.triangles; }, &next_,
+              [&](const RowBuffer::BufferedTriangle& e) { out.AddTriangle(e.a, e.b, e.c, e.surfaceId); });
+  bool ok = true;
+  for (const auto& w : workers_) ok = ok && w->ok;
+  return ok;
+}
+
+Counters PartitionedScan::Stats() const {
+  Counters total;
+  for (const auto& w : workers_) total.Merge(w->scan.Stats());
+  return total;
+}
+
+}  // namespace patchscan

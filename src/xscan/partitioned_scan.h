@@ -1,0 +1,61 @@
+// Molnar's object partition and z-composition (paper 002) on threads: the scene's surfaces
+// are dealt out to workers, each an ExactScan of its share that scans every sample row in
+// order exactly as it would alone; the rows of all workers are composited for the back end,
+// which keeps the nearest layers per sample.
+//
+// The image is the same for any number of workers: every surface is scanned as it would be
+// alone, and the compositor hands the back end each row's fragments and triangles in the
+// order one scan of all surfaces would (surfaces in the order the scan meets them, each
+// surface's own in its own order), so even ties of depth resolve alike. The one decision
+// that joins surfaces — a θ slab interval is a slab only if every surface's chains allow it
+// (watertight shared boundaries) — is taken over all workers between the two phases of
+// each interval. Memory: each worker holds one row of fragments.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "core/counters.h"
+#include "xscan/exact_scan.h"
+
+namespace patchscan {
+
+// How the surfaces are dealt out: each worker's share of `order` (ScanOrder), in scan
+// order. Balanced by an estimate of each surface's work — its screen box's area within
+// the image, plus a set-up's worth — largest first, each to the least loaded worker (ties:
+// the lower index), so the partition depends only on the scene, camera and worker count.
+std::vector<std::vector<ScanEntry>> PartitionSurfaces(const std::vector<ScanEntry>& order, const Camera& camera,
+                                                      int workers);
+
+class PartitionedScan final : public raster::FragmentSource {
+ public:
+  // `workers` scans (at least 1) run on up to `threads` threads (1: all in the caller's).
+  // `surfaces` must outlive the scan.
+  PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options, int workers,
+                  int threads);
+  ~PartitionedScan() override;
+
+  bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
+
+  // With one worker: its tracker marks on `trace` (a trace is not shared between threads).
+  void SetTrace(TraceSink* trace);
+
+  // Every worker's counts added up (MaxActiveSurfaces: the most any one worker had).
+  Counters Stats() const;
+  int Workers() const { return static_cast<int>(workers_.size()); }
+
+ private:
+  struct Worker;
+  struct Arena;
+  // Runs f(worker) for every worker, in parallel when there are threads.
+  template <class F>
+  void ForEachWorker(F&& f);
+
+  std::vector<std::unique_ptr<Worker>> workers_;
+  std::vector<std::uint32_t> rank_;  // per surface id: its place in the scan order
+  std::unique_ptr<Arena> arena_;
+  std::vector<std::size_t> next_;  // merge scratch
+};
+
+}  // namespace patchscan

@@ -1,0 +1,167 @@
+// Molnar's object partition on threads (paper 002): the scene's surfaces dealt out to
+// workers and their rows composited must give the very image one scan of all surfaces
+// gives, bit for bit in every channel, for any number of workers and threads, in every
+// direct mode; and the partition covers every surface once, in scan order, balanced.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "patch/scene.h"
+#include "raster/scanline_renderer.h"
+#include "xscan/exact_scan.h"
+#include "xscan/partitioned_scan.h"
+
+namespace patchscan {
+namespace {
+
+// Keeps every channel of every row.
+class KeepRows final : public raster::RowSink {
+ public:
+  explicit KeepRows(int width) : width_(width) {}
+  bool WriteRow(int, const float* pixels) override {
+    rows.insert(rows.end(), pixels, pixels + static_cast<std::size_t>(width_) * raster::kChannels);
+    return true;
+  }
+  std::vector<float> rows;
+
+ private:
+  int width_;
+};
+
+struct SceneCase {
+  std::string name;
+  Scene scene;
+  Camera camera;
+};
+
+// The scenes of surfaces/, each at a small size through its own camera or framed.
+std::vector<SceneCase> Scenes() {
+  std::vector<SceneCase> out;
+  for (const char* file : {"teapot.bpt", "teacup.bpt", "teaspoon.bpt", "sphere.bpt", "quadrics.rib",
+                           "patchmesh.rib", "teapot_lit.rib"}) {
+    auto loaded = LoadScene(std::string(PATCHSCAN_SURFACES_DIR) + "/" + file);
+    EXPECT_TRUE(std::holds_alternative<Scene>(loaded)) << file;
+    if (!std::holds_alternative<Scene>(loaded)) continue;
+    Scene scene = std::get<Scene>(std::move(loaded));
+    // Framed from the scene's bounds (RIB scenes too: their own cameras are not the point).
+    const std::string f = file;
+    const Vec3 up = f == "teacup.bpt" || f == "teaspoon.bpt" ? Vec3(0, 1, 0) : Vec3(0, 0, 1);
+    Camera camera;
+    camera.width = 120;
+    camera.height = 90;
+    camera.up = up;
+    camera = FrameBounds(scene.WorldBounds(), camera, DefaultViewDirection(up));
+    out.push_back({file, std::move(scene), camera});
+  }
+  // The teapot twice over: every sample sees two fragments at exactly the same depth, and
+  // which one is kept (the surface id written) rests on the order they reach the back end.
+  SceneCase twice = out.front();
+  twice.name = "teapot twice over";
+  const std::size_t n = twice.scene.surfaces.size();
+  for (std::size_t k = 0; k < n; ++k) twice.scene.surfaces.push_back(twice.scene.surfaces[k]);
+  out.push_back(std::move(twice));
+  return out;
+}
+
+struct Mode {
+  std::string name;
+  int thetaSteps, slabRows, aa;
+};
+const Mode kModes[] = {{"exact", 0, 0, 3}, {"theta per row", 16, 0, 2}, {"theta slabs 1 px", 16, 2, 3},
+                       {"theta slabs 3 px", 8, 9, 4}};
+
+raster::RenderSettings Settings(const Camera& camera, int aa) {
+  raster::RenderSettings s;
+  s.width = camera.width;
+  s.height = camera.height;
+  s.aa = aa;
+  s.hither = camera.hither;
+  s.eye = EyePoint(camera);
+  s.forward = ViewForward(camera);
+  s.orthographic = camera.orthographic;
+  return s;
+}
+
+TEST(Partition, SameImageForAnyNumberOfWorkers) {
+  long compared = 0;
+  for (const SceneCase& c : Scenes()) {
+    for (const Mode& m : kModes) {
+      ExactScanOptions o;
+      o.thetaSteps = m.thetaSteps;
+      o.slabRows = m.slabRows;
+      const raster::RenderSettings s = Settings(c.camera, m.aa);
+      ExactScan alone(c.scene.surfaces, c.camera, o);
+      KeepRows want(c.camera.width);
+      ASSERT_TRUE(raster::RenderFragments(alone, s, want)) << c.name << ", " << m.name;
+      for (const auto& [workers, threads] : {std::pair{1, 1}, {2, 2}, {3, 2}, {7, 2}, {7, 7}}) {
+        PartitionedScan parts(c.scene.surfaces, c.camera, o, workers, threads);
+        KeepRows got(c.camera.width);
+        ASSERT_TRUE(raster::RenderFragments(parts, s, got)) << c.name << ", " << m.name;
+        ASSERT_EQ(got.rows.size(), want.rows.size());
+        std::size_t differ = 0, first = 0;
+        for (std::size_t k = 0; k < want.rows.size(); ++k)
+          if (std::memcmp(&got.rows[k], &want.rows[k], sizeof(float)) != 0 && differ++ == 0) {
+            first = k;
+          }
+        const std::size_t perRow = static_cast<std::size_t>(c.camera.width) * raster::kChannels;
+        EXPECT_EQ(differ, 0u) << c.name << ", " << m.name << ", " << workers << " workers on " << threads
+                              << " threads: first at pixel (" << (first % perRow) / raster::kChannels << ", "
+                              << first / perRow << ") channel " << first % raster::kChannels;
+        // The counts too (the most surfaces active at once is per worker).
+        const Counters a = alone.Stats(), b = parts.Stats();
+        for (const CounterInfo& info : kCounterTable) {
+          if (info.counter == Counter::MaxActiveSurfaces) continue;
+          EXPECT_EQ(a[info.counter], b[info.counter]) << c.name << ", " << m.name << ", " << workers << " workers: "
+                                                      << info.key;
+        }
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 8 * 4 * 5);
+}
+
+TEST(Partition, EverySurfaceOnceInScanOrderAndBalanced) {
+  for (const SceneCase& c : Scenes()) {
+    const std::vector<ScanEntry> order = ScanOrder(c.scene.surfaces, c.camera);
+    for (int workers : {1, 2, 3, 7, 64}) {
+      const auto shares = PartitionSurfaces(order, c.camera, workers);
+      ASSERT_EQ(shares.size(), static_cast<std::size_t>(workers));
+      std::vector<int> seen(c.scene.surfaces.size(), 0);
+      double biggest = 0.0, lo = INFINITY, hi = 0.0;
+      const double image = static_cast<double>(c.camera.width) * c.camera.height;
+      for (const auto& share : shares) {
+        double load = 0.0;
+        for (std::size_t k = 0; k < share.size(); ++k) {
+          ++seen[share[k].index];
+          // In scan order: by the top of the screen box, then by index.
+          if (k > 0) {
+            EXPECT_TRUE(share[k - 1].yMin < share[k].yMin ||
+                        (share[k - 1].yMin == share[k].yMin && share[k - 1].index < share[k].index))
+                << c.name;
+          }
+          const double work = std::min(share[k].area, image);
+          load += work;
+          biggest = std::max(biggest, work);
+        }
+        lo = std::min(lo, load);
+        hi = std::max(hi, load);
+      }
+      for (const ScanEntry& e : order) EXPECT_EQ(seen[e.index], 1) << c.name << " surface " << e.index;
+      // Largest first to the least loaded: no worker ends more than one surface's work
+      // (and its set-up) above another.
+      constexpr double kSetUpSlack = 256.0 * 64;  // the set-up allowance of each surface, generously
+      if (workers <= static_cast<int>(order.size())) {
+        EXPECT_LE(hi - lo, biggest + kSetUpSlack) << c.name;
+      }
+      EXPECT_EQ(shares, PartitionSurfaces(order, c.camera, workers)) << "deterministic";
+    }
+  }
+}
+
+}  // namespace
+}  // namespace patchscan
