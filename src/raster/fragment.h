@@ -57,6 +57,9 @@ class FragmentRow {
 class FragmentSource {
  public:
   virtual ~FragmentSource() = default;
+  // Called once before the first row: the rows will be y0 + k dy for k in [0, nRows), each
+  // with `columns`. A source may scan ahead on that knowledge; the default does nothing.
+  virtual void BeginRows(const SampleColumns& /*columns*/, double /*y0*/, double /*dy*/, int /*nRows*/) {}
   // Sample rows come in increasing y. Returns false to stop the render (an error the
   // source reports itself).
   virtual bool ScanRow(double y, const SampleColumns& columns, FragmentRow& out) = 0;

@@ -357,6 +357,7 @@ std::optional<Counters> RenderFragments(FragmentSource& source, const RenderSett
   const Lattice lat(s);
   const int layers = s.AnyTransparency() ? kMaxLayers : 1;
   FragmentGeometry geo(source, s, lat, layers, stats);
+  source.BeginRows(SampleColumns{lat.offset, lat.spacing, lat.nx}, lat.At(0), lat.spacing, lat.ny);
   return RenderRows(geo, s, lat, layers, stats, sink);
 }
 

@@ -1,11 +1,17 @@
 #include "xscan/partitioned_scan.h"
 
 #include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/info.h>
 #include <oneapi/tbb/task_arena.h>
 
+#include <oneapi/tbb/task_group.h>
+
 #include <algorithm>
 #include <cmath>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
 #include <numeric>
 
 namespace patchscan {
@@ -99,7 +105,54 @@ void MergeByRank(std::size_t nLists, Entries&& entries, std::vector<std::size_t>
   }
 }
 
+// Rows the scan-ahead may be in front of the back end: a few pixel rows' worth of sample
+// rows (the back end takes aa of them at a time), so memory stays O(width).
+constexpr int kRowsAhead = 24;
+
+// A composited row kept for the back end: what the workers handed over, in scan order.
+class StoredRow final : public raster::FragmentRow {
+ public:
+  void Clear() {
+    fragments_.clear();
+    triangles_.clear();
+  }
+  void Add(int column, const raster::Fragment& f) override { fragments_.push_back({column, f}); }
+  void AddTriangle(const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c,
+                   std::uint32_t surfaceId) override {
+    triangles_.push_back({a, b, c, surfaceId});
+  }
+  // Hands everything over to `out` in the order it came.
+  void Replay(raster::FragmentRow& out) const {
+    for (const auto& [column, f] : fragments_) out.Add(column, f);
+    for (const Triangle& t : triangles_) out.AddTriangle(t.a, t.b, t.c, t.surfaceId);
+  }
+
+ private:
+  struct Triangle {
+    raster::RasterVertex a, b, c;
+    std::uint32_t surfaceId;
+  };
+  std::vector<std::pair<int, raster::Fragment>> fragments_;
+  std::vector<Triangle> triangles_;
+};
+
 }  // namespace
+
+// The scan-ahead: a task composites rows 0, 1, ... into a ring of kRowsAhead slots while the
+// back end replays them in order; the task waits while the ring is full.
+struct PartitionedScan::Ahead {
+  raster::SampleColumns columns;
+  double y0 = 0.0, dy = 1.0;
+  int nRows = 0;
+  std::vector<StoredRow> slots = std::vector<StoredRow>(kRowsAhead);
+  std::vector<char> okOf = std::vector<char>(kRowsAhead, 1);
+  std::mutex m;
+  std::condition_variable cv;
+  int produced = 0, consumed = 0;  // rows composited, rows replayed
+  bool cancel = false;
+  std::exception_ptr error;
+  tbb::task_group group;
+};
 
 struct PartitionedScan::Worker {
   Worker(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
@@ -111,8 +164,13 @@ struct PartitionedScan::Worker {
   bool ok = true;     // its last ScanRow's answer
 };
 
+// The threads: all of them scan (none is kept for the caller, which runs the back end
+// while the scan-ahead composites).
 struct PartitionedScan::Arena {
-  explicit Arena(int threads) : arena(threads) {}
+  explicit Arena(int threads)
+      : control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads) + 1),
+        arena(threads, 0) {}
+  tbb::global_control control;
   tbb::task_arena arena;
 };
 
@@ -126,14 +184,60 @@ PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera
   // More threads than the machine has cores would only queue (and oneTBB warns): the
   // arena is capped there; the partition, and so the image, follows `workers` alone.
   threads = std::min(threads, tbb::info::default_concurrency());
-  if (threads > 1 && workers_.size() > 1) arena_ = std::make_unique<Arena>(threads);
+  if (threads > 1) arena_ = std::make_unique<Arena>(threads);
 }
 
-PartitionedScan::~PartitionedScan() = default;
+PartitionedScan::~PartitionedScan() {
+  if (!ahead_) return;
+  {
+    std::lock_guard lock(ahead_->m);
+    ahead_->cancel = true;
+  }
+  ahead_->cv.notify_all();
+  arena_->arena.execute([&] { ahead_->group.wait(); });
+}
+
+void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) {
+  if (!arena_ || tracing_ || ahead_) return;
+  ahead_ = std::make_unique<Ahead>();
+  Ahead& a = *ahead_;
+  a.columns = columns;
+  a.y0 = y0;
+  a.dy = dy;
+  a.nRows = nRows;
+  arena_->arena.execute([&] {
+    a.group.run([this, &a] {
+      for (int j = 0; j < a.nRows; ++j) {
+        {
+          std::unique_lock lock(a.m);
+          a.cv.wait(lock, [&] { return a.cancel || j - a.consumed < kRowsAhead; });
+          if (a.cancel) return;
+        }
+        StoredRow& slot = a.slots[static_cast<std::size_t>(j % kRowsAhead)];
+        slot.Clear();
+        bool ok = false;
+        try {
+          ok = Composite(a.y0 + j * a.dy, a.columns, slot);
+        } catch (...) {
+          std::lock_guard lock(a.m);
+          a.error = std::current_exception();
+          a.cv.notify_all();
+          return;
+        }
+        {
+          std::lock_guard lock(a.m);
+          a.okOf[static_cast<std::size_t>(j % kRowsAhead)] = ok;
+          a.produced = j + 1;
+        }
+        a.cv.notify_all();
+      }
+    });
+  });
+}
 
 template <class F>
 void PartitionedScan::ForEachWorker(F&& f) {
-  if (!arena_) {
+  if (!arena_ || workers_.size() == 1) {
     for (auto& w : workers_) f(*w);
     return;
   }
@@ -144,9 +248,29 @@ void PartitionedScan::ForEachWorker(F&& f) {
 
 void PartitionedScan::SetTrace(TraceSink* trace) {
   if (workers_.size() == 1) workers_.front()->scan.SetTrace(trace);
+  tracing_ = trace != nullptr;
 }
 
 bool PartitionedScan::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  if (!ahead_) return Composite(y, columns, out);
+  Ahead& a = *ahead_;
+  const int j = static_cast<int>(std::lround((y - a.y0) / a.dy));
+  std::unique_lock lock(a.m);
+  a.cv.wait(lock, [&] { return a.produced > j || a.error; });
+  if (a.error) std::rethrow_exception(a.error);
+  lock.unlock();
+  // The producer leaves slot j alone until row j is consumed.
+  const auto k = static_cast<std::size_t>(j % kRowsAhead);
+  a.slots[k].Replay(out);
+  const bool ok = a.okOf[k] != 0;
+  lock.lock();
+  a.consumed = j + 1;
+  lock.unlock();
+  a.cv.notify_all();
+  return ok;
+}
+
+bool PartitionedScan::Composite(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   ExactScan& first = workers_.front()->scan;
   if (workers_.size() == 1) return first.ScanRow(y, columns, out);  // alone: no compositing
   // Step 1: a θ slab interval beginning here is a slab only if every worker's surfaces

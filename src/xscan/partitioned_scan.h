@@ -36,6 +36,9 @@ class PartitionedScan final : public raster::FragmentSource {
                   int threads);
   ~PartitionedScan() override;
 
+  // With more than one thread, rows are scanned and composited ahead of the back end (up
+  // to kRowsAhead rows) on a task of their own while the back end shades the rows before.
+  void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) override;
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 
   // With one worker: its tracker marks on `trace` (a trace is not shared between threads).
@@ -52,10 +55,16 @@ class PartitionedScan final : public raster::FragmentSource {
   template <class F>
   void ForEachWorker(F&& f);
 
+  // One row of all workers, composited (into `out`, or into a slot of the scan-ahead).
+  bool Composite(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  struct Ahead;
+
   std::vector<std::unique_ptr<Worker>> workers_;
+  std::unique_ptr<Ahead> ahead_;  // the scan-ahead, when BeginRows started one
   std::vector<std::uint32_t> rank_;  // per surface id: its place in the scan order
   std::unique_ptr<Arena> arena_;
   std::vector<std::size_t> next_;  // merge scratch
+  bool tracing_ = false;           // no scan-ahead: the trace is drawn row by row
 };
 
 }  // namespace patchscan

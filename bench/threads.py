@@ -1,0 +1,72 @@
+"""Speed-up of `render --threads N` against `--threads 1`, each measured in the same run,
+interleaved, the fastest of --repeat runs: the render's wall time with the image written
+(seconds_render of --stats-json) and the whole process's. Writes threads.csv and threads.md."""
+import argparse
+import json
+import os
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(__file__))
+from common import run  # noqa: E402
+
+CASES = [
+    ("teapot 1024x768 theta16 aa 4", "surfaces/teapot.bpt", ["--size", "1024x768", "--mode", "theta", "--aa", "4"]),
+    ("teapot 1024x768 exact aa 3", "surfaces/teapot.bpt", ["--size", "1024x768", "--mode", "exact", "--aa", "3"]),
+    ("teapot 4096x3072 theta16 aa 1", "surfaces/teapot.bpt", ["--size", "4096x3072", "--mode", "theta", "--aa", "1"]),
+    ("teapot 4096x3072 theta16 aa 3", "surfaces/teapot.bpt", ["--size", "4096x3072", "--mode", "theta", "--aa", "3"]),
+    ("quadrics.rib 1024x768 theta16 aa 3", "surfaces/quadrics.rib", ["--size", "1024x768", "--mode", "theta", "--aa", "3"]),
+    ("sphere.bpt 1024x768 exact aa 3", "surfaces/sphere.bpt", ["--size", "1024x768", "--mode", "exact", "--aa", "3"]),
+    ("teapot 1024x768 tess rate 16 aa 4", "surfaces/teapot.bpt", ["--size", "1024x768", "--mode", "tess", "--tess-rate", "16", "--aa", "4"]),
+]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--binary", default="build/patchscan")
+    ap.add_argument("--out", default="docs")
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    args = ap.parse_args()
+    rows = []
+    with tempfile.TemporaryDirectory() as work:
+        png, js = os.path.join(work, "out.png"), os.path.join(work, "stats.json")
+        for name, scene, extra in CASES:
+            best = {}
+            for _ in range(args.repeat):
+                for n in args.threads:
+                    t0 = time.perf_counter()
+                    code, _, err = run([args.binary, "render", scene, "-o", png, "--threads", str(n),
+                                        "--stats-json", js] + extra)
+                    wall = time.perf_counter() - t0
+                    if code != 0:
+                        sys.exit(f"threads: {name} --threads {n} failed:\n{err}")
+                    with open(js) as f:
+                        render = json.load(f)["seconds_render"]
+                    old = best.get(n, (1e9, 1e9))
+                    best[n] = (min(old[0], render), min(old[1], wall))
+            for n in args.threads:
+                rows.append({"case": name, "threads": n, "seconds_render": best[n][0], "seconds_wall": best[n][1],
+                             "speedup_render": best[args.threads[0]][0] / best[n][0],
+                             "speedup_wall": best[args.threads[0]][1] / best[n][1]})
+                print(f"{name}, --threads {n}: render {best[n][0]:.3f} s, wall {best[n][1]:.3f} s, "
+                      f"speed-up {rows[-1]['speedup_render']:.2f}x", flush=True)
+    os.makedirs(args.out, exist_ok=True)
+    with open(os.path.join(args.out, "threads.csv"), "w") as f:
+        f.write("case,threads,seconds_render,seconds_wall,speedup_render,speedup_wall\n")
+        for r in rows:
+            f.write(f"{r['case']},{r['threads']},{r['seconds_render']:.4f},{r['seconds_wall']:.4f},"
+                    f"{r['speedup_render']:.3f},{r['speedup_wall']:.3f}\n")
+    with open(os.path.join(args.out, "threads.md"), "w") as f:
+        f.write(f"# render --threads N against --threads 1\n\n`bench/threads --repeat {args.repeat}` on "
+                f"{os.cpu_count()} cores: the fastest of the repeats, interleaved; render = seconds_render of "
+                "--stats-json (scanning, shading and writing the PNG).\n\n")
+        f.write("| case | threads | render s | process s | speed-up (render) | speed-up (process) |\n|---|---|---|---|---|---|\n")
+        for r in rows:
+            f.write(f"| {r['case']} | {r['threads']} | {r['seconds_render']:.3f} | {r['seconds_wall']:.3f} | "
+                    f"{r['speedup_render']:.2f} | {r['speedup_wall']:.2f} |\n")
+
+
+if __name__ == "__main__":
+    main()
