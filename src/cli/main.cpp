@@ -24,8 +24,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.footer(
       "Exit codes: 0 success, 1 unreadable or malformed input file, 2 bad command line,\n"
-      "3 the output could not be written, 130 interrupted (Ctrl-C or SIGTERM: no output is\n"
-      "left behind); 'compare' has its own: see its help.\n"
+      "3 the output could not be written, 70 an internal failure (memory exhausted), 130\n"
+      "interrupted (Ctrl-C or SIGTERM: no output is left behind); 'compare' has its own: see\n"
+      "its help.\n"
       "Run 'patchscan COMMAND --help' for one command's options.");
 
   InfoOptions info;
@@ -57,9 +58,16 @@ int main(int argc, char** argv) {
     return compareCmd->parsed() ? kCompareFileError : kExitUsage;
   }
 
-  if (infoCmd->parsed()) return RunInfo(info, std::cout, std::cerr);
-  if (renderCmd->parsed()) return RunRender(render, std::cerr);
-  if (compareCmd->parsed()) return RunCompare(compare, std::cout, std::cerr);
-  if (convertCmd->parsed()) return RunConvert(convert, std::cerr);
+  // A failure no command foresaw (memory exhausted, in a worker thread or not): the stack
+  // unwinds, so no unfinished output file is left, and the program says so.
+  try {
+    if (infoCmd->parsed()) return RunInfo(info, std::cout, std::cerr);
+    if (renderCmd->parsed()) return RunRender(render, std::cerr);
+    if (compareCmd->parsed()) return RunCompare(compare, std::cout, std::cerr);
+    if (convertCmd->parsed()) return RunConvert(convert, std::cerr);
+  } catch (const std::exception& e) {
+    std::cerr << "patchscan: failed: " << e.what() << "; no output written\n";
+    return kExitInternal;
+  }
   return kExitUsage;
 }

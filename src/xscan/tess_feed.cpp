@@ -2,10 +2,11 @@
 
 #include <Eigen/Geometry>
 #include <oneapi/tbb/info.h>
-#include <oneapi/tbb/parallel_for.h>
-#include <oneapi/tbb/task_arena.h>
 
 #include <atomic>
+#include <exception>
+#include <mutex>
+#include <thread>
 
 namespace patchscan {
 
@@ -41,13 +42,26 @@ std::optional<TessMesh> TessellateScene(std::span<const Surface> surfaces, const
     else
       TessellateUniform(surfaces[k], settings.rate, id, &parts[k]);
   };
+  // Plain threads, joined before the back end starts: a pool's workers would go on
+  // spinning for a while and take cycles from the back end's thread.
   threads = std::min(threads, tbb::info::default_concurrency());
-  if (threads > 1) {
-    tbb::task_arena arena(threads);
-    arena.execute([&] { tbb::parallel_for(std::size_t{0}, surfaces.size(), one); });
-  } else {
-    for (std::size_t k = 0; k < surfaces.size(); ++k) one(k);
-  }
+  std::atomic<std::size_t> next = 0;
+  std::mutex failure;
+  std::exception_ptr error;  // the first thread's exception, rethrown once all are joined
+  auto drain = [&] {
+    try {
+      for (std::size_t k; (k = next++) < surfaces.size();) one(k);
+    } catch (...) {
+      stopped = true;
+      std::lock_guard lock(failure);
+      if (!error) error = std::current_exception();
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(drain);
+  drain();
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
   if (stopped) return std::nullopt;
   // Appended in surface order, each part's vertex indices moved past those before it.
   TessMesh mesh;
