@@ -58,7 +58,7 @@ def render(binary, scene, extra, aa, mode_args, size, out_exr, stats_json, repea
     best = None
     for _ in range(repeat):
         cmd = [binary, "render", scene, "-o", out_exr, "--aov", "--aa", str(aa), "--size", size,
-               "--stats-json", stats_json] + extra + mode_args
+               "--stats-json", stats_json, "--threads", "1"] + extra + mode_args
         t0 = time.perf_counter()
         code, _, err = run(cmd)
         wall = time.perf_counter() - t0

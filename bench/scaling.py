@@ -27,7 +27,7 @@ def render(binary, scene, size, args, work, repeat, extra=()):
     best = None
     for _ in range(repeat):
         out, js = os.path.join(work, "out.png"), os.path.join(work, "stats.json")
-        cmd = [binary, "render", scene, "-o", out, "--size", size, "--aa", "1", "--stats-json", js,
+        cmd = [binary, "render", scene, "-o", out, "--size", size, "--aa", "1", "--stats-json", js, "--threads", "1",
                *extra, *args]
         r = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         if r.returncode != 0:

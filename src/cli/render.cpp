@@ -11,6 +11,7 @@
 #include "cli/render_setup.h"
 #include "cli/stats_report.h"
 #include "patch/tessellate.h"
+#include "raster/async_row_sink.h"
 #include "raster/image_writer.h"
 #include "xscan/exact_scan.h"
 #include "xscan/partitioned_scan.h"
@@ -203,9 +204,14 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   }
   auto& writer = *std::get<std::unique_ptr<raster::ImageWriter>>(opened);
   std::unique_ptr<TrackerOverlay> overlay;
-  raster::RowSink* out = &writer;
+  // With more than one thread the image is encoded and written on a thread of its own,
+  // overlapping the rows still being rendered.
+  std::unique_ptr<raster::AsyncRowSink> async;
+  if (threads > 1) async = std::make_unique<raster::AsyncRowSink>(writer, camera.width);
+  raster::RowSink* toImage = async ? static_cast<raster::RowSink*>(async.get()) : &writer;
+  raster::RowSink* out = toImage;
   if (o.overlay == Overlay::Trackers) {
-    overlay = std::make_unique<TrackerOverlay>(writer, camera.width, camera.height);
+    overlay = std::make_unique<TrackerOverlay>(*toImage, camera.width, camera.height);
     scan->SetTrace(overlay.get());
     out = overlay.get();
   }
@@ -215,6 +221,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   auto counted = scan ? raster::RenderFragments(*scan, backEnd.settings, progress)
                       : raster::RenderMesh(*mesh, backEnd.settings, progress);
   if (counted && overlay && !overlay->Finish()) counted.reset();
+  if (counted && async && !async->Finish()) counted.reset();
   if (!counted) {
     if (gInterrupted) {
       err << "\npatchscan: interrupted; no image written\n";
@@ -243,7 +250,8 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   report.load = Seconds(t0, tLoaded);
   report.setUp = Seconds(tLoaded, tSetUp);
   report.render = Seconds(tSetUp, tDone);
-  report.output = progress.OutputSeconds() + Seconds(tCommit, tDone);  // encoding and writing, inside the render
+  // Encoding and writing, inside the render (on the writer's thread: overlapping it).
+  report.output = (async ? async->WriterSeconds() : progress.OutputSeconds()) + Seconds(tCommit, tDone);
   report.peakKiB = PeakResidentKiB();
   report.texture = backEnd.TextureReport();
   if (o.stats) PrintReport(report, err);

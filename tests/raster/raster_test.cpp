@@ -7,6 +7,7 @@
 
 #include <OpenImageIO/imageio.h>
 
+#include "raster/async_row_sink.h"
 #include "raster/image_writer.h"
 #include "raster/scanline_renderer.h"
 #include "raster/triangle_setup.h"
@@ -273,6 +274,61 @@ TEST(ScanlineRenderer, TrianglesHandedOverByADirectSourceRenderAsAMesh) {
     EXPECT_GT(mesh.Coverage(), 500.0);
     EXPECT_LT(worst, kColourTol) << "aa " << aa;
   }
+}
+
+// Keeps rows as they come, refusing from row `refuseAt` on.
+class OrderedRows final : public RowSink {
+ public:
+  OrderedRows(int width, int refuseAt) : width_(width), refuseAt_(refuseAt) {}
+  bool WriteRow(int y, const float* pixels) override {
+    if (y >= refuseAt_) return false;
+    ys.push_back(y);
+    firsts.push_back(pixels[0]);
+    lasts.push_back(pixels[static_cast<std::size_t>(width_) * kChannels - 1]);
+    return true;
+  }
+  std::vector<int> ys;
+  std::vector<float> firsts, lasts;
+
+ private:
+  int width_, refuseAt_;
+};
+
+TEST(AsyncRowSink, WritesEveryRowInOrderOnItsThread) {
+  // More rows than the ring holds, each row's first and last value its own: the next sink
+  // sees every row once, in order, with the values it was given (the ring's slots reused).
+  constexpr int kWidth = 7, kRows = 5 * AsyncRowSink::kRowsQueued + 3;
+  OrderedRows next(kWidth, kRows);
+  {
+    AsyncRowSink async(next, kWidth);
+    std::vector<float> row(static_cast<std::size_t>(kWidth) * kChannels);
+    for (int y = 0; y < kRows; ++y) {
+      row.front() = static_cast<float>(y);
+      row.back() = static_cast<float>(-y);
+      ASSERT_TRUE(async.WriteRow(y, row.data()));
+    }
+    EXPECT_TRUE(async.Finish());
+  }
+  ASSERT_EQ(next.ys.size(), static_cast<std::size_t>(kRows));
+  for (int y = 0; y < kRows; ++y) {
+    EXPECT_EQ(next.ys[y], y);
+    EXPECT_EQ(next.firsts[y], static_cast<float>(y));
+    EXPECT_EQ(next.lasts[y], static_cast<float>(-y));
+  }
+}
+
+TEST(AsyncRowSink, ARefusedRowStopsTheRender) {
+  // The next sink refuses row 10 (a full disk): a later WriteRow or Finish says so, and
+  // nothing after it reaches the next sink.
+  constexpr int kWidth = 3;
+  OrderedRows next(kWidth, 10);
+  AsyncRowSink async(next, kWidth);
+  std::vector<float> row(static_cast<std::size_t>(kWidth) * kChannels, 0.0f);
+  bool refused = false;
+  for (int y = 0; y < 10 * AsyncRowSink::kRowsQueued && !refused; ++y) refused = !async.WriteRow(y, row.data());
+  EXPECT_TRUE(refused || !async.Finish());
+  EXPECT_FALSE(async.Finish());
+  EXPECT_EQ(next.ys.size(), 10u);
 }
 
 TEST(Shading, FastRenormalizationIsSecondOrder) {
