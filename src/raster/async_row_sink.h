@@ -16,7 +16,7 @@ namespace patchscan::raster {
 class AsyncRowSink final : public RowSink {
  public:
   // Rows at most this far ahead of the writer: enough to ride out an encoder's bursts.
-  static constexpr int kRowsQueued = 32;
+  static constexpr int kRowsQueued = 16;
 
   // `next` receives every row, in order, on the writer thread; it must outlive this sink.
   AsyncRowSink(RowSink& next, int width);

@@ -14,6 +14,8 @@
 #include <mutex>
 #include <numeric>
 
+#include "raster/scanline_renderer.h"
+
 namespace patchscan {
 
 std::vector<std::vector<ScanEntry>> PartitionSurfaces(const std::vector<ScanEntry>& order, const Camera& camera,
@@ -105,9 +107,9 @@ void MergeByRank(std::size_t nLists, Entries&& entries, std::vector<std::size_t>
   }
 }
 
-// Rows the scan-ahead may be in front of the back end: a few pixel rows' worth of sample
-// rows (the back end takes aa of them at a time), so memory stays O(width).
-constexpr int kRowsAhead = 24;
+// Rows the scan-ahead may be in front of the back end: two pixel rows of the largest
+// supersampling grid (the back end takes aa of them at a time), so memory stays O(width).
+constexpr int kRowsAhead = 2 * raster::kMaxAa;
 
 // A composited row kept for the back end: what the workers handed over, in scan order.
 class StoredRow final : public raster::FragmentRow {
