@@ -196,7 +196,8 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   // Step 3: the back end, and the rows' way to the image file.
   auto setup = SetUpBackEnd(o, scene, camera, aa, err);
   if (const int* code = std::get_if<int>(&setup)) return *code;
-  const BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);
+  BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);
+  backEnd.settings.threads = threads;
   auto opened = raster::ImageWriter::Open(output, camera.width, camera.height, o.aov);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';

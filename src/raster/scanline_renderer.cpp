@@ -3,7 +3,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
+#include <mutex>
 #include <numeric>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/info.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/task_arena.h>
 
 #include "raster/triangle_store.h"
 
@@ -181,7 +188,7 @@ class FragmentGeometry final : public FragmentRow {
   const Lattice& lat_;
   int layers_;
   Counters& stats_;
-  bool failed_ = false;
+  std::atomic<bool> failed_ = false;  // the source failed, or a texture (set while shading, on any thread)
   std::vector<std::vector<Fragment>> pools_;  // per sample row of the pixel row
   std::vector<Fragment>* pool_ = nullptr;    // the row being scanned
   Sample* row_ = nullptr;
@@ -192,6 +199,10 @@ class FragmentGeometry final : public FragmentRow {
 // The pixel rows, for either geometry: sample rows resolved, samples grouped by surface
 // per pixel, one shading call per group plus the adaptive-stochastic extra calls, and
 // the finished row handed to the sink.
+// A task shades at least this many pixels of a row: enough that a task's overhead (a few
+// microseconds) is small against its shading calls.
+constexpr int kPixelsPerTask = 32;
+
 template <class Geometry>
 std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const Lattice& lat,
                                       int layers, Counters& stats, RowSink& sink) {
@@ -202,6 +213,9 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
   // P = (l - 1) / (l^2 - 1) = 1 / (l + 1); a colour that differs from the pixel's one
   // shading call by more than kShadeDiscrepancy makes the pixel shade every sample.
   const double extraP = s.aa > 1 ? 1.0 / (s.aa + 1) : 0.0;
+  std::unique_ptr<tbb::task_arena> arena;
+  if (s.threads > 1) arena = std::make_unique<tbb::task_arena>(std::min(s.threads, tbb::info::default_concurrency()));
+  std::mutex merge;
   for (int py = 0; py < s.height; ++py) {
     const int j0 = lat.FirstOfPixel(py);
     geo.BeginPixelRow(j0);
@@ -214,7 +228,10 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
       std::fill(rows[r].begin(), rows[r].end(), Sample{0.0, -1});
       geo.ScanRow(j0 + r, r, lat.At(j0 + r), rows[r].data());
     }
-    for (int px = 0; px < s.width; ++px) {
+    // The pixels of the row, each on its own: in chunks over the back end's threads, each
+    // chunk counting into its own counts (added up in any order: sums).
+    auto shadePixels = [&](int pxBegin, int pxEnd, Counters& stats) {
+    for (int px = pxBegin; px < pxEnd; ++px) {
       // Group the pixel's samples by surface and layer: one shading call per group.
       struct Group {
         std::uint32_t surface;
@@ -326,6 +343,19 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
         out[kChannelUv + 1] = static_cast<float>(a.uv.y());
         out[kChannelId] = static_cast<float>(gr.surface);
       }
+    }
+    };
+    if (arena) {
+      arena->execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int>(0, s.width, kPixelsPerTask), [&](const tbb::blocked_range<int>& range) {
+          Counters local;
+          shadePixels(range.begin(), range.end(), local);
+          std::lock_guard lock(merge);
+          stats.Merge(local);
+        });
+      });
+    } else {
+      shadePixels(0, s.width, stats);
     }
     if (geo.Failed() || !sink.WriteRow(py, pixels.data())) return std::nullopt;
   }

@@ -4,7 +4,9 @@
 // loading), so a texture on a hidden surface costs nothing.
 #pragma once
 
+#include <atomic>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -21,18 +23,24 @@ class ImageTexture {
 
   // RGB at (s, t) = uv (t = 0 at the image's top, as in RenderMan), filtered with the
   // derivatives of uv per pixel in x and y. nullopt if the texture cannot be read
-  // (Error() says why).
+  // (Error() says why). Safe to call from several threads at once.
   std::optional<Eigen::Vector3d> Lookup(const Vec2& uv, const Vec2& duvdx, const Vec2& duvdy);
 
+  // After the render (not while lookups run):
   bool Opened() const { return impl_ != nullptr; }
   long Lookups() const { return nLookups_; }
   const std::string& Error() const { return error_; }
 
  private:
   struct Impl;
+  // Opens the texture (once, whichever thread asks first); false if it cannot be read.
+  bool Open();
   std::string path_, error_;
   std::unique_ptr<Impl> impl_;
-  long nLookups_ = 0;
+  std::once_flag opened_;
+  std::mutex errorMutex_;  // error_ is written by whichever lookup fails
+  std::atomic<bool> failed_ = false;
+  std::atomic<long> nLookups_ = 0;
 };
 
 }  // namespace patchscan::raster

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -65,7 +66,7 @@ struct Member {
 };
 
 // The colour of a surface point: the material's (textured) colour lit by the rig.
-inline Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, bool* failed) {
+inline Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, std::atomic<bool>* failed) {
   const Material& m = s.MaterialOf(a.surfaceId);
   const auto base = SurfaceColour(m, a.uv, a.duvdx, a.duvdy);
   if (!base) *failed = true;
@@ -278,7 +279,7 @@ class TriangleStore {
   ShadingMode shading_;
   double invHither_;
   Counters& stats_;
-  bool failed_ = false;  // a texture could not be read
+  std::atomic<bool> failed_ = false;  // a texture could not be read (set while shading, on any thread)
   std::vector<Active> active_;  // the slots
   std::vector<int> live_, freeSlots_;
 };

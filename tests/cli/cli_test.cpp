@@ -187,21 +187,24 @@ TEST(Cli, SameBytesForAnyNumberOfThreads) {
   // every mode, with the AOVs.
   const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_threads";
   std::filesystem::create_directories(dir);
+  // The lit teapot's texture is looked up from every shading thread.
+  const std::string lit = std::string(PATCHSCAN_SURFACES_DIR) + "/teapot_lit.rib";
+  for (const std::string& scene : {kTeapot, lit})
   for (const char* mode : {"exact", "theta", "tess"}) {
     for (const char* ext : {".png", ".exr"}) {
       const std::string aov = std::string(ext) == ".exr" ? " --aov" : "";
       const std::string one = (dir / (std::string("one") + ext)).string();
-      ASSERT_EQ(Patchscan("render " + kTeapot + " --size 80x60 --mode " + mode + aov + " --threads 1 -o " + one).code, 0);
+      ASSERT_EQ(Patchscan("render " + scene + " --size 80x60 --mode " + mode + aov + " --threads 1 -o " + one).code, 0);
       for (int n : {2, 3, 7}) {
         const std::string many = (dir / (std::string("many") + ext)).string();
-        const Result r = Patchscan("render " + kTeapot + " --size 80x60 --mode " + mode + aov + " --threads " +
+        const Result r = Patchscan("render " + scene + " --size 80x60 --mode " + mode + aov + " --threads " +
                                    std::to_string(n) + " -o " + many);
         ASSERT_EQ(r.code, 0) << r.err;
         // (An EXR's header carries the time it was written: its pixels are compared.)
         if (std::string(ext) == ".png") {
-          EXPECT_EQ(Slurp(one), Slurp(many)) << mode << ext << ", --threads " << n;
+          EXPECT_EQ(Slurp(one), Slurp(many)) << scene << " " << mode << ext << ", --threads " << n;
         } else {
-          EXPECT_EQ(Pixels(one), Pixels(many)) << mode << ext << ", --threads " << n;
+          EXPECT_EQ(Pixels(one), Pixels(many)) << scene << " " << mode << ext << ", --threads " << n;
         }
       }
     }
