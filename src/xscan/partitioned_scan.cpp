@@ -5,7 +5,6 @@
 #include <oneapi/tbb/info.h>
 #include <oneapi/tbb/task_arena.h>
 
-#include <oneapi/tbb/task_group.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,6 +12,7 @@
 #include <exception>
 #include <mutex>
 #include <numeric>
+#include <thread>
 
 #include "raster/scanline_renderer.h"
 
@@ -140,8 +140,9 @@ class StoredRow final : public raster::FragmentRow {
 
 }  // namespace
 
-// The scan-ahead: a task composites rows 0, 1, ... into a ring of kRowsAhead slots while the
-// back end replays them in order; the task waits while the ring is full.
+// The scan-ahead: a thread composites rows 0, 1, ... into a ring of kRowsAhead slots (its
+// workers' scans on the arena) while the back end replays them in order; it waits while the
+// ring is full.
 struct PartitionedScan::Ahead {
   raster::SampleColumns columns;
   double y0 = 0.0, dy = 1.0;
@@ -153,7 +154,9 @@ struct PartitionedScan::Ahead {
   int produced = 0, consumed = 0;  // rows composited, rows replayed
   bool cancel = false;
   std::exception_ptr error;
-  tbb::task_group group;
+  // A plain thread, not a task of the arena: the destructor joins it without waiting inside
+  // the arena, where the wait could be run by the very worker the producer runs on.
+  std::thread producer;
 };
 
 struct PartitionedScan::Worker {
@@ -196,7 +199,7 @@ PartitionedScan::~PartitionedScan() {
     ahead_->cancel = true;
   }
   ahead_->cv.notify_all();
-  arena_->arena.execute([&] { ahead_->group.wait(); });
+  ahead_->producer.join();
 }
 
 void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) {
@@ -207,8 +210,7 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
   a.y0 = y0;
   a.dy = dy;
   a.nRows = nRows;
-  arena_->arena.execute([&] {
-    a.group.run([this, &a] {
+  a.producer = std::thread([this, &a] {
       for (int j = 0; j < a.nRows; ++j) {
         {
           std::unique_lock lock(a.m);
@@ -233,7 +235,6 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
         }
         a.cv.notify_all();
       }
-    });
   });
 }
 
