@@ -198,7 +198,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   if (const int* code = std::get_if<int>(&setup)) return *code;
   BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);
   backEnd.settings.threads = threads;
-  auto opened = raster::ImageWriter::Open(output, camera.width, camera.height, o.aov);
+  auto opened = raster::ImageWriter::Open(output, camera.width, camera.height, o.aov, threads);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';
     return kExitUsage;

@@ -3,13 +3,20 @@
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <system_error>
+
+#include "raster/png_encoder.h"
 
 namespace patchscan::raster {
 
 struct ImageWriter::Impl {
-  std::unique_ptr<OIIO::ImageOutput> out;
+  std::unique_ptr<OIIO::ImageOutput> out;  // every format but PNG
+  std::FILE* file = nullptr;               // PNG: our own encoder, deflating on threads
+  std::unique_ptr<PngEncoder> png;
   std::filesystem::path target, temp;
   int width = 0, channels = 4;
   bool committed = false;
@@ -20,6 +27,8 @@ ImageWriter::ImageWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 ImageWriter::~ImageWriter() {
   if (!impl_->committed) {
     if (impl_->out) impl_->out->close();
+    impl_->png.reset();
+    if (impl_->file) std::fclose(impl_->file);
     std::error_code ec;
     std::filesystem::remove(impl_->temp, ec);
   }
@@ -27,7 +36,7 @@ ImageWriter::~ImageWriter() {
 
 std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const std::string& path,
                                                                           int width, int height,
-                                                                          bool aovs) {
+                                                                          bool aovs, int threads) {
   auto impl = std::make_unique<Impl>();
   impl->target = path;
   std::string ext = impl->target.extension().string();
@@ -45,6 +54,12 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   tempName += impl->target.stem().string();
   tempName += ".partial-" + std::to_string(::getpid()) + ext;
   impl->temp = impl->target.parent_path() / tempName;
+  if (ext == ".png" && !aovs) {
+    impl->file = std::fopen(impl->temp.c_str(), "wb");
+    if (!impl->file) return path + ": cannot write: " + impl->temp.string() + ": " + std::strerror(errno);
+    impl->png = std::make_unique<PngEncoder>(impl->file, width, height, PngEncoder::Options{6, threads});
+    return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
+  }
   impl->out = OIIO::ImageOutput::create(path);
   if (!impl->out) return path + ": cannot create an image writer: " + OIIO::geterror();
   OIIO::ImageSpec spec(width, height, impl->channels, type);
@@ -59,11 +74,20 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
 }
 
 bool ImageWriter::WriteRow(int y, const float* pixels) {
+  if (impl_->png) return impl_->png->WriteRow(pixels, kChannels);
   return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, pixels, kChannels * sizeof(float));
 }
 
 std::variant<std::monostate, std::string> ImageWriter::Commit() {
-  if (!impl_->out->close()) return impl_->target.string() + ": " + impl_->out->geterror();
+  if (impl_->png) {
+    const bool encoded = impl_->png->Finish();
+    impl_->png.reset();
+    const bool closed = std::fclose(impl_->file) == 0;
+    impl_->file = nullptr;
+    if (!encoded || !closed) return impl_->target.string() + ": writing the image failed";
+  } else if (!impl_->out->close()) {
+    return impl_->target.string() + ": " + impl_->out->geterror();
+  }
   std::error_code ec;
   std::filesystem::rename(impl_->temp, impl_->target, ec);
   if (ec) return impl_->target.string() + ": cannot rename the finished image into place: " + ec.message();

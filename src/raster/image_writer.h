@@ -16,9 +16,11 @@ class ImageWriter final : public RowSink {
   // Opens the temporary file for `path`, with the format its extension names (.png, .tif,
   // .tiff, .jpg, .jpeg, .exr): RGBA (RGB for JPEG); with `aovs`, which only EXR takes, also
   // the channels Z (eye distance), N.x N.y N.z, u v and id. A message when that fails.
+  // PNG is encoded by PngEncoder, deflating on `threads` threads (the same bytes for any).
   static std::variant<std::unique_ptr<ImageWriter>, std::string> Open(const std::string& path,
                                                                      int width, int height,
-                                                                     bool aovs = false);
+                                                                     bool aovs = false,
+                                                                     int threads = 1);
   ~ImageWriter() override;
 
   bool WriteRow(int y, const float* pixels) override;
