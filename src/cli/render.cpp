@@ -1,10 +1,11 @@
 #include "cli/render.h"
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <chrono>
-#include <thread>
 #include <ostream>
+#include <thread>
 
 #include "cli/exit_codes.h"
 #include "cli/file_output.h"
@@ -156,6 +157,10 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
                   "number. 1: one thread. --overlay uses one worker")
       ->check(CLI::Range(1, 1024));
   cmd->add_flag("--stats", o->stats, "print counts, times and peak memory to stderr");
+  auto* progress = cmd->add_flag("--progress", o->progress,
+                                 "show progress on stderr (rows finished, elapsed time, time left) even when "
+                                 "stderr is not a terminal (default: only on a terminal)");
+  cmd->add_flag("--quiet", o->quiet, "no progress line (errors and warnings are still printed)")->excludes(progress);
   cmd->add_option("--stats-json", o->statsJson, "write counts and times as JSON to this file");
   AddCameraOptions(cmd, &o->camera);
   return cmd;
@@ -218,7 +223,8 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   }
 
   // Step 4: render the rows, streaming each to the image; then commit it.
-  ProgressSink progress(*out, camera.height, err);
+  const bool showProgress = !o.quiet && (o.progress || isatty(STDERR_FILENO) != 0);
+  ProgressSink progress(*out, camera.height, err, showProgress);
   auto counted = scan ? raster::RenderFragments(*scan, backEnd.settings, progress)
                       : raster::RenderMesh(*mesh, backEnd.settings, progress);
   if (counted && overlay && !overlay->Finish()) counted.reset();
@@ -235,6 +241,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
     err << "patchscan: " << output << ": writing the image failed\n";
     return kExitOutputError;
   }
+  progress.Finish();
   const auto tCommit = Clock::now();
   if (auto committed = writer.Commit(); auto* why = std::get_if<std::string>(&committed)) {
     err << "patchscan: " << *why << '\n';
@@ -247,7 +254,12 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   RenderReport report;
   report.mode = o.mode;
   report.counters = *counted;
-  if (scan) report.counters.Merge(scan->Stats());
+  if (scan) {
+    report.counters.Merge(scan->Stats());
+    const PartitionedScan::Timing times = scan->Times();
+    report.workerSeconds = times.workerSeconds;
+    report.compositeSeconds = times.compositeSeconds;
+  }
   report.load = Seconds(t0, tLoaded);
   report.setUp = Seconds(tLoaded, tSetUp);
   report.render = Seconds(tSetUp, tDone);

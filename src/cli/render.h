@@ -44,6 +44,9 @@ struct RenderOptions {
   std::uint64_t seed = 1;
   int threads = 0;  // 0: one per core
   bool stats = false;
+  // Progress on stderr: by default only when stderr is a terminal; --progress always,
+  // --quiet never.
+  bool progress = false, quiet = false;
   std::string statsJson;
   CameraOptions camera;
 };

@@ -42,14 +42,20 @@ void CatchInterrupts();
 // takes; when stderr is a terminal, shows the percentage done a few times a second.
 class ProgressSink final : public raster::RowSink {
  public:
-  ProgressSink(raster::RowSink& next, int height, std::ostream& err);
+  // With `show`, a line on `err` a few times a second: the share of rows finished (scanned,
+  // composited and shaded), the seconds since the start and an estimate of those left.
+  ProgressSink(raster::RowSink& next, int height, std::ostream& err, bool show);
+  // Clears the line, if an interrupted render left one.
   ~ProgressSink() override;
   bool WriteRow(int y, const float* pixels) override;
+  // After the last row: the line at 100 % with the total time, ended, so what follows
+  // (--stats) starts on a line of its own.
+  void Finish();
   double OutputSeconds() const { return outputSeconds_; }
 
  private:
   raster::RowSink& next_;
-  int height_;
+  int height_, rows_ = 0;
   std::ostream& err_;
   bool show_, shown_ = false;
   double outputSeconds_ = 0.0;

@@ -39,6 +39,12 @@ void PrintReport(const RenderReport& r, std::ostream& out) {
       out << line;
     }
   }
+  if (!r.workerSeconds.empty()) {
+    out << "workers: " << r.workerSeconds.size() << ", seconds scanning each:";
+    for (double t : r.workerSeconds) out << ' ' << t;
+    out << "; compositor " << r.compositeSeconds << " s (" << (r.render > 0 ? 100.0 * r.compositeSeconds / r.render : 0.0)
+        << " % of the render)\n";
+  }
   out << "time: load " << r.load << " s, " << (Direct(r.mode) ? "set up " : "tessellate ") << r.setUp
       << " s, render " << r.render << " s (of which writing the image " << r.output << " s)\npeak memory: "
       << r.peakKiB << " KiB\ntexture: " << r.texture << '\n';
@@ -50,7 +56,9 @@ std::string ReportJson(const RenderReport& r) {
   for (const CounterInfo& c : kCounterTable) js << ", \"" << c.key << "\": " << r.counters[c.counter];
   for (const CounterRatio& q : kCounterRatios) js << ", \"" << q.key << "\": " << r.counters.Ratio(q);
   js << ", \"seconds_load\": " << r.load << ", \"seconds_tessellate\": " << r.setUp << ", \"seconds_render\": "
-     << r.render << ", \"seconds_output\": " << r.output << ", \"peak_rss_kib\": " << r.peakKiB << "}\n";
+     << r.render << ", \"seconds_output\": " << r.output << ", \"seconds_workers\": [";
+  for (std::size_t k = 0; k < r.workerSeconds.size(); ++k) js << (k ? ", " : "") << r.workerSeconds[k];
+  js << "], \"seconds_composite\": " << r.compositeSeconds << ", \"peak_rss_kib\": " << r.peakKiB << "}\n";
   return js.str();
 }
 

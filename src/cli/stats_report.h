@@ -5,6 +5,7 @@
 
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 #include "cli/render.h"
 #include "core/counters.h"
@@ -18,6 +19,10 @@ struct RenderReport {
   // the output), of which encoding and writing the image.
   double load = 0.0, setUp = 0.0, render = 0.0, output = 0.0;
   long peakKiB = 0;
+  // Direct modes: each worker's seconds scanning its share of the surfaces, and the
+  // compositor's merging their rows.
+  std::vector<double> workerSeconds;
+  double compositeSeconds = 0.0;
   std::string texture;  // what became of the texture: "none", "opened, N lookups", ...
 };
 

@@ -7,6 +7,7 @@
 
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <exception>
@@ -47,6 +48,8 @@ std::vector<std::vector<ScanEntry>> PartitionSurfaces(const std::vector<ScanEntr
 }
 
 namespace {
+
+double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 // One worker's share of a row, as its scan handed it over: fragments and triangles, each
 // with the rank of its surface in the scan order (non-decreasing: a scan hands over its
@@ -167,6 +170,7 @@ struct PartitionedScan::Worker {
   RowBuffer buffer;
   bool slab = false;  // this worker's vote for the current θ slab interval
   bool ok = true;     // its last ScanRow's answer
+  double seconds = 0.0;  // spent scanning
 };
 
 // The threads: all of them scan (none is kept for the caller, which runs the back end
@@ -240,12 +244,17 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
 
 template <class F>
 void PartitionedScan::ForEachWorker(F&& f) {
+  auto timed = [&](Worker& w) {
+    const double t0 = Now();
+    f(w);
+    w.seconds += Now() - t0;
+  };
   if (!arena_ || workers_.size() == 1) {
-    for (auto& w : workers_) f(*w);
+    for (auto& w : workers_) timed(*w);
     return;
   }
   arena_->arena.execute([&] {
-    tbb::parallel_for(std::size_t{0}, workers_.size(), [&](std::size_t k) { f(*workers_[k]); });
+    tbb::parallel_for(std::size_t{0}, workers_.size(), [&](std::size_t k) { timed(*workers_[k]); });
   });
 }
 
@@ -275,7 +284,12 @@ bool PartitionedScan::ScanRow(double y, const raster::SampleColumns& columns, ra
 
 bool PartitionedScan::Composite(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   ExactScan& first = workers_.front()->scan;
-  if (workers_.size() == 1) return first.ScanRow(y, columns, out);  // alone: no compositing
+  if (workers_.size() == 1) {  // alone: no compositing
+    const double t0 = Now();
+    const bool ok = first.ScanRow(y, columns, out);
+    workers_.front()->seconds += Now() - t0;
+    return ok;
+  }
   // Step 1: a θ slab interval beginning here is a slab only if every worker's surfaces
   // allow it; the workers vote, then all take the verdict.
   const bool interval = first.SlabMode() && first.BeginsInterval(y, columns);
@@ -291,14 +305,23 @@ bool PartitionedScan::Composite(double y, const raster::SampleColumns& columns, 
     w.ok = w.scan.ScanRow(y, columns, w.buffer);
   });
   // Step 3: composite, in scan order.
+  const double t0 = Now();
   const std::size_t n = workers_.size();
   MergeByRank(n, [&](std::size_t w) -> const auto& { return workers_[w]->buffer.fragments; }, &next_,
               [&](const RowBuffer::BufferedFragment& e) { out.Add(e.column, e.f); });
   MergeByRank(n, [&](std::size_t w) -> const auto& { return workers_[w]->buffer.triangles; }, &next_,
               [&](const RowBuffer::BufferedTriangle& e) { out.AddTriangle(e.a, e.b, e.c, e.surfaceId); });
+  compositeSeconds_ += Now() - t0;
   bool ok = true;
   for (const auto& w : workers_) ok = ok && w->ok;
   return ok;
+}
+
+PartitionedScan::Timing PartitionedScan::Times() const {
+  Timing t;
+  for (const auto& w : workers_) t.workerSeconds.push_back(w->seconds);
+  t.compositeSeconds = compositeSeconds_;
+  return t;
 }
 
 Counters PartitionedScan::Stats() const {

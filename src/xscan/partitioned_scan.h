@@ -46,6 +46,13 @@ class PartitionedScan final : public raster::FragmentSource {
 
   // Every worker's counts added up (MaxActiveSurfaces: the most any one worker had).
   Counters Stats() const;
+  // Wall seconds each worker spent scanning its share, and the compositor merging the
+  // workers' rows (with one worker: none).
+  struct Timing {
+    std::vector<double> workerSeconds;
+    double compositeSeconds = 0.0;
+  };
+  Timing Times() const;
   int Workers() const { return static_cast<int>(workers_.size()); }
 
  private:
@@ -64,6 +71,7 @@ class PartitionedScan final : public raster::FragmentSource {
   std::vector<std::uint32_t> rank_;  // per surface id: its place in the scan order
   std::unique_ptr<Arena> arena_;
   std::vector<std::size_t> next_;  // merge scratch
+  double compositeSeconds_ = 0.0;
   bool tracing_ = false;           // no scan-ahead: the trace is drawn row by row
 };
 

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -149,6 +150,37 @@ TEST(Cli, RenderWritesTheImage) {
   EXPECT_EQ(StatsValue(r.err, "triangles"), 1024) << r.err;  // 32 x 4 x 4 x 2
   EXPECT_EQ(StatsValue(r.err, "walks"), -1) << "tess mode runs no x scan:\n" << r.err;
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir), {}), 1);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, ProgressLineAndQuiet) {
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_progress";
+  std::filesystem::create_directories(dir);
+  const std::string out = (dir / "teapot.png").string(), js = (dir / "stats.json").string();
+  // Not a terminal: nothing on stderr unless asked.
+  Result r = Patchscan("render " + kTeapot + " -o " + out + " --size 64x48");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  // Asked: it ends at 100 % with every row and the time, on a line of its own before --stats.
+  r = Patchscan("render " + kTeapot + " -o " + out + " --size 64x48 --progress --stats --threads 2 --stats-json " + js);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::size_t done = r.err.find("\rrender: 100% (48/48 rows, ");
+  ASSERT_NE(done, std::string::npos) << r.err;
+  EXPECT_LT(done, r.err.find("set up:\n")) << r.err;
+  EXPECT_NE(r.err.find(" s)"), std::string::npos) << r.err;
+  // The workers' and the compositor's times: one figure per worker.
+  EXPECT_NE(r.err.find("workers: 2, seconds scanning each: "), std::string::npos) << r.err;
+  const std::string json = Slurp(js);
+  const std::size_t w = json.find("\"seconds_workers\": [");
+  ASSERT_NE(w, std::string::npos) << json;
+  const std::string list = json.substr(w, json.find(']', w) - w);
+  EXPECT_EQ(std::count(list.begin(), list.end(), ','), 1) << list;
+  EXPECT_NE(json.find("\"seconds_composite\": "), std::string::npos) << json;
+  // --quiet: silent, and the two conflict.
+  r = Patchscan("render " + kTeapot + " -o " + out + " --size 64x48 --quiet");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.err, "");
+  EXPECT_EQ(Patchscan("render " + kTeapot + " -o " + out + " --quiet --progress").code, 2);
   std::filesystem::remove_all(dir);
 }
 
