@@ -203,10 +203,14 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   if (const int* code = std::get_if<int>(&setup)) return *code;
   BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);
   backEnd.settings.threads = threads;
+  if (const auto why = raster::ImageWriter::CheckFormat(output, o.aov)) {
+    err << "patchscan: " << *why << '\n';
+    return kExitUsage;
+  }
   auto opened = raster::ImageWriter::Open(output, camera.width, camera.height, o.aov, threads);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';
-    return kExitUsage;
+    return kExitOutputError;
   }
   auto& writer = *std::get<std::unique_ptr<raster::ImageWriter>>(opened);
   std::unique_ptr<TrackerOverlay> overlay;

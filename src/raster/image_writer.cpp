@@ -20,18 +20,37 @@ struct ImageWriter::Impl {
   std::filesystem::path target, temp;
   int width = 0, channels = 4;
   bool committed = false;
+  // Until committed, the temporary file goes, also when Open fails after creating it.
+  ~Impl() {
+    if (committed) return;
+    if (out) out->close();
+    png.reset();
+    if (file) std::fclose(file);
+    std::error_code ec;
+    if (!temp.empty()) std::filesystem::remove(temp, ec);
+  }
 };
 
 ImageWriter::ImageWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
-ImageWriter::~ImageWriter() {
-  if (!impl_->committed) {
-    if (impl_->out) impl_->out->close();
-    impl_->png.reset();
-    if (impl_->file) std::fclose(impl_->file);
-    std::error_code ec;
-    std::filesystem::remove(impl_->temp, ec);
-  }
+ImageWriter::~ImageWriter() = default;
+
+namespace {
+
+std::string LowerExtension(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+}  // namespace
+
+std::optional<std::string> ImageWriter::CheckFormat(const std::string& path, bool aovs) {
+  const std::string ext = LowerExtension(path);
+  if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".tif" && ext != ".tiff" && ext != ".exr")
+    return path + ": unknown image format '" + ext + "' (known: .png .tif .tiff .jpg .jpeg .exr)";
+  if (aovs && ext != ".exr") return path + ": AOV channels need an .exr output";
+  return std::nullopt;
 }
 
 std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const std::string& path,
@@ -39,14 +58,11 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
                                                                           bool aovs, int threads) {
   auto impl = std::make_unique<Impl>();
   impl->target = path;
-  std::string ext = impl->target.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  OIIO::TypeDesc type;
+  if (auto why = CheckFormat(path, aovs)) return *why;
+  const std::string ext = LowerExtension(impl->target);
+  OIIO::TypeDesc type = OIIO::TypeDesc::HALF;  // .exr
   if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") type = OIIO::TypeDesc::UINT8;
   else if (ext == ".tif" || ext == ".tiff") type = OIIO::TypeDesc::UINT16;
-  else if (ext == ".exr") type = OIIO::TypeDesc::HALF;
-  else return path + ": unknown image format '" + ext + "' (known: .png .tif .tiff .jpg .jpeg .exr)";
-  if (aovs && ext != ".exr") return path + ": AOV channels need an .exr output";
   impl->channels = (ext == ".jpg" || ext == ".jpeg") ? 3 : aovs ? kChannels : 4;  // JPEG: no alpha
   if (aovs) type = OIIO::TypeDesc::FLOAT;  // depth and ids need more than half precision
   impl->width = width;
@@ -54,12 +70,16 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   tempName += impl->target.stem().string();
   tempName += ".partial-" + std::to_string(::getpid()) + ext;
   impl->temp = impl->target.parent_path() / tempName;
-  if (ext == ".png" && !aovs) {
-    impl->file = std::fopen(impl->temp.c_str(), "wb");
-    if (!impl->file) return path + ": cannot write: " + impl->temp.string() + ": " + std::strerror(errno);
+  // The temporary file is created here for every format, so that a directory that cannot
+  // be written is reported by the user's name for the file, not the temporary one.
+  impl->file = std::fopen(impl->temp.c_str(), "wb");
+  if (!impl->file) return path + ": cannot write: " + std::strerror(errno);
+  if (ext == ".png") {
     impl->png = std::make_unique<PngEncoder>(impl->file, width, height, PngEncoder::Options{6, threads});
     return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
   }
+  std::fclose(impl->file);  // OpenImageIO opens it again by name
+  impl->file = nullptr;
   impl->out = OIIO::ImageOutput::create(path);
   if (!impl->out) return path + ": cannot create an image writer: " + OIIO::geterror();
   OIIO::ImageSpec spec(width, height, impl->channels, type);

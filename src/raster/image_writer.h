@@ -4,6 +4,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 
@@ -22,6 +23,9 @@ class ImageWriter final : public RowSink {
                                                                      bool aovs = false,
                                                                      int threads = 1);
   ~ImageWriter() override;
+  // Whether `path` names a format Open takes (with `aovs`, an .exr): the message if not. A
+  // refusal here is the user's choice of name; a failure of Open after it is the file system's.
+  static std::optional<std::string> CheckFormat(const std::string& path, bool aovs = false);
 
   bool WriteRow(int y, const float* pixels) override;
   // Closes the file and renames it onto the target; the message on failure.

@@ -1,6 +1,7 @@
 #include "raster/scanline_renderer.h"
 
 #include <algorithm>
+#include <limits>
 #include <array>
 #include <cmath>
 #include <memory>
@@ -330,7 +331,9 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
       for (int g = 0; g < nGroups; ++g)
         if (groups[g].layer == 0 && (major < 0 || groups[g].count > groups[major].count)) major = g;
       if (major < 0) {
+        // No surface: depth +inf (OpenEXR's and prman's background), the rest 0, id -1.
         std::fill(out + 4, out + kChannels, 0.0f);
+        out[kChannelZ] = std::numeric_limits<float>::infinity();
         out[kChannelId] = -1.0f;
       } else {
         const Group& gr = groups[major];

@@ -58,9 +58,9 @@ struct RenderSettings {
 };
 
 // The channels of a row handed to a RowSink, per pixel.
-constexpr int kChannelZ = 4;    // w, the eye distance along the view axis (0: no surface)
-constexpr int kChannelN = 5;    // 3 channels: unit world normal
-constexpr int kChannelUv = 8;   // 2 channels: surface (u, v)
+constexpr int kChannelZ = 4;    // w, the eye distance along the view axis (+inf: no surface)
+constexpr int kChannelN = 5;    // 3 channels: unit world normal (0: no surface)
+constexpr int kChannelUv = 8;   // 2 channels: surface (u, v) (0: no surface)
 constexpr int kChannelId = 10;  // surface id, -1: no surface
 constexpr int kChannels = 11;
 

@@ -282,9 +282,15 @@ TEST(Cli, FailedRenderLeavesNoFile) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("unknown image format '.xyz'"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists("/tmp/patchscan_cli_x.xyz"));
-  r = Patchscan("render " + kTeapot + " -o /nonexistent/dir/out.png");
-  EXPECT_NE(r.code, 0);
-  EXPECT_FALSE(std::filesystem::exists("/nonexistent/dir/out.png"));
+  // A file that cannot be created: the output-error code, and the user's name for it (not
+  // the temporary file's), in every format.
+  for (const char* ext : {"png", "exr", "tif", "jpg"}) {
+    const std::string path = std::string("/nonexistent/dir/out.") + ext;
+    r = Patchscan("render " + kTeapot + " --size 32x24 -o " + path);
+    EXPECT_EQ(r.code, 3) << r.err;
+    EXPECT_EQ(r.err, "patchscan: " + path + ": cannot write: No such file or directory\n");
+    EXPECT_FALSE(std::filesystem::exists(path));
+  }
   r = Patchscan("render /nonexistent.bpt -o /tmp/patchscan_cli_y.png");
   EXPECT_EQ(r.code, 1);
   EXPECT_FALSE(std::filesystem::exists("/tmp/patchscan_cli_y.png"));

@@ -7,7 +7,9 @@
 
 #include <Eigen/Geometry>
 
+#include <cmath>
 #include <functional>
+#include <limits>
 #include <iostream>
 #include <sstream>
 
@@ -216,16 +218,22 @@ std::vector<Case> Cases() {
   return c;
 }
 
-// Checks every value of every row and counts covered pixels (alpha).
+// Checks every value of every row (finite; the depth of a pixel no surface covers: +inf)
+// and counts covered pixels (alpha).
 class CheckingSink final : public raster::RowSink {
  public:
   CheckingSink(int width, std::string what, bool keepAlpha = true)
       : width_(width), what_(std::move(what)), keepAlpha_(keepAlpha) {}
   bool WriteRow(int y, const float* pixels) override {
-    for (int k = 0; k < width_ * raster::kChannels; ++k)
-      if (!std::isfinite(pixels[k]) && nonFinite_++ == 0)
+    for (int k = 0; k < width_ * raster::kChannels; ++k) {
+      const bool background = pixels[k - k % raster::kChannels + raster::kChannelId] < 0;
+      const bool ok = k % raster::kChannels == raster::kChannelZ && background
+                          ? pixels[k] == std::numeric_limits<float>::infinity()
+                          : std::isfinite(pixels[k]);
+      if (!ok && nonFinite_++ == 0)
         ADD_FAILURE() << what_ << ": channel " << k % raster::kChannels << " of pixel (" << k / raster::kChannels
                       << ", " << y << ") is " << pixels[k];
+    }
     for (int x = 0; x < width_; ++x) {
       coverage_ += pixels[x * raster::kChannels + 3];
       if (keepAlpha_) alpha_.push_back(pixels[x * raster::kChannels + 3]);
