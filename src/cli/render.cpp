@@ -217,7 +217,7 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   // With more than one thread the image is encoded and written on a thread of its own,
   // overlapping the rows still being rendered.
   std::unique_ptr<raster::AsyncRowSink> async;
-  if (threads > 1) async = std::make_unique<raster::AsyncRowSink>(writer, camera.width);
+  if (threads > 1 && !writer.EncodesInParallel()) async = std::make_unique<raster::AsyncRowSink>(writer, camera.width);
   raster::RowSink* toImage = async ? static_cast<raster::RowSink*>(async.get()) : &writer;
   raster::RowSink* out = toImage;
   if (o.overlay == Overlay::Trackers) {

@@ -4,6 +4,11 @@
 #include "patch/rib_reader.h"
 #include "patch/text_file.h"
 
+#include <climits>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+
 namespace patchscan::rib {
 
 bool RibParser::InWorld(const Request& r) {
@@ -166,6 +171,106 @@ bool RibParser::PatchMesh(const Request& r) {
       if (bicubic) AddSurface(r, BicubicPatch(cv, attr_.uBasis, attr_.vBasis));
       else AddSurface(r, BilinearPatch({cv[0], cv[1], cv[2], cv[3]}));
     }
+  return true;
+}
+
+namespace {
+
+// A whole number within [lo, hi], or nullopt.
+std::optional<int> WholeIn(double x, int lo, int hi) {
+  if (!(x == std::floor(x)) || x < lo || x > hi) return std::nullopt;
+  return static_cast<int>(x);
+}
+
+}  // namespace
+
+bool RibParser::SubdivTags(const Value& tags, const Value& nargs, const Value& ints,
+                           const Value& floats, SubdivMesh* mesh) {
+  const std::size_t nTags = tags.Textual() ? tags.strings.size() : 0;
+  if (!tags.Textual() && tags.Size() != 0) return Fail(tags.line, "SubdivisionMesh: the tags are an array of strings");
+  if (!nargs.Numeric() || nargs.numbers.size() != 2 * nTags)
+    return Fail(nargs.line, "SubdivisionMesh: nargs expects 2 numbers per tag (" + std::to_string(2 * nTags) + "), found " +
+                                std::to_string(nargs.Size()));
+  if (!ints.Numeric() && ints.Size() != 0) return Fail(ints.line, "SubdivisionMesh: intargs are numbers");
+  if (!floats.Numeric() && floats.Size() != 0) return Fail(floats.line, "SubdivisionMesh: floatargs are numbers");
+  std::size_t ni = 0, nf = 0;
+  for (std::size_t t = 0; t < nTags; ++t) {
+    const auto nInt = WholeIn(nargs.numbers[2 * t], 0, 100'000'000), nFloat = WholeIn(nargs.numbers[2 * t + 1], 0, 100'000'000);
+    if (!nInt || !nFloat) return Fail(nargs.line, "SubdivisionMesh: nargs are whole numbers");
+    if (ni + static_cast<std::size_t>(*nInt) > ints.Size() || nf + static_cast<std::size_t>(*nFloat) > floats.Size())
+      return Fail(nargs.line, "SubdivisionMesh: tag " + Shown(tags.strings[t]) + " asks for more arguments than intargs and floatargs hold");
+    std::vector<int> iv;
+    for (int k = 0; k < *nInt; ++k) {
+      const auto i = WholeIn(ints.numbers[ni + static_cast<std::size_t>(k)], INT_MIN, INT_MAX);
+      if (!i) return Fail(ints.line, "SubdivisionMesh: intargs are whole numbers");
+      iv.push_back(*i);
+    }
+    const std::vector<double> fv(floats.numbers.begin() + static_cast<std::ptrdiff_t>(nf),
+                                 floats.numbers.begin() + static_cast<std::ptrdiff_t>(nf + static_cast<std::size_t>(*nFloat)));
+    ni += static_cast<std::size_t>(*nInt);
+    nf += static_cast<std::size_t>(*nFloat);
+    const std::string& tag = tags.strings[t];
+    if (tag == "crease") {
+      if (iv.size() < 2 || fv.size() != 1) return Fail(tags.line, "SubdivisionMesh: \"crease\" takes a chain of 2 or more vertices and one sharpness");
+      mesh->creases.push_back({iv, fv[0]});
+    } else if (tag == "corner") {
+      if (iv.empty() || (fv.size() != 1 && fv.size() != iv.size()))
+        return Fail(tags.line, "SubdivisionMesh: \"corner\" takes vertices and one sharpness, or one per vertex");
+      for (std::size_t k = 0; k < iv.size(); ++k) mesh->corners.emplace_back(iv[k], fv.size() == 1 ? fv[0] : fv[k]);
+    } else if (tag == "hole") {
+      mesh->holes.insert(mesh->holes.end(), iv.begin(), iv.end());
+    } else if (tag == "interpolateboundary") {
+      // No argument: on (edges and corners), as RenderMan 3.2 first defined it.
+      if (iv.size() > 1 || (iv.size() == 1 && (iv[0] < 0 || iv[0] > 2)))
+        return Fail(tags.line, "SubdivisionMesh: \"interpolateboundary\" takes nothing, or 0, 1 or 2");
+      mesh->interpolateBoundary = iv.empty() ? 1 : iv[0];
+    } else {
+      Warn(tags.line, "SubdivisionMesh tag " + tag, "SubdivisionMesh: tag " + Shown(tag) + " is not supported here: ignored");
+    }
+  }
+  return true;
+}
+
+bool RibParser::SubdivisionMesh(const Request& r) {
+  // SubdivisionMesh scheme nvertices vertices [tags nargs intargs floatargs] parameterlist
+  if (!InWorld(r)) return false;
+  std::string scheme;
+  if (!StringArg(r, 0, &scheme)) return false;
+  if (scheme != "catmull-clark") {
+    Warn(r.line, "SubdivisionMesh " + scheme,
+         "SubdivisionMesh: scheme " + Shown(scheme) + " is not supported here (only \"catmull-clark\"): skipped");
+    return true;
+  }
+  if (r.args.size() < 3 || !r.args[1].Numeric() || !r.args[2].Numeric())
+    return Fail(r.line, "SubdivisionMesh expects scheme, nvertices and vertices (arrays of numbers)");
+  SubdivMesh mesh;
+  for (const double n : r.args[1].numbers) {
+    const auto k = WholeIn(n, 0, 1'000'000);
+    if (!k) return Fail(r.args[1].line, "SubdivisionMesh: nvertices are whole numbers");
+    mesh.faceSizes.push_back(*k);
+  }
+  int maxIndex = -1;
+  for (const double v : r.args[2].numbers) {
+    const auto k = WholeIn(v, 0, 100'000'000);
+    if (!k) return Fail(r.args[2].line, "SubdivisionMesh: vertices are whole numbers from 0");
+    mesh.faceVertices.push_back(*k);
+    maxIndex = std::max(maxIndex, *k);
+  }
+  // The tags are there if an array (not a parameter name) follows.
+  std::size_t first = 3;
+  if (r.args.size() >= 7 && r.args[3].kind != Value::Kind::String) {
+    if (!SubdivTags(r.args[3], r.args[4], r.args[5], r.args[6], &mesh)) return false;
+    first = 7;
+  }
+  if (!Points(r, first, static_cast<std::size_t>(maxIndex + 1))) return false;
+  mesh.points = pts_;
+  std::vector<SubdivFace> faces;
+  try {
+    faces = PrepareSubdivFaces(mesh);
+  } catch (const std::invalid_argument& e) {
+    return Fail(r.line, std::string("SubdivisionMesh: ") + e.what());
+  }
+  for (SubdivFace& f : faces) AddSurface(r, std::move(f));
   return true;
 }
 

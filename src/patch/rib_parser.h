@@ -164,6 +164,11 @@ class RibParser {
   // nonperiodic n - 1, periodic n.
   bool MeshCount(const Request& r, int n, bool periodic, bool bicubic, int step, const char* dir, int* count);
   bool PatchMesh(const Request& r);
+  bool SubdivisionMesh(const Request& r);
+  // SubdivisionMesh's tags (RenderMan Interface 3.2 and prman: crease, corner, hole,
+  // interpolateboundary) into `mesh`; unknown tags are warned about and ignored.
+  bool SubdivTags(const Value& tags, const Value& nargs, const Value& ints, const Value& floats,
+                  SubdivMesh* mesh);
   bool Quadric(const Request& r);
   bool Geometry(const Request& r);
 

@@ -11,11 +11,12 @@
 
 #include "patch/bicubic.h"
 #include "patch/quadrics.h"
+#include "patch/subdiv.h"
 
 namespace patchscan {
 
 using Shape = std::variant<BicubicPatch, BilinearPatch, Sphere, Cylinder, Cone, Paraboloid,
-                           Hyperboloid, Disk, Torus, Saddle, MonkeySaddle>;
+                           Hyperboloid, Disk, Torus, Saddle, MonkeySaddle, SubdivFace>;
 
 using Affine3 = Eigen::Affine3d;
 

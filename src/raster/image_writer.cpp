@@ -93,6 +93,8 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
 }
 
+bool ImageWriter::EncodesInParallel() const { return impl_->png != nullptr; }
+
 bool ImageWriter::WriteRow(int y, const float* pixels) {
   if (impl_->png) return impl_->png->WriteRow(pixels, kChannels);
   return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, pixels, kChannels * sizeof(float));

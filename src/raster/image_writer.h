@@ -28,6 +28,9 @@ class ImageWriter final : public RowSink {
   static std::optional<std::string> CheckFormat(const std::string& path, bool aovs = false);
 
   bool WriteRow(int y, const float* pixels) override;
+  // Whether the format encodes on threads of its own (PNG): then a row costs the caller a
+  // conversion to 8 bits only, and a writer thread in front of it would only add copies.
+  bool EncodesInParallel() const;
   // Closes the file and renames it onto the target; the message on failure.
   std::variant<std::monostate, std::string> Commit();
 

@@ -42,7 +42,7 @@ struct SceneCase {
 std::vector<SceneCase> Scenes() {
   std::vector<SceneCase> out;
   for (const char* file : {"teapot.bpt", "teacup.bpt", "teaspoon.bpt", "sphere.bpt", "quadrics.rib",
-                           "patchmesh.rib", "teapot_lit.rib"}) {
+                           "patchmesh.rib", "teapot_lit.rib", "cages.rib"}) {
     auto loaded = LoadScene(std::string(PATCHSCAN_SURFACES_DIR) + "/" + file);
     EXPECT_TRUE(std::holds_alternative<Scene>(loaded)) << file;
     if (!std::holds_alternative<Scene>(loaded)) continue;
@@ -122,7 +122,7 @@ TEST(Partition, SameImageForAnyNumberOfWorkers) {
       }
     }
   }
-  EXPECT_EQ(compared, 8 * 4 * 5);
+  EXPECT_EQ(compared, 9 * 4 * 5);  // scenes, modes, worker counts
 }
 
 TEST(Partition, EverySurfaceOnceInScanOrderAndBalanced) {
