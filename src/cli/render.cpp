@@ -62,7 +62,7 @@ std::unique_ptr<PartitionedScan> DirectScan(const RenderOptions& o, const Scene&
 // The tessellated mode's mesh, tessellated on `threads` threads (nullopt: interrupted).
 std::optional<raster::TriangleMesh> TessellatedMesh(const RenderOptions& o, const Scene& scene, const Camera& camera,
                                                     int threads) {
-  auto tess = TessellateScene(scene.surfaces, camera, TessSettings{o.tessRate, o.tessPixels}, threads,
+  auto tess = TessellateScene(scene.surfaces, camera, TessSettings{o.tessRate, o.tessPixels, o.tessError}, threads,
                               [] { return gInterrupted != 0; });
   if (!tess) return std::nullopt;
   WeldBoundaryVertices(&*tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
@@ -112,13 +112,21 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
                   "event as a ring (maximum passed yellow, saddle magenta, fold green, "
                   "silhouette tracker born pink, tracker died black, crossing repaired by the "
                   "x scan orange, walk or sample given up cyan)");
-  cmd->add_option("--tess-rate", o->tessRate, "tessellation segments per patch edge (uniform)")
-      ->check(CLI::Range(1, kMaxTessRate))
-      ->capture_default_str();
-  cmd->add_option("--tess-pixels", o->tessPixels,
-                  "screen-adaptive tessellation: per-edge rates making edges about this many "
-                  "pixels long (equal on shared edges), instead of --tess-rate")
-      ->check(CLI::Range(0.01, 1e6));
+  auto* tessError = cmd->add_option("--tess-error", o->tessError,
+                                    "tess mode (the default tessellation): rates chosen per surface so that "
+                                    "no triangle lies more than about this many pixels from the surface "
+                                    "(chord error; equal rates on shared edges)")
+                         ->check(CLI::Range(0.01, 1e6))
+                         ->capture_default_str();
+  auto* tessRate = cmd->add_option("--tess-rate", o->tessRate,
+                                   "tess mode: uniform tessellation instead, this many segments per patch edge")
+                       ->check(CLI::Range(1, kMaxTessRate));
+  auto* tessPixels = cmd->add_option("--tess-pixels", o->tessPixels,
+                                     "tess mode: screen-adaptive tessellation instead, per-edge rates making "
+                                     "edges about this many pixels long (equal on shared edges)")
+                         ->check(CLI::Range(0.01, 1e6));
+  tessError->excludes(tessRate)->excludes(tessPixels);
+  tessRate->excludes(tessPixels);
   cmd->add_option("--aa", o->aa,
                   "supersampling: an l x l grid of samples per pixel whose edge samples are "
                   "shared with the neighbours (1: one sample at the pixel centre; default: a RIB "

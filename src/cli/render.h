@@ -10,6 +10,7 @@
 #include "cli/camera_options.h"
 #include "cli/choice_option.h"
 #include "raster/scanline_renderer.h"
+#include "xscan/tess_feed.h"
 
 namespace patchscan::cli {
 
@@ -32,8 +33,11 @@ struct RenderOptions {
   int thetaSteps = 16;
   double yStep = 1.0;  // theta mode: pixels between scan lines with chains; 0: every sample row
   Overlay overlay = Overlay::None;
-  int tessRate = 8;
-  double tessPixels = 0.0;  // > 0: screen-adaptive tessellation instead of tessRate
+  // Tessellation (xscan/tess_feed.h): uniform at tessRate > 0, or edges tessPixels long,
+  // else (the default) a chord error of at most tessError pixels.
+  int tessRate = 0;
+  double tessPixels = 0.0;
+  double tessError = kDefaultChordErrorPx;
   std::optional<int> aa;  // none: a RIB scene's PixelSamples, else kDefaultAa
   raster::ShadingMode shading = raster::ShadingMode::Phong;
   std::string texture = "none";

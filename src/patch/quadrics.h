@@ -23,6 +23,15 @@ inline void RevolveU(const Vec3& p, double thetaMax, bool first, bool second, Su
   if (first) d->dpdu = Vec3(-p.y(), p.x(), 0.0) * thetaMax;
   if (second) d->d2pdu2 = Vec3(p.x(), p.y(), 0.0) * (-thetaMax * thetaMax);
 }
+
+// The angle t reduced to (-pi, pi]: exact (Sterbenz) for t in [-2 pi, 2 pi], so a full
+// turn's two ends, u = 0 and u = 1 with thetamax 360, give the same sine and cosine bit for
+// bit and the seam's two edges are one curve (sin(2 pi) is -2.4e-16 in doubles: the edges
+// 1e-14 px apart left a crack for samples lying exactly on them).
+inline double Turn(double t) {
+  constexpr double kPi = 3.141592653589793, kTwoPi = 6.283185307179586;
+  return t > kPi ? t - kTwoPi : (t <= -kPi ? t + kTwoPi : t);
+}
 }  // namespace detail
 
 // Sphere: radius, zmin, zmax (clamped to [-radius, radius]), thetamax.
@@ -154,7 +163,7 @@ class MonkeySaddle {
 
 inline void Sphere::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const {
   const bool first = Wants(order, DerivOrder::First), second = Wants(order, DerivOrder::Second);
-  const double theta = u * thetaMax_, dPhi = phiMax_ - phiMin_, phi = phiMin_ + v * dPhi;
+  const double theta = detail::Turn(u * thetaMax_), dPhi = phiMax_ - phiMin_, phi = phiMin_ + v * dPhi;
   const double ct = std::cos(theta), st = std::sin(theta), cp = std::cos(phi), sp = std::sin(phi);
   d->p = Vec3(r_ * ct * cp, r_ * st * cp, r_ * sp);
   detail::RevolveU(d->p, thetaMax_, first, second, d);
@@ -167,7 +176,7 @@ inline void Sphere::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs
 
 inline void Cylinder::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const {
   const bool first = Wants(order, DerivOrder::First), second = Wants(order, DerivOrder::Second);
-  const double theta = u * thetaMax_;
+  const double theta = detail::Turn(u * thetaMax_);
   d->p = Vec3(r_ * std::cos(theta), r_ * std::sin(theta), zMin_ + v * (zMax_ - zMin_));
   detail::RevolveU(d->p, thetaMax_, first, second, d);
   if (first) d->dpdv = Vec3(0.0, 0.0, zMax_ - zMin_);
@@ -176,7 +185,7 @@ inline void Cylinder::Evaluate(double u, double v, DerivOrder order, SurfaceDeri
 
 inline void Cone::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const {
   const bool first = Wants(order, DerivOrder::First), second = Wants(order, DerivOrder::Second);
-  const double theta = u * thetaMax_, ct = std::cos(theta), st = std::sin(theta);
+  const double theta = detail::Turn(u * thetaMax_), ct = std::cos(theta), st = std::sin(theta);
   const double rho = r_ * (1.0 - v);
   d->p = Vec3(rho * ct, rho * st, v * h_);
   detail::RevolveU(d->p, thetaMax_, first, second, d);
@@ -189,7 +198,7 @@ inline void Cone::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* 
 
 inline void Paraboloid::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const {
   const bool first = Wants(order, DerivOrder::First), second = Wants(order, DerivOrder::Second);
-  const double theta = u * thetaMax_, ct = std::cos(theta), st = std::sin(theta);
+  const double theta = detail::Turn(u * thetaMax_), ct = std::cos(theta), st = std::sin(theta);
   const double dz = zMax_ - zMin_, z = zMin_ + v * dz;
   const double q = std::max(z / zMax_, 0.0);  // rho = rMax sqrt(q)
   const double rho = rMax_ * std::sqrt(q);
@@ -210,7 +219,7 @@ inline void Paraboloid::Evaluate(double u, double v, DerivOrder order, SurfaceDe
 
 inline void Hyperboloid::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const {
   const bool first = Wants(order, DerivOrder::First), second = Wants(order, DerivOrder::Second);
-  const double theta = u * thetaMax_, ct = std::cos(theta), st = std::sin(theta);
+  const double theta = detail::Turn(u * thetaMax_), ct = std::cos(theta), st = std::sin(theta);
   const Vec3 l = p1_ + v * (p2_ - p1_), e = p2_ - p1_;
   d->p = Vec3(l.x() * ct - l.y() * st, l.x() * st + l.y() * ct, l.z());
   detail::RevolveU(d->p, thetaMax_, first, second, d);
@@ -224,7 +233,7 @@ inline void Hyperboloid::Evaluate(double u, double v, DerivOrder order, SurfaceD
 
 inline void Disk::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const {
   const bool first = Wants(order, DerivOrder::First), second = Wants(order, DerivOrder::Second);
-  const double theta = u * thetaMax_, ct = std::cos(theta), st = std::sin(theta);
+  const double theta = detail::Turn(u * thetaMax_), ct = std::cos(theta), st = std::sin(theta);
   const double rho = r_ * (1.0 - v);
   d->p = Vec3(rho * ct, rho * st, h_);
   detail::RevolveU(d->p, thetaMax_, first, second, d);
@@ -237,8 +246,8 @@ inline void Disk::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* 
 
 inline void Torus::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const {
   const bool first = Wants(order, DerivOrder::First), second = Wants(order, DerivOrder::Second);
-  const double theta = u * thetaMax_, ct = std::cos(theta), st = std::sin(theta);
-  const double dPhi = phiMax_ - phiMin_, phi = phiMin_ + v * dPhi;
+  const double theta = detail::Turn(u * thetaMax_), ct = std::cos(theta), st = std::sin(theta);
+  const double dPhi = phiMax_ - phiMin_, phi = detail::Turn(phiMin_ + v * dPhi);
   const double cp = std::cos(phi), sp = std::sin(phi), rho = major_ + minor_ * cp;
   d->p = Vec3(rho * ct, rho * st, minor_ * sp);
   detail::RevolveU(d->p, thetaMax_, first, second, d);

@@ -76,47 +76,123 @@ void TessellateUniform(const Surface& s, int rate, std::uint32_t surfaceId, Tess
                 surfaceId, out);
 }
 
+namespace {
+
+// Bfr's quad edge order: v=0, u=1, v=1, u=0.
+constexpr PatchEdge kBfrEdges[4] = {PatchEdge::V0, PatchEdge::U1, PatchEdge::V1, PatchEdge::U0};
+// Points sampled along a curve of the surface to size its tessellation: 16 segments.
+constexpr int kRateSegments = 16;
+using CurvePoints = std::array<Vec3, kRateSegments + 1>;
+
+// World points along boundary edge e. For a bicubic patch the edge's Bézier points are
+// taken in a canonical order and evaluated by de Casteljau: the same arithmetic in both
+// patches that share the edge, so both give it the same rate.
+CurvePoints EdgePoints(const Surface& s, PatchEdge e) {
+  CurvePoints world;
+  if (const auto* bicubic = std::get_if<BicubicPatch>(&s.shape)) {
+    const auto& b = bicubic->BezierPoints();
+    std::array<Vec3, 4> cv;
+    for (int k = 0; k < 4; ++k) {
+      const int i = e == PatchEdge::U0 ? 0 : e == PatchEdge::U1 ? 3 : k;
+      const int j = e == PatchEdge::V0 ? 0 : e == PatchEdge::V1 ? 3 : k;
+      cv[k] = s.worldFromObject * b[4 * j + i];
+    }
+    if (std::lexicographical_compare(cv[3].data(), cv[3].data() + 3, cv[0].data(), cv[0].data() + 3))
+      std::reverse(cv.begin(), cv.end());
+    for (int k = 0; k <= kRateSegments; ++k) {
+      const double t = double(k) / kRateSegments;
+      std::array<Vec3, 4> q = cv;
+      for (int m = 3; m > 0; --m)
+        for (int i = 0; i < m; ++i) q[i] = (1 - t) * q[i] + t * q[i + 1];
+      world[k] = q[0];
+    }
+    return world;
+  }
+  for (int k = 0; k <= kRateSegments; ++k) {
+    const double t = double(k) / kRateSegments;
+    const double u = e == PatchEdge::U0 ? 0 : e == PatchEdge::U1 ? 1 : t;
+    const double v = e == PatchEdge::V0 ? 0 : e == PatchEdge::V1 ? 1 : t;
+    SurfaceDerivs d;
+    EvaluateObject(s, u, v, DerivOrder::Position, &d);
+    world[k] = s.worldFromObject * d.p;
+  }
+  return world;
+}
+
+// World points along the iso-line v = c (alongU) or u = c of the surface.
+CurvePoints IsoPoints(const Surface& s, bool alongU, double c) {
+  CurvePoints world;
+  for (int k = 0; k <= kRateSegments; ++k) {
+    const double t = double(k) / kRateSegments;
+    SurfaceDerivs d;
+    EvaluateObject(s, alongU ? t : c, alongU ? c : t, DerivOrder::Position, &d);
+    world[k] = s.worldFromObject * d.p;
+  }
+  return world;
+}
+
+// Pixels per world unit at world point p, across the view (the larger row of the screen
+// map's Jacobian); infinity at or behind the eye.
+double PixelsPerUnit(const Mat4& screenFromWorld, const Vec3& p) {
+  const Vec4 h = screenFromWorld * p.homogeneous();
+  if (!(h.w() > 0.0)) return INFINITY;
+  const Eigen::Matrix<double, 1, 3> w = screenFromWorld.block<1, 3>(3, 0);
+  const double jx = (screenFromWorld.block<1, 3>(0, 0) - (h.x() / h.w()) * w).norm() / h.w();
+  const double jy = (screenFromWorld.block<1, 3>(1, 0) - (h.y() / h.w()) * w).norm() / h.w();
+  return std::max(jx, jy);
+}
+
+// The segments a curve needs for a chord error of at most `errorPx` pixels: a chord over a
+// parameter step h of a curve with second derivative c'' is off by h^2 |c''| / 8; c'' in
+// pixels comes from the points' second differences (3D, so that depth and the normals'
+// turn count too, not just the outline) scaled by the pixels per unit there.
+int ChordRate(const CurvePoints& world, const Mat4& screenFromWorld, double errorPx) {
+  double worst = 0.0;  // max |c''| in pixels per unit parameter squared
+  for (int k = 0; k <= kRateSegments; ++k) {
+    const double ppu = PixelsPerUnit(screenFromWorld, world[k]);
+    if (!std::isfinite(ppu)) return kMaxAdaptiveRate;
+    if (k == 0 || k == kRateSegments) continue;
+    const double d2 = (world[k - 1] - 2.0 * world[k] + world[k + 1]).norm() * kRateSegments * kRateSegments;
+    worst = std::max(worst, d2 * ppu);
+  }
+  const double wanted = std::ceil(std::sqrt(worst / (8.0 * errorPx)));
+  return wanted < kMaxAdaptiveRate ? std::max(1, static_cast<int>(wanted)) : kMaxAdaptiveRate;
+}
+
+}  // namespace
+
 std::array<int, 4> ScreenEdgeRates(const Surface& s, const Camera& camera, double pixels) {
   const Mat4 screenFromWorld = ScreenFromWorld(camera);
-  const PatchEdge edges[4] = {PatchEdge::V0, PatchEdge::U1, PatchEdge::V1, PatchEdge::U0};
   std::array<int, 4> rates;
-  const auto* bicubic = std::get_if<BicubicPatch>(&s.shape);
   for (int e = 0; e < 4; ++e) {
-    std::array<Vec3, 17> world;  // 16 segments along the edge
-    if (bicubic) {
-      // The edge's Bézier points in a canonical order, evaluated by de Casteljau: the
-      // same arithmetic in both patches that share the edge.
-      const auto& b = bicubic->BezierPoints();
-      std::array<Vec3, 4> cv;
-      for (int k = 0; k < 4; ++k) {
-        const int i = edges[e] == PatchEdge::U0 ? 0 : edges[e] == PatchEdge::U1 ? 3 : k;
-        const int j = edges[e] == PatchEdge::V0 ? 0 : edges[e] == PatchEdge::V1 ? 3 : k;
-        cv[k] = s.worldFromObject * b[4 * j + i];
-      }
-      if (std::lexicographical_compare(cv[3].data(), cv[3].data() + 3, cv[0].data(), cv[0].data() + 3))
-        std::reverse(cv.begin(), cv.end());
-      for (int k = 0; k <= 16; ++k) {
-        const double t = k / 16.0;
-        std::array<Vec3, 4> q = cv;
-        for (int m = 3; m > 0; --m)
-          for (int i = 0; i < m; ++i) q[i] = (1 - t) * q[i] + t * q[i + 1];
-        world[k] = q[0];
-      }
-    } else {
-      for (int k = 0; k <= 16; ++k) {
-        const double t = k / 16.0;
-        const double u = edges[e] == PatchEdge::U0 ? 0 : edges[e] == PatchEdge::U1 ? 1 : t;
-        const double v = edges[e] == PatchEdge::V0 ? 0 : edges[e] == PatchEdge::V1 ? 1 : t;
-        SurfaceDerivs d;
-        EvaluateObject(s, u, v, DerivOrder::Position, &d);
-        world[k] = s.worldFromObject * d.p;
-      }
-    }
-    const double len = ScreenLength(world, screenFromWorld);
+    const double len = ScreenLength(EdgePoints(s, kBfrEdges[e]), screenFromWorld);
     const double wanted = std::ceil(len / pixels);  // infinite behind the eye
     rates[e] = wanted < kMaxAdaptiveRate ? std::max(1, static_cast<int>(wanted)) : kMaxAdaptiveRate;
   }
   return rates;
+}
+
+std::array<int, 6> ChordErrorRates(const Surface& s, const Camera& camera, double errorPx) {
+  const Mat4 screenFromWorld = ScreenFromWorld(camera);
+  std::array<int, 6> rates;
+  for (int e = 0; e < 4; ++e) rates[e] = ChordRate(EdgePoints(s, kBfrEdges[e]), screenFromWorld, errorPx);
+  // Inner rates: the most any iso-line needs, and no fewer than the edges along it have.
+  rates[4] = std::max(rates[0], rates[2]);
+  rates[5] = std::max(rates[1], rates[3]);
+  for (int k = 1; k < kInnerIsoLines; ++k) {
+    const double c = double(k) / kInnerIsoLines;
+    rates[4] = std::max(rates[4], ChordRate(IsoPoints(s, true, c), screenFromWorld, errorPx));
+    rates[5] = std::max(rates[5], ChordRate(IsoPoints(s, false, c), screenFromWorld, errorPx));
+  }
+  return rates;
+}
+
+void TessellateToChordError(const Surface& s, const Camera& camera, double errorPx, std::uint32_t surfaceId,
+                            TessMesh* out) {
+  const std::array<int, 6> rates = ChordErrorRates(s, camera, errorPx);
+  const Bfr::Parameterization quad(OpenSubdiv::Sdc::SCHEME_CATMARK, 4);
+  AppendPattern(s, Bfr::Tessellation(quad, 6, rates.data(), Bfr::Tessellation::Options().SetFacetSize(3)),
+                surfaceId, out);
 }
 
 void TessellateToScreen(const Surface& s, const Camera& camera, double pixels,

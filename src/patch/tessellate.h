@@ -40,6 +40,19 @@ std::array<int, 4> ScreenEdgeRates(const Surface& s, const Camera& camera, doubl
 void TessellateToScreen(const Surface& s, const Camera& camera, double pixels,
                         std::uint32_t surfaceId, TessMesh* out);
 
+// Appends `s` tessellated so that no triangle is more than about `errorPx` pixels from
+// the surface (chord error, estimated from second differences of 16 segments of each
+// curve, in 3D scaled to pixels at each point, so that a curve seen end-on still counts).
+// The edge rates depend only on the edge curve (as in TessellateToScreen); the two inner
+// rates are the largest any of kInnerIsoLines - 1 interior iso-lines, or the edges along
+// them, need. A collapsed edge gets rate 1, its neighbourhood the inner rate.
+constexpr int kInnerIsoLines = 4;
+// The four edge rates in Bfr's order (v=0, u=1, v=1, u=0), then the inner rates along u
+// and along v.
+std::array<int, 6> ChordErrorRates(const Surface& s, const Camera& camera, double errorPx);
+void TessellateToChordError(const Surface& s, const Camera& camera, double errorPx, std::uint32_t surfaceId,
+                            TessMesh* out);
+
 // The world-space unit normal of `s` at (u,v). Where dp/du x dp/dv vanishes (a collapsed
 // edge such as the teapot's lid apex), the normal is taken a step kNormalNudge towards
 // the domain's centre, its limit along that path.

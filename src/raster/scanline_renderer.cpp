@@ -32,8 +32,10 @@ class TriangleGeometry {
       const Vec3 &a = mesh.vertices[t.v[0]].h, &b = mesh.vertices[t.v[1]].h, &c = mesh.vertices[t.v[2]].h;
       double yMin = 0, yMax = s.height;
       if (a.z() > 0 && b.z() > 0 && c.z() > 0) {
-        yMin = std::min({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()});
-        yMax = std::max({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()});
+        // Widened as SetupTriangle widens its bounds: a rounded division must not keep a
+        // triangle off a sample row its edge values give it.
+        yMin = std::min({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()}) - kBoundsSlackPx;
+        yMax = std::max({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()}) + kBoundsSlackPx;
       }
       const int first = lat.Ceil(yMin, lat.ny), last = lat.Floor(yMax, lat.ny);
       if (first <= last) ySorted_.push_back({first, last, k});
@@ -133,7 +135,7 @@ class FragmentGeometry final : public FragmentRow {
     ++stats_[Counter::Triangles];
     double yMax = s_.height;
     if (a.h.z() > 0 && b.h.z() > 0 && c.h.z() > 0)
-      yMax = std::max({a.h.y() / a.h.z(), b.h.y() / b.h.z(), c.h.y() / c.h.z()});
+      yMax = std::max({a.h.y() / a.h.z(), b.h.y() / b.h.z(), c.h.y() / c.h.z()}) + kBoundsSlackPx;
     store_.Add(a, b, c, surfaceId, lat_.Floor(yMax, lat_.ny));
   }
 

@@ -29,10 +29,13 @@ std::optional<TriangleSetup> SetupTriangle(const Vec3& h0, const Vec3& h1, const
   if (h0.z() > 0 && h1.z() > 0 && h2.z() > 0) {
     const double x[3] = {h0.x() / h0.z(), h1.x() / h1.z(), h2.x() / h2.z()};
     const double y[3] = {h0.y() / h0.z(), h1.y() / h1.z(), h2.y() / h2.z()};
-    t.xMin = std::min({x[0], x[1], x[2]});
-    t.xMax = std::max({x[0], x[1], x[2]});
-    t.yMin = std::min({y[0], y[1], y[2]});
-    t.yMax = std::max({y[0], y[1], y[2]});
+    // Widened by kBoundsSlackPx: the divisions round, and a sample exactly on an edge level
+    // with a row of samples (x or y equal at both ends) must still be tested by both
+    // triangles that share the edge, whose edge values then give it to exactly one.
+    t.xMin = std::min({x[0], x[1], x[2]}) - kBoundsSlackPx;
+    t.xMax = std::max({x[0], x[1], x[2]}) + kBoundsSlackPx;
+    t.yMin = std::min({y[0], y[1], y[2]}) - kBoundsSlackPx;
+    t.yMax = std::max({y[0], y[1], y[2]}) + kBoundsSlackPx;
   } else {
     t.xMin = 0;
     t.xMax = width;

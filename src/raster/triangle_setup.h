@@ -16,6 +16,10 @@ namespace patchscan::raster {
 // sample reliably and its inverse would amplify rounding without bound.
 constexpr double kMinRelativeDet = 1e-14;
 
+// How far a triangle's screen bounds reach beyond its vertices: far above the rounding of
+// a vertex's x = X/W (1e-12 px at 65536 px), far below a sample spacing.
+constexpr double kBoundsSlackPx = 1e-6;
+
 struct TriangleSetup {
   // Edge lines in homogeneous screen space, oriented so that inside is >= 0:
   // edge[i] is the line through the two vertices other than i; edge[i] . (x, y, 1) is

@@ -96,6 +96,10 @@ constexpr double kLineHalfWidth = 0.6;
 // detail that one call per pixel would alias.
 constexpr double kShadeDiscrepancy = 0.08;
 
+// An edge whose x coefficient is below this fraction of its y coefficient is level with
+// the sample rows (its slope is rounding).
+constexpr double kLevelEdgeRel = 1e-9;
+
 // Triangles being scanned: the active store whose slots do not move while a sample
 // refers to them (a triangle is retired at the start of the first pixel row none of whose
 // sample rows it reaches). A slot keeps its own copy of the vertices, so triangles may come
@@ -176,7 +180,10 @@ class TriangleStore {
         else if (c < 0) hi = -INFINITY;
       };
       for (const Vec3& e : t.edge) {
-        clip(e.x(), e.y() * y + e.z());
+        // An edge level with the row (x coefficient rounding next to y's) bounds nothing
+        // along it: -c / a would be rounding over rounding, and could cut off samples
+        // the exact test gives the triangle.
+        if (std::abs(e.x()) > kLevelEdgeRel * std::abs(e.y())) clip(e.x(), e.y() * y + e.z());
         sum += e;
       }
       const double absDet = 1.0 / std::abs(t.invDet);

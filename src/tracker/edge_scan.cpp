@@ -1,6 +1,7 @@
 #include "tracker/edge_scan.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace patchscan {
 namespace {
@@ -24,13 +25,14 @@ EdgeSample SampleEdge(const ShapeT& shape, const ScreenMap& map, PatchEdge e, do
 }
 
 template <class ShapeT>
-std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEdge e) {
+std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEdge e, double* collapsedY) {
   // Step 1: collapsed edges (kCollapsedRel everywhere along them) have no crossing to track.
   bool collapsed = true;
   for (int k = 0; k <= 4 && collapsed; ++k) {
     const EdgeSample s = SampleEdge(shape, map, e, k / 4.0);
     collapsed = s.tangent <= kCollapsedRel * std::max(s.across, 1e-300);
   }
+  if (collapsedY) *collapsedY = collapsed ? SampleEdge(shape, map, e, 0.5).y : NAN;
   if (collapsed) return {};
   // Step 2: critical points of y(t): sign changes of y_t between samples, refined by
   // Newton on y_t = 0 inside the bracket (bisection when Newton leaves it).
@@ -64,16 +66,28 @@ std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEd
 
 }  // namespace
 
-std::vector<EdgePiece> MonotoneEdgePieces(const Surface& s, const ScreenMap& map, PatchEdge e) {
-  return VisitShape(s, [&](const auto& shape) { return Pieces(shape, map, e); });
+std::vector<EdgePiece> MonotoneEdgePieces(const Surface& s, const ScreenMap& map, PatchEdge e, double* collapsedY) {
+  return VisitShape(s, [&](const auto& shape) { return Pieces(shape, map, e, collapsedY); });
 }
 
 EdgeScan::EdgeScan(const Surface& s, const ScreenMap& map, Counters& counters, bool extrapolate, double tolerancePx)
     : surface_(s), map_(map), extrapolate_(extrapolate), tolerancePx_(tolerancePx), counters_(counters) {
   for (PatchEdge e : {PatchEdge::U0, PatchEdge::U1, PatchEdge::V0, PatchEdge::V1}) {
-    const auto p = MonotoneEdgePieces(s, map, e);
+    double collapsedY = NAN;
+    const auto p = MonotoneEdgePieces(s, map, e, &collapsedY);
     pieces_.insert(pieces_.end(), p.begin(), p.end());
+    if (std::isfinite(collapsedY)) degenerate_.emplace_back(collapsedY - kDegenerateNearPx, collapsedY + kDegenerateNearPx);
+    for (const EdgePiece& q : p)
+      if (q.yBottom - q.yTop <= kFlatPiecePx) degenerate_.emplace_back(q.yTop - kDegenerateNearPx, q.yBottom + kDegenerateNearPx);
   }
+  // Merged into disjoint ranges (a flat edge's noise pieces are one range).
+  std::sort(degenerate_.begin(), degenerate_.end());
+  std::size_t n = 0;
+  for (const auto& r : degenerate_) {
+    if (n > 0 && r.first <= degenerate_[n - 1].second) degenerate_[n - 1].second = std::max(degenerate_[n - 1].second, r.second);
+    else degenerate_[n++] = r;
+  }
+  degenerate_.resize(n);
   std::stable_sort(pieces_.begin(), pieces_.end(),
                    [](const EdgePiece& a, const EdgePiece& b) { return a.yTop < b.yTop; });
   trackers_.reserve(pieces_.size());

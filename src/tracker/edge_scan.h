@@ -11,6 +11,7 @@
 #pragma once
 
 #include <array>
+#include <utility>
 #include <vector>
 
 #include "core/counters.h"
@@ -44,8 +45,18 @@ constexpr int kEdgeCriticalSamples = 64;
 // Convergence of edge trackers in screen y: far below the 1e-3 px the exact mode allows.
 constexpr double kEdgeTolPx = 1e-7;
 
-// The monotone pieces of one edge of `s` (none for a collapsed edge).
-std::vector<EdgePiece> MonotoneEdgePieces(const Surface& s, const ScreenMap& map, PatchEdge e);
+// The monotone pieces of one edge of `s` (none for a collapsed edge; then *collapsedY,
+// when given, is set to the screen y of the point the edge collapses to, else NaN).
+std::vector<EdgePiece> MonotoneEdgePieces(const Surface& s, const ScreenMap& map, PatchEdge e,
+                                          double* collapsedY = nullptr);
+
+// A piece whose y range is this small lies along its scan line: a straight boundary edge
+// level on the screen (a full quadric's seam seen edge-on, a cylinder's ruling), whose
+// "pieces" are the rounding noise of y_t = 0. Rounding of y is ~1e-13 px.
+constexpr double kFlatPiecePx = 1e-9;
+// A line within this of a flat piece or a collapsed edge's point meets a degenerate level
+// set (a whole edge, or the pole every level curve through it passes): SurfaceScan::LineFor.
+constexpr double kDegenerateNearPx = 1e-6;
 
 struct EdgeTracker {
   int piece;            // index into EdgeScan::Pieces()
@@ -73,6 +84,9 @@ class EdgeScan {
 
   const std::vector<EdgeTracker>& Trackers() const { return trackers_; }
   const std::vector<EdgePiece>& Pieces() const { return pieces_; }
+  // Ranges of y, sorted and disjoint, on which a scan line meets a degenerate level set:
+  // within kDegenerateNearPx of a flat piece or of a collapsed edge's point.
+  const std::vector<std::pair<double, double>>& DegenerateRanges() const { return degenerate_; }
   // Events so far: trackers born and died, folds, bisection repairs. Two calls that
   // return the same number bracket scan lines on which the boundary crossings kept their
   // topology (a θ slab needs that, xscan/exact_scan.cpp).
@@ -91,6 +105,7 @@ class EdgeScan {
   bool extrapolate_;
   double tolerancePx_;
   std::vector<EdgePiece> pieces_;   // sorted by yTop
+  std::vector<std::pair<double, double>> degenerate_;
   std::vector<EdgeTracker> trackers_;
   std::vector<Vec2> folds_, deaths_;
   size_t nextPiece_ = 0;

@@ -26,8 +26,8 @@ SurfaceScan::SurfaceScan(const Surface& surface, const Camera& camera, bool extr
 void SurfaceScan::StartAt(double yStart, double spacing) {
   const double step = std::max(spacing, 1.0);
   for (double y = std::max(std::min(yTop_, yStart), yStart - kMaxPreAdvancePx); y < yStart; y += step) {
-    edges_.Advance(y);
-    silhouettes_.Advance(y, edges_);
+    edges_.Advance(LineFor(y));
+    silhouettes_.Advance(LineFor(y), edges_);
   }
 }
 
@@ -42,6 +42,19 @@ std::vector<Stationary> SurfaceScan::PrePass() {
     yTop_ = std::min(yTop_, p.y);
   }
   return stationary;
+}
+
+double SurfaceScan::LineFor(double y) const {
+  const auto& ranges = edges_.DegenerateRanges();
+  constexpr int kMaxSteps = 64;  // ranges are disjoint and few: a handful of steps at most
+  double line = y;
+  for (int k = 0; k < kMaxSteps; ++k) {
+    const auto hit = std::find_if(ranges.begin(), ranges.end(),
+                                  [&](const std::pair<double, double>& r) { return line >= r.first && line <= r.second; });
+    if (hit == ranges.end()) return line;
+    line = y + (k + 1) * kDegenerateStepPx;
+  }
+  return line;
 }
 
 void SurfaceScan::AdvanceTo(double y) {

@@ -35,6 +35,10 @@ struct ScreenStationary {
   Vec2 p;  // screen x, y
 };
 
+// The step by which SurfaceScan::LineFor moves a degenerate line: a few times the width
+// of a degenerate range, so that one step leaves it.
+constexpr double kDegenerateStepPx = 4.0 * kDegenerateNearPx;
+
 class SurfaceScan {
  public:
   // Sets up the Y scan of `surface` seen by `camera`: the maxima pre-pass and the edges'
@@ -50,6 +54,16 @@ class SurfaceScan {
   // image, or between two lines): advances the trackers from Top() towards yStart in steps
   // of max(spacing, 1) px, so that they are born where the seeds of §3.2.2 are good.
   void StartAt(double yStart, double spacing);
+
+  // The line the scan takes for sample row y: y itself, unless y meets a degenerate level
+  // set (EdgeScan::DegenerateRanges: a boundary edge lying along the line, a collapsed
+  // edge's point on it, as a full sphere seen along its axis has both on its centre row);
+  // then the nearest line below it by steps of kDegenerateStepPx that does not. Symbolic
+  // perturbation: the level curves there are curves again, and the samples move by at most
+  // a few steps times |dx/dy| of a silhouette, far below the 1e-3 px exact mode allows
+  // (except at a silhouette's very top, where a tangency is ambiguous anyway). A function of
+  // y and the surface alone, so every worker and every slab takes the same line.
+  double LineFor(double y) const;
 
   // Advances every tracker to line y (non-decreasing from call to call) and lists them in
   // Trackers(). Allocation-free once the lists have their size.

@@ -113,8 +113,10 @@ void ExactScan::UpdateActive(double yLo, double yHi, double spacing) {
     if (pending_[nextPending_].yMax >= yLo) Activate(pending_[nextPending_].index, yLo, spacing);
 }
 
+// Every line a surface's scan takes is SurfaceScan::LineFor of the row's y: the trackers
+// and the walks of one row are on the same line, away from degenerate level sets.
 void ExactScan::AdvanceTo(Active& a, double y) {
-  a.scan->AdvanceTo(y);
+  a.scan->AdvanceTo(a.scan->LineFor(y));
   if (trace_) TraceTrackers(a, y);
 }
 
@@ -124,7 +126,7 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
   VisitShape(surface, [&](const auto& shape) {
     using ShapeT = std::decay_t<decltype(shape)>;
     const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_};
-    ThetaWalker<ShapeT> walker(shape, a.scan->Map(), y, columns, &counters_, &walkEvents_, options_.thetaSteps, frame);
+    ThetaWalker<ShapeT> walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_, options_.thetaSteps, frame);
     walker.SetChainSink(chainSink_);
     f(walker, [&](const LevelPoint& p) {
       return FragmentAt(p, surface, a.scan->NormalFromObject(), static_cast<std::uint32_t>(a.index));
@@ -149,7 +151,7 @@ void ExactScan::WalkSurface(Active& a, double y, const RowTrackers& t, const ras
   } else {
     const Surface& surface = surfaces_[a.index];
     VisitShape(surface, [&](const auto& shape) {
-      LevelWalker walker(shape, a.scan->Map(), y, columns, &counters_, &walkEvents_);
+      LevelWalker walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_);
       walker.WalkAll(t, &edgeUsed_, &silUsed_, [&](int column, const LevelPoint& p) {
         ++counters_[Counter::Fragments];
         out.Add(column, FragmentAt(p, surface, a.scan->NormalFromObject(), static_cast<std::uint32_t>(a.index)));

@@ -39,8 +39,10 @@ std::optional<TessMesh> TessellateScene(std::span<const Surface> surfaces, const
     const auto id = static_cast<std::uint32_t>(k);
     if (settings.pixels > 0)
       TessellateToScreen(surfaces[k], camera, settings.pixels, id, &parts[k]);
-    else
+    else if (settings.rate > 0)
       TessellateUniform(surfaces[k], settings.rate, id, &parts[k]);
+    else
+      TessellateToChordError(surfaces[k], camera, settings.chordPx, id, &parts[k]);
   };
   // Plain threads, joined before the back end starts: a pool's workers would go on
   // spinning for a while and take cycles from the back end's thread.

@@ -14,6 +14,7 @@
 #include "raster/scanline_renderer.h"
 #include "xscan/exact_scan.h"
 #include "xscan/partitioned_scan.h"
+#include "xscan/render_settings.h"
 
 namespace patchscan {
 namespace {
@@ -74,17 +75,7 @@ struct Mode {
 const Mode kModes[] = {{"exact", 0, 0, 3}, {"theta per row", 16, 0, 2}, {"theta slabs 1 px", 16, 2, 3},
                        {"theta slabs 3 px", 8, 9, 4}};
 
-raster::RenderSettings Settings(const Camera& camera, int aa) {
-  raster::RenderSettings s;
-  s.width = camera.width;
-  s.height = camera.height;
-  s.aa = aa;
-  s.hither = camera.hither;
-  s.eye = EyePoint(camera);
-  s.forward = ViewForward(camera);
-  s.orthographic = camera.orthographic;
-  return s;
-}
+using test::SettingsFor;
 
 TEST(Partition, SameImageForAnyNumberOfWorkers) {
   long compared = 0;
@@ -93,7 +84,7 @@ TEST(Partition, SameImageForAnyNumberOfWorkers) {
       ExactScanOptions o;
       o.thetaSteps = m.thetaSteps;
       o.slabRows = m.slabRows;
-      const raster::RenderSettings s = Settings(c.camera, m.aa);
+      const raster::RenderSettings s = SettingsFor(c.camera, m.aa);
       ExactScan alone(c.scene.surfaces, c.camera, o);
       KeepRows want(c.camera.width);
       ASSERT_TRUE(raster::RenderFragments(alone, s, want)) << c.name << ", " << m.name;
