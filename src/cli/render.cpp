@@ -113,9 +113,9 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
                   "silhouette tracker born pink, tracker died black, crossing repaired by the "
                   "x scan orange, walk or sample given up cyan)");
   auto* tessError = cmd->add_option("--tess-error", o->tessError,
-                                    "tess mode (the default tessellation): rates chosen per surface so that "
-                                    "no triangle lies more than about this many pixels from the surface "
-                                    "(chord error; equal rates on shared edges)")
+                                    "tess mode (the default tessellation): rates chosen per surface from the "
+                                    "screen so that no triangle lies more than about this many pixels from "
+                                    "the surface (chord error; equal rates on shared edges)")
                          ->check(CLI::Range(0.01, 1e6))
                          ->capture_default_str();
   auto* tessRate = cmd->add_option("--tess-rate", o->tessRate,

@@ -159,48 +159,60 @@ int ChordRate(const CurvePoints& world, const Mat4& screenFromWorld, double erro
   return wanted < kMaxAdaptiveRate ? std::max(1, static_cast<int>(wanted)) : kMaxAdaptiveRate;
 }
 
-}  // namespace
-
-std::array<int, 4> ScreenEdgeRates(const Surface& s, const Camera& camera, double pixels) {
-  const Mat4 screenFromWorld = ScreenFromWorld(camera);
-  std::array<int, 4> rates;
-  for (int e = 0; e < 4; ++e) {
-    const double len = ScreenLength(EdgePoints(s, kBfrEdges[e]), screenFromWorld);
-    const double wanted = std::ceil(len / pixels);  // infinite behind the eye
-    rates[e] = wanted < kMaxAdaptiveRate ? std::max(1, static_cast<int>(wanted)) : kMaxAdaptiveRate;
-  }
-  return rates;
+// The segments a curve needs for tessellation edges about `pixels` long on the screen.
+int LengthRate(const CurvePoints& world, const Mat4& screenFromWorld, double pixels) {
+  const double wanted = std::ceil(ScreenLength(world, screenFromWorld) / pixels);  // infinite behind the eye
+  return wanted < kMaxAdaptiveRate ? std::max(1, static_cast<int>(wanted)) : kMaxAdaptiveRate;
 }
 
-std::array<int, 6> ChordErrorRates(const Surface& s, const Camera& camera, double errorPx) {
-  const Mat4 screenFromWorld = ScreenFromWorld(camera);
+// The edge rates of `s` by rateOf(curve points), then its two inner rates: the most any
+// of kInnerIsoLines - 1 interior iso-lines needs, and no fewer than the edges along them
+// (a collapsed edge's rate 1 must not set the inner rate: Bfr would infer it so).
+template <class RateOf>
+std::array<int, 6> RatesOf(const Surface& s, RateOf&& rateOf) {
   std::array<int, 6> rates;
-  for (int e = 0; e < 4; ++e) rates[e] = ChordRate(EdgePoints(s, kBfrEdges[e]), screenFromWorld, errorPx);
-  // Inner rates: the most any iso-line needs, and no fewer than the edges along it have.
+  for (int e = 0; e < 4; ++e) rates[e] = rateOf(EdgePoints(s, kBfrEdges[e]));
   rates[4] = std::max(rates[0], rates[2]);
   rates[5] = std::max(rates[1], rates[3]);
   for (int k = 1; k < kInnerIsoLines; ++k) {
     const double c = double(k) / kInnerIsoLines;
-    rates[4] = std::max(rates[4], ChordRate(IsoPoints(s, true, c), screenFromWorld, errorPx));
-    rates[5] = std::max(rates[5], ChordRate(IsoPoints(s, false, c), screenFromWorld, errorPx));
+    rates[4] = std::max(rates[4], rateOf(IsoPoints(s, true, c)));
+    rates[5] = std::max(rates[5], rateOf(IsoPoints(s, false, c)));
   }
   return rates;
 }
 
-void TessellateToChordError(const Surface& s, const Camera& camera, double errorPx, std::uint32_t surfaceId,
-                            TessMesh* out) {
-  const std::array<int, 6> rates = ChordErrorRates(s, camera, errorPx);
+void AppendRates(const Surface& s, const std::array<int, 6>& rates, std::uint32_t surfaceId, TessMesh* out) {
   const Bfr::Parameterization quad(OpenSubdiv::Sdc::SCHEME_CATMARK, 4);
   AppendPattern(s, Bfr::Tessellation(quad, 6, rates.data(), Bfr::Tessellation::Options().SetFacetSize(3)),
                 surfaceId, out);
 }
 
+}  // namespace
+
+std::array<int, 4> ScreenEdgeRates(const Surface& s, const Camera& camera, double pixels) {
+  const Mat4 screenFromWorld = ScreenFromWorld(camera);
+  std::array<int, 4> rates;
+  for (int e = 0; e < 4; ++e) rates[e] = LengthRate(EdgePoints(s, kBfrEdges[e]), screenFromWorld, pixels);
+  return rates;
+}
+
+std::array<int, 6> ChordErrorRates(const Surface& s, const Camera& camera, double errorPx) {
+  const Mat4 screenFromWorld = ScreenFromWorld(camera);
+  const double curveErrorPx = kCurveShareOfChordError * errorPx;
+  return RatesOf(s, [&](const CurvePoints& c) { return ChordRate(c, screenFromWorld, curveErrorPx); });
+}
+
+void TessellateToChordError(const Surface& s, const Camera& camera, double errorPx, std::uint32_t surfaceId,
+                            TessMesh* out) {
+  AppendRates(s, ChordErrorRates(s, camera, errorPx), surfaceId, out);
+}
+
 void TessellateToScreen(const Surface& s, const Camera& camera, double pixels,
                         std::uint32_t surfaceId, TessMesh* out) {
-  const std::array<int, 4> rates = ScreenEdgeRates(s, camera, pixels);
-  const Bfr::Parameterization quad(OpenSubdiv::Sdc::SCHEME_CATMARK, 4);
-  AppendPattern(s, Bfr::Tessellation(quad, 4, rates.data(), Bfr::Tessellation::Options().SetFacetSize(3)),
-                surfaceId, out);
+  const Mat4 screenFromWorld = ScreenFromWorld(camera);
+  AppendRates(s, RatesOf(s, [&](const CurvePoints& c) { return LengthRate(c, screenFromWorld, pixels); }), surfaceId,
+              out);
 }
 
 }  // namespace patchscan

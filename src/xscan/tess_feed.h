@@ -17,7 +17,6 @@ raster::TriangleMesh ToRasterMesh(const TessMesh& mesh, const Camera& camera);
 // How a scene is tessellated, to the screen of the camera: with edges about `pixels` long
 // (pixels > 0), else uniformly at `rate` segments per patch edge (rate > 0), else with a
 // chord error of at most `chordPx` pixels (the default).
-constexpr double kDefaultChordErrorPx = 0.25;
 struct TessSettings {
   int rate = 0;
   double pixels = 0.0;

@@ -127,6 +127,30 @@ TEST(Surfaces, HullContainsSurfaceAndIsTight) {
   }
 }
 
+TEST(Quadrics, AFullTurnClosesBitForBit) {
+  // u = 0 and u = 1 of a full turn are one curve (and v = 0 and 1 of a full torus tube):
+  // the same bits, so tessellations and scans see no seam between them.
+  const std::vector<Shape> shapes = {Sphere(1.3, -1.3, 1.3, 360.0), Cylinder(0.7, -1, 2, 360.0), Cone(2, 0.9, 360.0),
+                                     Paraboloid(1.1, 0.2, 2.0, 360.0),
+                                     Hyperboloid(Vec3(1, 0.3, -1), Vec3(0.2, 1, 1), 360.0), Disk(0.5, 1.5, 360.0),
+                                     Torus(1.0, 0.3, 0.0, 360.0, 360.0)};
+  for (const Shape& shape : shapes)
+    for (double t : {0.0, 0.125, 0.5, 0.7, 1.0}) {
+      SurfaceDerivs a, b;
+      EvaluateObject(Surface{shape, Affine3::Identity()}, 0.0, t, DerivOrder::First, &a);
+      EvaluateObject(Surface{shape, Affine3::Identity()}, 1.0, t, DerivOrder::First, &b);
+      EXPECT_EQ(a.p, b.p) << "at v = " << t;
+      EXPECT_EQ(a.dpdv, b.dpdv) << "at v = " << t;
+    }
+  const Surface torus{Torus(1.0, 0.3, -180.0, 180.0, 360.0), Affine3::Identity()};
+  for (double u : {0.0, 0.3, 1.0}) {
+    SurfaceDerivs a, b;
+    EvaluateObject(torus, u, 0.0, DerivOrder::Position, &a);
+    EvaluateObject(torus, u, 1.0, DerivOrder::Position, &b);
+    EXPECT_EQ(a.p, b.p) << "tube ends at u = " << u;
+  }
+}
+
 TEST(Quadrics, ParaboloidApexIsFinite) {
   const Paraboloid p(1.0, 0.0, 2.0, 360);
   SurfaceDerivs d;
