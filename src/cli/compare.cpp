@@ -16,7 +16,9 @@ CLI::App* AddCompareCommand(CLI::App* app, CompareOptions* o) {
       "(the alpha = 1/2 contours, distances both ways, in pixels: maximum and 99th percentile), "
       "pixels whose coverage differs by more than 1/2, relative depth error and normal angle "
       "where both images see the same surface over the whole pixel (from the Z, N.x N.y N.z "
-      "and id channels of 'render --aov' EXR files), and colour RMSE and PSNR. Measures an "
+      "and id channels of 'render --aov' EXR files), and colour RMSE and PSNR, in linear light "
+      "(8-bit sRGB files are decoded through the sRGB curve, straight alpha multiplied in). "
+      "Measures an "
       "image cannot give (no alpha, no Z) are reported as not measured. Exit codes: 0 every "
       "measure within its warning threshold, 1 a warning, 2 a failure, 3 the images differ "
       "in size, 4 an image could not be read or written, or a bad command line.");

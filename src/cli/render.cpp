@@ -75,8 +75,10 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   CLI::App* cmd = app->add_subcommand(
       "render",
       "Render a scene file to an image. The format follows the output's extension: .png, "
-      ".tif/.tiff, .jpg/.jpeg (no alpha) or .exr; alpha is coverage. The image is written to "
-      "a temporary file and renamed into place, so a failed render leaves no file.");
+      ".tif/.tiff, .jpg/.jpeg (no alpha) or .exr; alpha is coverage. 8-bit PNG and JPEG hold "
+      "sRGB-encoded colour (PNG with straight alpha); 16-bit TIFF and half-float EXR the linear, "
+      "premultiplied values. The image is written to a temporary file and renamed into place, "
+      "so a failed render leaves no file.");
   cmd->add_option("FILE", o->file, "scene file: .bpt (Bézier patches) or .rib (RenderMan scene)")->required();
   cmd->add_option("-o,--output", o->output,
                   "output image file (default: a RIB scene's Display file name; required otherwise)");

@@ -7,10 +7,15 @@
 #include <cmath>
 #include <limits>
 
+#include "raster/srgb.h"
+
 namespace patchscan::raster {
 
 std::variant<ComparableImage, std::string> ReadComparable(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
+  // As stored: a straight-alpha file's colour is linearised before alpha multiplies it.
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(path, &config);
   if (!in) return path + ": cannot read: " + OIIO::geterror();
   const OIIO::ImageSpec& spec = in->spec();
   if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) return path + ": empty image";
@@ -42,6 +47,21 @@ std::variant<ComparableImage, std::string> ReadComparable(const std::string& pat
       dst[3 * i + 2] = px[c2];
     }
   };
+
+  // Linear light, premultiplied, as renders are: 8-bit sRGB files (PNG, JPEG) decoded
+  // through the sRGB curve, straight alpha multiplied in.
+  const bool srgb = spec.get_string_attribute("oiio:ColorSpace") == "sRGB";
+  const bool straight = spec.get_int_attribute("oiio:UnassociatedAlpha", 0) != 0;
+  const int alphaChannel = channel("A", spec.alpha_channel);
+  if (srgb || straight)
+    for (std::size_t i = 0; i < nPixels; ++i) {
+      float* px = &all[i * static_cast<std::size_t>(nc)];
+      const float a = straight && alphaChannel >= 0 && alphaChannel < nc ? px[alphaChannel] : 1.0f;
+      for (int c = 0; c < std::min(nc, 3); ++c) {
+        if (c == alphaChannel) continue;
+        px[c] = a * (srgb ? static_cast<float>(LinearFromSrgb(px[c])) : px[c]);
+      }
+    }
 
   ComparableImage img;
   img.width = spec.width;

@@ -10,6 +10,7 @@
 #include <system_error>
 
 #include "raster/png_encoder.h"
+#include "raster/srgb.h"
 
 namespace patchscan::raster {
 
@@ -19,6 +20,8 @@ struct ImageWriter::Impl {
   std::unique_ptr<PngEncoder> png;
   std::filesystem::path target, temp;
   int width = 0, channels = 4;
+  bool srgb8 = false;              // JPEG: the row converted to sRGB bytes first
+  std::vector<std::uint8_t> bytes;  // that row
   bool committed = false;
   // Until committed, the temporary file goes, also when Open fails after creating it.
   ~Impl() {
@@ -84,6 +87,10 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   if (!impl->out) return path + ": cannot create an image writer: " + OIIO::geterror();
   OIIO::ImageSpec spec(width, height, impl->channels, type);
   if (impl->channels >= 4) spec.alpha_channel = 3;
+  // 8-bit files hold sRGB-encoded colour; EXR and 16-bit TIFF linear (raster/srgb.h).
+  impl->srgb8 = type == OIIO::TypeDesc::UINT8;
+  spec.attribute("oiio:ColorSpace", impl->srgb8 ? "sRGB" : "Linear");
+  if (impl->srgb8) impl->bytes.resize(static_cast<std::size_t>(width) * impl->channels);
   if (aovs) {
     spec.channelnames = {"R", "G", "B", "A", "Z", "N.x", "N.y", "N.z", "u", "v", "id"};
     spec.z_channel = kChannelZ;
@@ -97,6 +104,13 @@ bool ImageWriter::EncodesInParallel() const { return impl_->png != nullptr; }
 
 bool ImageWriter::WriteRow(int y, const float* pixels) {
   if (impl_->png) return impl_->png->WriteRow(pixels, kChannels);
+  if (impl_->srgb8) {  // JPEG: no alpha, the colour over black as it is (premultiplied)
+    for (int x = 0; x < impl_->width; ++x)
+      for (int c = 0; c < impl_->channels; ++c)
+        impl_->bytes[static_cast<std::size_t>(x * impl_->channels + c)] =
+            SrgbCode(pixels[static_cast<std::size_t>(x) * kChannels + c]);
+    return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::UINT8, impl_->bytes.data());
+  }
   return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, pixels, kChannels * sizeof(float));
 }
 

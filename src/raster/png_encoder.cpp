@@ -1,5 +1,7 @@
 #include "raster/png_encoder.h"
 
+#include "raster/srgb.h"
+
 #include <oneapi/tbb/task_arena.h>
 #include <zlib.h>
 
@@ -296,6 +298,13 @@ PngEncoder::PngEncoder(std::FILE* file, int width, int height, Options options)
   ihdr[11] = 0;  // adaptive filtering
   ihdr[12] = 0;  // not interlaced
   s.WriteChunk("IHDR", ihdr, sizeof ihdr);
+  // The colour is sRGB-encoded (PNG 1.2 §4.2.2.5: rendering intent 0, perceptual), with the
+  // gAMA chunk readers without sRGB support fall back to (1/2.2 as 45455).
+  const std::uint8_t intent = 0;
+  s.WriteChunk("sRGB", &intent, 1);
+  std::uint8_t gamma[4];
+  PutBigEndian(gamma, 45455);
+  s.WriteChunk("gAMA", gamma, 4);
 }
 
 PngEncoder::~PngEncoder() {
@@ -320,13 +329,8 @@ bool PngEncoder::WriteRow(const float* pixels, int stride) {
   std::uint8_t* row = b.raw.data() + static_cast<std::size_t>(b.contextRows + b.rows) * s.rowBytes;
   for (int x = 0; x < s.width; ++x) {
     const float* p = pixels + static_cast<std::ptrdiff_t>(x) * stride;
-    std::uint8_t q[4];
-    for (int c = 0; c < 4; ++c)
-      q[c] = static_cast<std::uint8_t>(std::clamp(p[c], 0.0f, 1.0f) * 255.0f + 0.5f);
-    // Straight alpha: the rounded colour divided by the rounded alpha, in integers.
-    if (q[3] != 0 && q[3] != 255)
-      for (int c = 0; c < 3; ++c) q[c] = static_cast<std::uint8_t>(std::min(255, q[c] * 255 / q[3]));
-    std::memcpy(row + static_cast<std::size_t>(x) * 4, q, 4);
+    // Straight alpha, sRGB-encoded colour (the sRGB chunk says so).
+    StraightSrgba8(p, p[3], row + static_cast<std::size_t>(x) * 4);
   }
   std::memcpy(s.history.data() + static_cast<std::size_t>(s.nextRow % (s.dictRows + 1)) * s.rowBytes, row, s.rowBytes);
   ++s.nextRow;

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <algorithm>
 #include <filesystem>
@@ -41,14 +42,24 @@ Result Patchscan(const std::string& args) {
 
 const std::string kTeapot = PATCHSCAN_SURFACES_DIR "/teapot.bpt";
 
-// Every channel of every pixel of an image file (empty if it cannot be read).
+// Every channel of every pixel of an image file, as stored (alpha not multiplied in; empty
+// if it cannot be read).
 std::vector<float> Pixels(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
+  OIIO::ImageSpec config;
+  config.attribute("oiio:UnassociatedAlpha", 1);
+  auto in = OIIO::ImageInput::open(path, &config);
   if (!in) return {};
   const OIIO::ImageSpec& spec = in->spec();
   std::vector<float> px(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data())) return {};
   return px;
+}
+
+// The sRGB encoding of linear v (IEC 61966-2-1), written out here independently of the
+// renderer's table.
+double Srgb(double v) {
+  v = std::clamp(v, 0.0, 1.0);
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
 }
 
 // The value --stats prints for a counter of the table (core/counters.h), by its key; -1 if
@@ -474,6 +485,32 @@ TEST(Cli, Version) {
   const Result r = Patchscan("--version");
   EXPECT_EQ(r.code, 0);
   EXPECT_EQ(r.out.rfind("patchscan ", 0), 0u) << r.out;
+}
+
+TEST(Cli, PngIsTheExrOfTheSameRenderInSrgb) {
+  // The 8-bit PNG holds sRGB-encoded straight colour; the EXR the linear, premultiplied
+  // colour of the same render: every pixel agrees to one 8-bit code (and the rounding of
+  // half floats, at most 1e-3 relative, which sRGB's slope of 12.92 near black turns into
+  // a little more).
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_srgb_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string png = (dir / "t.png").string(), exr = (dir / "t.exr").string();
+  for (const std::string& out : {png, exr})
+    ASSERT_EQ(Patchscan("render " + kTeapot + " -o " + out + " --size 96x72 --aa 2").code, 0);
+  const std::vector<float> a = Pixels(png), b = Pixels(exr);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_FALSE(a.empty());
+  constexpr double kTol = 0.5 / 255 + 0.004;
+  int compared = 0;
+  for (std::size_t k = 0; k < a.size(); k += 4) {
+    const double alpha = b[k + 3];
+    EXPECT_NEAR(a[k + 3], alpha, 0.5 / 255 + 1e-3) << "alpha at pixel " << k / 4;
+    if (a[k + 3] * 255 < 0.5) continue;
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(a[k + c], Srgb(b[k + c] / alpha), kTol) << "pixel " << k / 4;
+    ++compared;
+  }
+  EXPECT_GT(compared, 1000);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -10,8 +10,11 @@
 
 #include "raster/async_row_sink.h"
 #include "raster/image_writer.h"
+#include "raster/srgb.h"
 #include "raster/scanline_renderer.h"
 #include "raster/triangle_setup.h"
+
+#include <unistd.h>
 
 namespace patchscan::raster {
 namespace {
@@ -625,6 +628,52 @@ TEST(ImageWriter, FormatsAndChannels) {
   }
   EXPECT_NE(std::get<std::string>(ImageWriter::Open((dir / "c.png").string(), 4, 2, true)).find("need an .exr"),
             std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ImageWriter, EightBitOutputsAreSrgbOthersLinear) {
+  // A ramp of linear values, half of it at alpha 0.5 (premultiplied): the PNG holds the
+  // straight colour sRGB-encoded (and says so), the JPEG the colour over black encoded,
+  // the 16-bit TIFF and the EXR the linear values.
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_writer_srgb_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  constexpr int kWidth = 64;
+  std::vector<float> rows[2];
+  for (int y = 0; y < 2; ++y) {
+    rows[y].assign(kChannels * kWidth, 0.0f);
+    const float alpha = y == 0 ? 1.0f : 0.5f;
+    for (int x = 0; x < kWidth; ++x) {
+      const float linear = static_cast<float>(x) / (kWidth - 1);
+      for (int c = 0; c < 3; ++c) rows[y][x * kChannels + c] = alpha * linear;
+      rows[y][x * kChannels + 3] = alpha;
+    }
+  }
+  for (const char* name : {"s.png", "s.jpg", "s.tif", "s.exr"}) {
+    const std::string path = (dir / name).string();
+    auto w = std::get<std::unique_ptr<ImageWriter>>(ImageWriter::Open(path, kWidth, 2, false));
+    ASSERT_TRUE(w->WriteRow(0, rows[0].data()) && w->WriteRow(1, rows[1].data()));
+    ASSERT_TRUE(std::holds_alternative<std::monostate>(w->Commit()));
+    OIIO::ImageSpec config;  // the stored values: OpenImageIO would premultiply a PNG's
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path, &config);
+    ASSERT_TRUE(in) << name;
+    const int n = in->spec().nchannels;
+    std::vector<float> got(static_cast<std::size_t>(kWidth) * 2 * n);
+    ASSERT_TRUE(in->read_image(0, 0, 0, n, OIIO::TypeDesc::FLOAT, got.data()));
+    const std::string ext = std::filesystem::path(name).extension().string();
+    const bool srgb = ext == ".png" || ext == ".jpg";
+    if (srgb) EXPECT_EQ(in->spec().get_string_attribute("oiio:ColorSpace"), "sRGB") << name;
+    // One 8-bit code; JPEG's lossy coding of a smooth ramp a few more; 16-bit and half.
+    const double tol = ext == ".png" ? 0.5 / 255 + 1e-6 : ext == ".jpg" ? 4.0 / 255 : ext == ".tif" ? 1.0 / 65535 : 1e-3;
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < kWidth; ++x) {
+        const double linear = static_cast<double>(x) / (kWidth - 1), alpha = y == 0 ? 1.0 : 0.5;
+        const double want = ext == ".png"   ? SrgbFromLinear(linear)           // straight alpha
+                            : ext == ".jpg" ? SrgbFromLinear(alpha * linear)  // over black
+                                            : alpha * linear;                 // premultiplied, linear
+        EXPECT_NEAR(got[static_cast<std::size_t>((y * kWidth + x) * n)], want, tol) << name << " pixel " << x << ", " << y;
+      }
+  }
   std::filesystem::remove_all(dir);
 }
 

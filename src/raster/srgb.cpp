@@ -1,0 +1,52 @@
+#include "raster/srgb.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace patchscan::raster {
+
+double SrgbFromLinear(double v) {
+  v = std::clamp(v, 0.0, 1.0);
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+}
+
+double LinearFromSrgb(double e) {
+  e = std::clamp(e, 0.0, 1.0);
+  return e <= 0.04045 ? e / 12.92 : std::pow((e + 0.055) / 1.055, 2.4);
+}
+
+namespace {
+
+constexpr int kTableSteps = 65535;
+
+const std::array<std::uint8_t, kTableSteps + 1>& Table() {
+  static const auto table = [] {
+    std::array<std::uint8_t, kTableSteps + 1> t{};
+    for (int i = 0; i <= kTableSteps; ++i)
+      t[static_cast<std::size_t>(i)] =
+          static_cast<std::uint8_t>(std::lround(255.0 * SrgbFromLinear(static_cast<double>(i) / kTableSteps)));
+    return t;
+  }();
+  return table;
+}
+
+}  // namespace
+
+std::uint8_t SrgbCode(float v) {
+  const float c = std::clamp(v, 0.0f, 1.0f);  // NaN: clamp keeps it, the cast below maps it to 0
+  const int i = std::isnan(c) ? 0 : static_cast<int>(c * static_cast<float>(kTableSteps) + 0.5f);
+  return Table()[static_cast<std::size_t>(i)];
+}
+
+void StraightSrgba8(const float* c, float a, std::uint8_t out[4]) {
+  const float alpha = std::isnan(a) ? 0.0f : std::clamp(a, 0.0f, 1.0f);
+  out[3] = static_cast<std::uint8_t>(alpha * 255.0f + 0.5f);
+  if (out[3] == 0) {
+    out[0] = out[1] = out[2] = 0;
+    return;
+  }
+  for (int k = 0; k < 3; ++k) out[k] = SrgbCode(c[k] / alpha);
+}
+
+}  // namespace patchscan::raster
