@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 #include <ostream>
 
 #include "raster/image_compare.h"
@@ -121,13 +122,32 @@ int RunCompare(const CompareOptions& o, std::ostream& out, std::ostream& err) {
   if (c.silhouetteMissing)
     out << "coverage edges: one image has none, the other some\n";
   else
-    PrintStats(out, "coverage edges", c.silhouette, " px", alpha ? "neither image covers anything partly" : "no alpha channel in both");
+    PrintStats(out, "coverage edges", c.silhouette, " px",
+               !alpha        ? "no alpha channel in both"
+               : c.noContours ? "no coverage edge in either image: each covers the whole frame or none of it; "
+                                "compare colour, or render without the background"
+                              : "neither image covers anything partly");
+  if (c.silhouette && c.silhouette->count > 0 && c.silhouette->max > 0)
+    out << "  farthest at (" << c.silhouetteWorst.x() << ", " << c.silhouetteWorst.y() << ") on the edge of "
+        << (c.silhouetteWorstInA ? o.a : o.b) << '\n';
   if (alpha)
     out << "coverage: " << c.pixelsCoverageDiffers << " pixels differ by more than 1/2, area difference "
         << c.coverageAreaDifference << " px\n";
   PrintStats(out, "depth (relative)", c.depth, "", "needs A, Z and id channels in both");
   PrintStats(out, "normal angle", c.normalDegrees, " deg", "needs A and N.x N.y N.z channels in both");
   out << "colour: RMSE " << c.rmse << ", PSNR " << c.psnr << " dB, max difference " << c.maxColourDifference << '\n';
+  if (c.maxColourDifference > 0) {
+    auto rgb = [](const std::array<double, 3>& v) {
+      std::ostringstream s;
+      s << v[0] << ' ' << v[1] << ' ' << v[2];
+      return s.str();
+    };
+    const auto& box = c.colourWorstRegion;
+    out << "  largest at pixel (" << c.colourWorstX << ", " << c.colourWorstY << "): A " << rgb(c.colourWorstA) << ", B "
+        << rgb(c.colourWorstB) << "; within " << raster::kWorstRegionPx << " px of it " << c.colourWorstRegionPixels
+        << " pixels differ by more than half as much, in x " << box[0] << ".." << box[2] << ", y " << box[1] << ".."
+        << box[3] << '\n';
+  }
 
   // The verdict: every measured quantity against its thresholds.
   int code = kCompareOk;
@@ -170,7 +190,8 @@ int RunCompare(const CompareOptions& o, std::ostream& out, std::ostream& err) {
     js << ", ";
     JsonStats(js, "normal_degrees", c.normalDegrees);
     js << ", \"rmse\": " << c.rmse << ", \"psnr\": " << (std::isfinite(c.psnr) ? std::to_string(c.psnr) : "null")
-       << ", \"max_colour_difference\": " << c.maxColourDifference << ", \"verdict\": " << code << "}\n";
+       << ", \"max_colour_difference\": " << c.maxColourDifference << ", \"max_colour_difference_at\": [" << c.colourWorstX
+       << ", " << c.colourWorstY << "], \"verdict\": " << code << "}\n";
     if (!js) {
       err << "patchscan: " << o.json << ": cannot write\n";
       return kCompareFileError;

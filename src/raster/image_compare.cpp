@@ -80,9 +80,13 @@ CoverageContour CoverageEdges(const std::vector<float>& alpha, int width, int he
   // Inside: alpha ≥ 1/2. A box-filtered coverage of a straight edge crosses 1/2 at the
   // edge itself, so linear interpolation between pixel centres places the contour within
   // a fraction of a pixel of the true edge.
+  // Beyond the frame the nearest pixel's coverage continues: the frame's own border is no
+  // coverage edge (a full-frame background has none at all), and a surface cut by the
+  // frame has its contour end there.
   constexpr double kLevel = 0.5;
   auto at = [&](int x, int y) -> double {
-    if (x < 0 || y < 0 || x >= width || y >= height) return 0.0;
+    x = std::clamp(x, 0, width - 1);
+    y = std::clamp(y, 0, height - 1);
     return alpha[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)];
   };
   CoverageContour c;
@@ -234,8 +238,18 @@ ImageComparison CompareImages(const ComparableImage& a, const ComparableImage& b
     } else if (!ca.from.empty()) {
       std::vector<double> d = DistancesToContour(ca, cb, a.width, a.height);
       const std::vector<double> back = DistancesToContour(cb, ca, a.width, a.height);
+      // Where the largest is: end points of a's segments, then of b's, in order.
+      std::size_t worst = 0;
+      for (std::size_t k = 0; k < d.size() + back.size(); ++k)
+        if ((k < d.size() ? d[k] : back[k - d.size()]) > (worst < d.size() ? d[worst] : back[worst - d.size()])) worst = k;
+      const CoverageContour& on = worst < d.size() ? ca : cb;
+      const std::size_t k = worst < d.size() ? worst : worst - d.size();
+      r.silhouetteWorst = k % 2 == 0 ? on.from[k / 2] : on.to[k / 2];
+      r.silhouetteWorstInA = worst < d.size();
       d.insert(d.end(), back.begin(), back.end());
       r.silhouette = Summarize(std::move(d));
+    } else {
+      r.noContours = true;
     }
   }
 
@@ -262,10 +276,37 @@ ImageComparison CompareImages(const ComparableImage& a, const ComparableImage& b
 
   // Colour.
   double sumSq = 0;
+  std::size_t worst = 0;
   for (std::size_t i = 0; i < 3 * n; ++i) {
     const double d = static_cast<double>(a.rgb[i]) - b.rgb[i];
     sumSq += d * d;
-    r.maxColourDifference = std::max(r.maxColourDifference, std::abs(d));
+    if (std::abs(d) > r.maxColourDifference) {
+      r.maxColourDifference = std::abs(d);
+      worst = i / 3;
+    }
+  }
+  if (n > 0) {
+    r.colourWorstX = static_cast<int>(worst % static_cast<std::size_t>(a.width));
+    r.colourWorstY = static_cast<int>(worst / static_cast<std::size_t>(a.width));
+    for (int c = 0; c < 3; ++c) {
+      r.colourWorstA[c] = a.rgb[3 * worst + static_cast<std::size_t>(c)];
+      r.colourWorstB[c] = b.rgb[3 * worst + static_cast<std::size_t>(c)];
+    }
+    // The region around it: pixels within kWorstRegionPx differing by more than half as much.
+    const double half = 0.5 * r.maxColourDifference;
+    int x0 = r.colourWorstX, x1 = x0, y0 = r.colourWorstY, y1 = y0;
+    for (int y = std::max(0, y0 - kWorstRegionPx); y <= std::min(a.height - 1, r.colourWorstY + kWorstRegionPx); ++y)
+      for (int x = std::max(0, r.colourWorstX - kWorstRegionPx); x <= std::min(a.width - 1, r.colourWorstX + kWorstRegionPx);
+           ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(a.width) + static_cast<std::size_t>(x);
+        double d = 0;
+        for (std::size_t c = 0; c < 3; ++c) d = std::max(d, std::abs(static_cast<double>(a.rgb[3 * i + c]) - b.rgb[3 * i + c]));
+        if (half > 0 && d > half) {
+          ++r.colourWorstRegionPixels;
+          x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+        }
+      }
+    r.colourWorstRegion = {x0, y0, x1, y1};
   }
   r.rmse = n > 0 ? std::sqrt(sumSq / (3.0 * static_cast<double>(n))) : 0.0;
   r.psnr = r.rmse > 0 ? 20.0 * std::log10(1.0 / r.rmse) : std::numeric_limits<double>::infinity();

@@ -4,6 +4,7 @@
 // images by hand; ReadComparable reads any image OpenImageIO reads.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <variant>
@@ -54,6 +55,9 @@ struct ImageComparison {
   // neither has any contour. `pixelsCoverageDiffers`: |alpha_a - alpha_b| > 1/2.
   std::optional<ErrorStats> silhouette;
   bool silhouetteMissing = false;  // one image has a contour and the other none
+  bool noContours = false;         // both have alpha and neither a contour (the frame covered, or empty)
+  Vec2 silhouetteWorst = Vec2::Zero();  // the contour point (pixel coordinates) farthest from the other
+  bool silhouetteWorstInA = true;       // on a's contour, else on b's
   long pixelsCoverageDiffers = 0;
   double coverageAreaDifference = 0;  // sum of |alpha_a - alpha_b|, in pixels
   // On pixels both cover fully (alpha = 1) with the same surface id (when both carry ids):
@@ -62,7 +66,15 @@ struct ImageComparison {
   // Colour over every pixel and channel; PSNR against a peak of 1 (infinite when equal).
   double rmse = 0, psnr = 0;
   double maxColourDifference = 0;
+  // Where the largest colour difference is: the pixel, both colours there, and the box of
+  // the pixels within kWorstRegionPx of it that differ by more than half as much (x0, y0,
+  // x1, y1 inclusive) with their count.
+  int colourWorstX = 0, colourWorstY = 0;
+  std::array<double, 3> colourWorstA{}, colourWorstB{};
+  std::array<int, 4> colourWorstRegion{};
+  int colourWorstRegionPixels = 0;
 };
+constexpr int kWorstRegionPx = 8;
 
 // Compares `a` with the reference `b`, which must have the same size.
 ImageComparison CompareImages(const ComparableImage& a, const ComparableImage& b);

@@ -51,7 +51,8 @@ TEST(ImageCompare, ContourOfAHalfPlaneLiesOnItsEdge) {
     ASSERT_FALSE(contour.from.empty());
     double worst = 0;
     for (const auto& p : contour.from) {
-      // Points on the image border belong to the padding's contour, not the edge.
+      // Within the border pixels the padding (the nearest pixel's coverage continued) bends
+      // the contour to meet the frame square: not the edge's own.
       if (p.x() < 1 || p.y() < 1 || p.x() > img.width - 1 || p.y() > img.height - 1) continue;
       worst = std::max(worst, std::abs(nx * p.x() + ny * p.y() - c));
     }
@@ -119,6 +120,36 @@ TEST(ImageCompare, DepthAndNormalErrorsOnCommonFullPixels) {
   EXPECT_NEAR(c.depth->max, 0.01, kFloatTol);
   EXPECT_NEAR(c.depth->p99, 0.01, kFloatTol);
   EXPECT_NEAR(c.normalDegrees->max, 10.0, 1e-3);
+}
+
+TEST(ImageCompare, TheFrameIsNoCoverageEdge) {
+  // A full-frame background has no contour: not "0 px" over the frame's border, which would
+  // say the silhouettes agree when none were measured.
+  const ComparableImage full = CoverageImage(24, 16, [](double, double) { return true; });
+  EXPECT_TRUE(CoverageEdges(full.alpha, full.width, full.height).from.empty());
+  ComparableImage other = full;
+  other.rgb[3 * 40] = 0.25f;  // a colour difference only
+  const ImageComparison c = CompareImages(other, full);
+  EXPECT_FALSE(c.silhouette.has_value());
+  EXPECT_TRUE(c.noContours);
+  EXPECT_FALSE(c.silhouetteMissing);
+  // A disc cut by the frame: its contour ends at the frame, none runs along it.
+  const ComparableImage cut = CoverageImage(24, 16, Disc(0.0, 8.0, 6.0));
+  for (const Vec2& p : CoverageEdges(cut.alpha, cut.width, cut.height).from)
+    EXPECT_NEAR((p - Vec2(0.0, 8.0)).norm(), 6.0, 0.15) << p.transpose();
+}
+
+TEST(ImageCompare, WhereTheLargestColourDifferenceIs) {
+  ComparableImage a = CoverageImage(32, 24, Disc(16, 12, 8)), b = a;
+  for (int dy = -1; dy <= 1; ++dy)  // a 3 x 3 blotch, strongest at (20, 9)
+    for (int dx = -1; dx <= 1; ++dx) a.rgb[3 * static_cast<size_t>((9 + dy) * 32 + 20 + dx)] -= dx == 0 && dy == 0 ? 0.8f : 0.5f;
+  const ImageComparison c = CompareImages(a, b);
+  EXPECT_EQ(c.colourWorstX, 20);
+  EXPECT_EQ(c.colourWorstY, 9);
+  EXPECT_NEAR(c.maxColourDifference, 0.8, 1e-6);
+  EXPECT_NEAR(c.colourWorstB[0] - c.colourWorstA[0], 0.8, 1e-6);
+  EXPECT_EQ(c.colourWorstRegionPixels, 9);
+  EXPECT_EQ(c.colourWorstRegion, (std::array<int, 4>{19, 8, 21, 10}));
 }
 
 TEST(ImageCompare, SummaryPercentileIsTheNearestRank) {
