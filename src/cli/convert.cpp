@@ -13,8 +13,10 @@ CLI::App* AddConvertCommand(CLI::App* app, ConvertOptions* o) {
   CLI::App* cmd = app->add_subcommand(
       "convert",
       "Write a scene and its camera as a RenderMan RIB file (.rib) that renders the same "
-      "image: Format, PixelSamples, Projection, Clipping, the world-to-camera Transform, then "
-      "each surface as a Patch (bicubic patches in Bézier form). The file is written to a "
+      "image: Format, PixelSamples, Projection, Clipping, the world-to-camera Transform, the "
+      "scene's lights, then each surface with its appearance (Color, Opacity, Sides, "
+      "ReverseOrientation, Surface shader and parameters) as a Patch (bicubic patches in Bézier "
+      "form) or its quadric. Subdivision meshes are not written yet. The file is written to a "
       "temporary name and renamed into place.");
   cmd->add_option("FILE", o->file, "scene file: .bpt or .rib")->required();
   cmd->add_option("-o,--output", o->output, "the RIB file to write")->required();

@@ -27,16 +27,29 @@ BoxHull RevolutionHull(double rhoMin, double rhoMax, double thetaMax, double zLo
   return BoxCorners(box);
 }
 
+// Words separated by spaces, numbers to `digits` significant digits.
 template <class... T>
-std::string Words(const char* kind, const T&... values) {
+std::string DigitWords(int digits, const char* kind, const T&... values) {
   std::ostringstream s;
-  s.precision(6);
+  s.precision(digits);
   s << kind;
   ((s << ' ' << values), ...);
   return s.str();
 }
 
+// For people: six digits.
+template <class... T>
+std::string Words(const char* kind, const T&... values) {
+  return DigitWords(6, kind, values...);
+}
+
 double Deg(double rad) { return rad / kRadPerDeg; }
+
+// A RIB request with its numbers to 17 significant digits: read back, the same doubles.
+template <class... T>
+std::string RibWords(const char* request, const T&... values) {
+  return DigitWords(17, request, values...);
+}
 
 }  // namespace
 
@@ -63,7 +76,7 @@ Bounds2 SectorBox(double rhoMin, double rhoMax, double t0, double t1) {
 }
 
 Sphere::Sphere(double radius, double zMin, double zMax, double thetaMaxDeg)
-    : r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg) {
+    : r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg), rib_(RibWords("Sphere", radius, zMin, zMax, thetaMaxDeg)) {
   const double r = std::abs(radius);
   const double z0 = std::clamp(std::min(zMin, zMax), -r, r);
   const double z1 = std::clamp(std::max(zMin, zMax), -r, r);
@@ -78,7 +91,8 @@ std::string Sphere::Describe() const {
 }
 
 Cylinder::Cylinder(double radius, double zMin, double zMax, double thetaMaxDeg)
-    : r_(radius), zMin_(zMin), zMax_(zMax), thetaMax_(thetaMaxDeg * kRadPerDeg) {
+    : r_(radius), zMin_(zMin), zMax_(zMax), thetaMax_(thetaMaxDeg * kRadPerDeg),
+      rib_(RibWords("Cylinder", radius, zMin, zMax, thetaMaxDeg)) {
   hull_ = RevolutionHull(r_, r_, thetaMax_, zMin, zMax);
 }
 std::string Cylinder::Describe() const {
@@ -86,7 +100,7 @@ std::string Cylinder::Describe() const {
 }
 
 Cone::Cone(double height, double radius, double thetaMaxDeg)
-    : h_(height), r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg) {
+    : h_(height), r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg), rib_(RibWords("Cone", height, radius, thetaMaxDeg)) {
   hull_ = RevolutionHull(std::min(0.0, r_), std::max(0.0, r_), thetaMax_, 0.0, h_);
 }
 std::string Cone::Describe() const {
@@ -94,7 +108,8 @@ std::string Cone::Describe() const {
 }
 
 Paraboloid::Paraboloid(double rMax, double zMin, double zMax, double thetaMaxDeg)
-    : rMax_(rMax), zMin_(zMin), zMax_(zMax), thetaMax_(thetaMaxDeg * kRadPerDeg) {
+    : rMax_(rMax), zMin_(zMin), zMax_(zMax), thetaMax_(thetaMaxDeg * kRadPerDeg),
+      rib_(RibWords("Paraboloid", rMax, zMin, zMax, thetaMaxDeg)) {
   // rho = rMax sqrt(z / zMax) is monotonic in z, so its range is set by the two ends.
   auto rho = [&](double z) { return rMax_ * std::sqrt(std::max(z / zMax_, 0.0)); };
   const double a = rho(zMin), b = rho(zMax);
@@ -105,7 +120,8 @@ std::string Paraboloid::Describe() const {
 }
 
 Hyperboloid::Hyperboloid(const Vec3& point1, const Vec3& point2, double thetaMaxDeg)
-    : p1_(point1), p2_(point2), thetaMax_(thetaMaxDeg * kRadPerDeg) {
+    : p1_(point1), p2_(point2), thetaMax_(thetaMaxDeg * kRadPerDeg),
+      rib_(RibWords("Hyperboloid", point1.x(), point1.y(), point1.z(), point2.x(), point2.y(), point2.z(), thetaMaxDeg)) {
   // The sweep of a segment about z: its distance from the axis is convex along the
   // segment, so the largest is at an end; the smallest is the segment's distance to the
   // axis in the xy projection. The start angle of each point differs, so bound the full
@@ -123,7 +139,7 @@ std::string Hyperboloid::Describe() const {
 }
 
 Disk::Disk(double height, double radius, double thetaMaxDeg)
-    : h_(height), r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg) {
+    : h_(height), r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg), rib_(RibWords("Disk", height, radius, thetaMaxDeg)) {
   hull_ = RevolutionHull(std::min(0.0, r_), std::max(0.0, r_), thetaMax_, h_, h_);
 }
 std::string Disk::Describe() const {
@@ -136,7 +152,8 @@ Torus::Torus(double majorRadius, double minorRadius, double phiMinDeg, double ph
       minor_(minorRadius),
       phiMin_(phiMinDeg * kRadPerDeg),
       phiMax_(phiMaxDeg * kRadPerDeg),
-      thetaMax_(thetaMaxDeg * kRadPerDeg) {
+      thetaMax_(thetaMaxDeg * kRadPerDeg),
+      rib_(RibWords("Torus", majorRadius, minorRadius, phiMinDeg, phiMaxDeg, thetaMaxDeg)) {
   // The tube circle (minor cos phi, minor sin phi) over the phi sweep is an arc; its box
   // gives the range of rho = major + minor cos phi and of z = minor sin phi.
   const Bounds2 tube = minor_ >= 0.0

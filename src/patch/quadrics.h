@@ -41,11 +41,14 @@ class Sphere {
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
   std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
+  // The RIB request that makes this surface, its arguments as given, to 17 digits.
+  const std::string& RibRequest() const { return rib_; }
   double Radius() const { return r_; }
 
  private:
   double r_, phiMin_, phiMax_, thetaMax_;
   BoxHull hull_;
+  std::string rib_;
 };
 
 // Cylinder: radius, zmin, zmax, thetamax.
@@ -55,10 +58,13 @@ class Cylinder {
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
   std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
+  // The RIB request that makes this surface, its arguments as given, to 17 digits.
+  const std::string& RibRequest() const { return rib_; }
 
  private:
   double r_, zMin_, zMax_, thetaMax_;
   BoxHull hull_;
+  std::string rib_;
 };
 
 // Cone: height, base radius, thetamax; base circle at z = 0, apex at (0, 0, height) for v = 1.
@@ -68,10 +74,13 @@ class Cone {
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
   std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
+  // The RIB request that makes this surface, its arguments as given, to 17 digits.
+  const std::string& RibRequest() const { return rib_; }
 
  private:
   double h_, r_, thetaMax_;
   BoxHull hull_;
+  std::string rib_;
 };
 
 // Paraboloid: rmax, zmin, zmax, thetamax; radius rmax * sqrt(z / zmax).
@@ -82,6 +91,8 @@ class Paraboloid {
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
   std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
+  // The RIB request that makes this surface, its arguments as given, to 17 digits.
+  const std::string& RibRequest() const { return rib_; }
 
   // z / zmax is floored at this ratio when derivatives are taken, so that the collapsed
   // apex edge yields large finite derivatives (a rho' of about 5e5 * rmax) instead of inf.
@@ -90,6 +101,7 @@ class Paraboloid {
  private:
   double rMax_, zMin_, zMax_, thetaMax_;
   BoxHull hull_;
+  std::string rib_;
 };
 
 // Hyperboloid: the segment point1 -> point2 swept about the z axis by thetamax.
@@ -99,11 +111,14 @@ class Hyperboloid {
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
   std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
+  // The RIB request that makes this surface, its arguments as given, to 17 digits.
+  const std::string& RibRequest() const { return rib_; }
 
  private:
   Vec3 p1_, p2_;
   double thetaMax_;
   BoxHull hull_;
+  std::string rib_;
 };
 
 // Disk: height, radius, thetamax; v = 0 on the rim, v = 1 at the centre.
@@ -113,10 +128,13 @@ class Disk {
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
   std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
+  // The RIB request that makes this surface, its arguments as given, to 17 digits.
+  const std::string& RibRequest() const { return rib_; }
 
  private:
   double h_, r_, thetaMax_;
   BoxHull hull_;
+  std::string rib_;
 };
 
 // Torus: major radius, minor radius, phimin, phimax (the tube angle), thetamax.
@@ -127,10 +145,13 @@ class Torus {
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
   std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
+  // The RIB request that makes this surface, its arguments as given, to 17 digits.
+  const std::string& RibRequest() const { return rib_; }
 
  private:
   double major_, minor_, phiMin_, phiMax_, thetaMax_;
   BoxHull hull_;
+  std::string rib_;
 };
 
 // Test surface z = x^2 - y^2 over the square x, y in [-a, a] (x = a(2u-1), y = a(2v-1)).

@@ -1,6 +1,7 @@
 #include "patch/rib_writer.h"
 
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <numbers>
 #include <sstream>
@@ -20,6 +21,61 @@ void Matrix(std::ostream& out, const Mat4& m) {
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) out << (i + j == 0 ? "" : " ") << m(j, i);
   out << ']';
+}
+
+void Triple(std::ostream& out, const Vec3& v) { out << '[' << v.x() << ' ' << v.y() << ' ' << v.z() << ']'; }
+
+// The scene's lights in world space, as RenderMan's standard light shaders read them
+// (colour as lightcolor at intensity 1; cone angles in radians).
+void Lights(std::ostream& out, const std::vector<SceneLight>& lights) {
+  int handle = 1;
+  for (const SceneLight& l : lights) {
+    using K = SceneLight::Kind;
+    const char* name = l.kind == K::Ambient ? "ambientlight" : l.kind == K::Distant ? "distantlight"
+                       : l.kind == K::Point ? "pointlight" : "spotlight";
+    out << "LightSource \"" << name << "\" " << handle++ << " \"intensity\" [1] \"lightcolor\" ";
+    Triple(out, l.colour);
+    if (l.kind != K::Ambient) {
+      out << " \"from\" ";
+      Triple(out, l.from);
+    }
+    if (l.kind == K::Distant || l.kind == K::Spot) {
+      out << " \"to\" ";
+      Triple(out, l.to);
+    }
+    if (l.kind == K::Spot)
+      out << " \"coneangle\" [" << l.coneAngle << "] \"conedeltaangle\" [" << l.coneDelta << "] \"beamdistribution\" ["
+          << l.beamDistribution << ']';
+    out << '\n';
+  }
+}
+
+// A surface's appearance as attributes: colour, opacity, sides, orientation and the
+// standard shader with the parameters it reads.
+void Attributes(std::ostream& out, const Appearance& a) {
+  out << "Color ";
+  Triple(out, a.colour);
+  out << "\nOpacity ";
+  Triple(out, a.opacity);
+  out << "\nSides " << (a.twoSided ? 2 : 1) << '\n';
+  if (a.reversed) out << "ReverseOrientation\n";
+  using S = Appearance::Shader;
+  switch (a.shader) {
+    case S::Default: return;
+    case S::Constant: out << "Surface \"constant\"\n"; return;
+    case S::Matte: out << "Surface \"matte\" \"Ka\" [" << a.ka << "] \"Kd\" [" << a.kd << "]\n"; return;
+    case S::Metal: out << "Surface \"metal\" \"Ka\" [" << a.ka << "] \"Ks\" [" << a.ks << "] \"roughness\" [" << a.roughness << "]\n"; return;
+    case S::Plastic:
+    case S::PaintedPlastic:
+      out << "Surface \"" << (a.shader == S::Plastic ? "plastic" : "paintedplastic") << "\" \"Ka\" [" << a.ka << "] \"Kd\" ["
+          << a.kd << "] \"Ks\" [" << a.ks << "] \"roughness\" [" << a.roughness << "] \"specularcolor\" ";
+      Triple(out, a.specularColour);
+      // The reader resolved the name against its scene file: absolute, it reads the same anywhere.
+      if (a.shader == S::PaintedPlastic && !a.textureName.empty())
+        out << " \"texturename\" \"" << std::filesystem::absolute(a.textureName).string() << '"';
+      out << '\n';
+      return;
+  }
 }
 
 }  // namespace
@@ -65,16 +121,30 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
   out << "Clipping " << camera.hither << ' ' << kFarClip << "\nTransform ";
   Matrix(out, cameraFromWorld);
   out << "\nWorldBegin\n";
-  // Step 2: the surfaces, each in its own attribute block when it is placed.
+  // Step 2: the lights (none: the renderer's default rig, as in the source).
+  Lights(out, scene.lights);
+  // Step 3: the surfaces, each in its own attribute block when it is placed or has an
+  // appearance of its own.
   for (size_t k = 0; k < scene.surfaces.size(); ++k) {
     const Surface& s = scene.surfaces[k];
     const bool placed = !s.worldFromObject.matrix().isIdentity(0.0);
+    const bool dressed = !scene.appearanceOf.empty();
+    if (placed || dressed) out << "AttributeBegin\n";
+    if (dressed) Attributes(out, scene.appearances[scene.appearanceOf[k]]);
     if (placed) {
-      out << "AttributeBegin\nConcatTransform ";
+      out << "ConcatTransform ";
       Matrix(out, s.worldFromObject.matrix());
       out << '\n';
     }
-    if (const auto* b = std::get_if<BicubicPatch>(&s.shape)) {
+    const std::string quadric = std::visit(
+        [](const auto& shape) -> std::string {
+          if constexpr (requires { shape.RibRequest(); }) return shape.RibRequest();
+          else return {};
+        },
+        s.shape);
+    if (!quadric.empty()) {
+      out << quadric << '\n';
+    } else if (const auto* b = std::get_if<BicubicPatch>(&s.shape)) {
       out << "Patch \"bicubic\" \"P\" [";
       for (const Vec3& p : b->BezierPoints()) Point(out, p);
       out << " ]\n";
@@ -84,9 +154,9 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
       out << " ]\n";
     } else {
       return RibWriteError{"surface " + std::to_string(k + 1) + " (" + Describe(s) +
-                           ") has no RIB form here: only bicubic and bilinear patches are written"};
+                           ") has no RIB form here: bicubic and bilinear patches and the quadrics are written"};
     }
-    if (placed) out << "AttributeEnd\n";
+    if (placed || dressed) out << "AttributeEnd\n";
   }
   out << "WorldEnd\n";
   return out.str();
