@@ -1,5 +1,6 @@
 #include "cli/render.h"
 
+#include <cstdio>
 #include <sys/resource.h>
 #include <unistd.h>
 
@@ -157,6 +158,11 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   cmd->add_flag("--aov", o->aov,
                 "also write the channels Z (eye distance), N.x N.y N.z (world normal), u v and id "
                 "(surface index) of the surface covering most of each pixel; .exr only");
+  cmd->add_option("--crop", o->crop,
+                  "render a window of the image: XMIN,XMAX,YMIN,YMAX as fractions of the width and "
+                  "height from the top left (RenderMan's CropWindow, which a RIB scene may give); "
+                  "the pixels whose centres lie in it, the same as the full render's there, in an "
+                  "image of the window's size (EXR and TIFF record where it lies in the frame)");
   cmd->add_option("--seed", o->seed,
                   "seed of the stochastic extra shading calls (same seed, same image)")
       ->capture_default_str();
@@ -175,6 +181,44 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   AddCameraOptions(cmd, &o->camera);
   return cmd;
 }
+
+namespace {
+
+// The pixels [x0, x1) x [y0, y1) of a width x height frame that a crop window in NDC
+// covers: RenderMan's rule, the pixels from ceil(W xmin) to ceil(W xmax) - 1, so windows
+// that share a side share no pixel and tile the frame.
+struct PixelWindow {
+  int x0, y0, x1, y1;
+};
+PixelWindow CropPixels(const Vec4& ndc, int width, int height) {
+  auto at = [](double f, int n) { return std::clamp(static_cast<int>(std::ceil(f * n)), 0, n); };
+  return {at(ndc[0], width), at(ndc[2], height), at(ndc[1], width), at(ndc[3], height)};
+}
+
+// "xmin,xmax,ymin,ymax" with 0 <= xmin < xmax <= 1 and the same for y.
+std::optional<Vec4> ParseCrop(const std::string& text) {
+  Vec4 w;
+  char tail = 0;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf,%lf%c", &w[0], &w[1], &w[2], &w[3], &tail) != 4) return std::nullopt;
+  if (!(0.0 <= w[0] && w[0] < w[1] && w[1] <= 1.0 && 0.0 <= w[2] && w[2] < w[3] && w[3] <= 1.0)) return std::nullopt;
+  return w;
+}
+
+// Passes on the window's part of each row, renumbered from the window's top.
+class CropSink final : public raster::RowSink {
+ public:
+  CropSink(raster::RowSink& next, const PixelWindow& w) : next_(next), w_(w) {}
+  bool WriteRow(int y, const float* pixels) override {
+    if (y < w_.y0 || y >= w_.y1) return true;
+    return next_.WriteRow(y - w_.y0, pixels + static_cast<std::size_t>(w_.x0) * raster::kChannels);
+  }
+
+ private:
+  raster::RowSink& next_;
+  PixelWindow w_;
+};
+
+}  // namespace
 
 int RunRender(const RenderOptions& o, std::ostream& err) {
   const auto t0 = Clock::now();
@@ -195,6 +239,20 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
     return kExitUsage;
   }
   const int aa = o.aa.value_or(scene.image.pixelSamples.value_or(kDefaultAa));
+  std::optional<Vec4> cropNdc = scene.image.cropWindow;
+  if (!o.crop.empty() && !(cropNdc = ParseCrop(o.crop))) {
+    err << "patchscan: --crop: expected XMIN,XMAX,YMIN,YMAX with 0 <= XMIN < XMAX <= 1 and 0 <= YMIN < YMAX <= 1, found '"
+        << o.crop << "'\n";
+    return kExitUsage;
+  }
+  const PixelWindow window = cropNdc ? CropPixels(*cropNdc, camera.width, camera.height)
+                                     : PixelWindow{0, 0, camera.width, camera.height};
+  if (window.x1 <= window.x0 || window.y1 <= window.y0) {
+    err << "patchscan: the crop window holds no pixel centre of the " << camera.width << "x" << camera.height
+        << " image\n";
+    return kExitUsage;
+  }
+  const int outWidth = window.x1 - window.x0, outHeight = window.y1 - window.y0;
 
   // Step 2: the front end: the direct scan, or the tessellated mesh.
   const int threads = o.threads > 0 ? o.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
@@ -217,7 +275,9 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
     err << "patchscan: " << *why << '\n';
     return kExitUsage;
   }
-  auto opened = raster::ImageWriter::Open(output, camera.width, camera.height, o.aov, threads);
+  raster::ImageWriter::Window placement;
+  if (cropNdc) placement = {window.x0, window.y0, camera.width, camera.height};
+  auto opened = raster::ImageWriter::Open(output, outWidth, outHeight, o.aov, threads, placement);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';
     return kExitOutputError;
@@ -227,8 +287,15 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   // With more than one thread the image is encoded and written on a thread of its own,
   // overlapping the rows still being rendered.
   std::unique_ptr<raster::AsyncRowSink> async;
-  if (threads > 1 && !writer.EncodesInParallel()) async = std::make_unique<raster::AsyncRowSink>(writer, camera.width);
+  if (threads > 1 && !writer.EncodesInParallel()) async = std::make_unique<raster::AsyncRowSink>(writer, outWidth);
   raster::RowSink* toImage = async ? static_cast<raster::RowSink*>(async.get()) : &writer;
+  // A crop: the full frame's rows are rendered (the scan needs every row above the window
+  // anyway), and only the window's part of them reaches the image.
+  std::unique_ptr<CropSink> cropped;
+  if (cropNdc) {
+    cropped = std::make_unique<CropSink>(*toImage, window);
+    toImage = cropped.get();
+  }
   raster::RowSink* out = toImage;
   if (o.overlay == Overlay::Trackers) {
     overlay = std::make_unique<TrackerOverlay>(*toImage, camera.width, camera.height);

@@ -45,6 +45,9 @@ struct RenderOptions {
   bool hiddenLine = false;
   double opacity = 1.0;
   bool aov = false;
+  // --crop "xmin,xmax,ymin,ymax": a window of the frame in RenderMan's NDC (0..1, y down),
+  // as RIB CropWindow; empty: the scene's CropWindow, else the whole frame.
+  std::string crop;
   std::uint64_t seed = 1;
   int threads = 0;  // 0: one per core
   bool stats = false;

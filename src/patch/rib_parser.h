@@ -115,6 +115,7 @@ class RibParser {
   bool Format(const Request& r);
   bool Projection(const Request& r);
   bool ScreenWindow(const Request& r);
+  bool CropWindow(const Request& r);
   bool Clipping(const Request& r);
   bool PixelSamples(const Request& r);
   bool Display(const Request& r);

@@ -51,6 +51,15 @@ bool RibParser::ScreenWindow(const Request& r) {
   return true;
 }
 
+bool RibParser::CropWindow(const Request& r) {
+  if (!Numbers(r, 4)) return false;
+  const double* w = num_.data();
+  if (!(0.0 <= w[0] && w[0] < w[1] && w[1] <= 1.0 && 0.0 <= w[2] && w[2] < w[3] && w[3] <= 1.0))
+    return Fail(r.line, "CropWindow: expected 0 <= xmin < xmax <= 1 and 0 <= ymin < ymax <= 1");
+  scene_.image.cropWindow = Vec4(w[0], w[1], w[2], w[3]);
+  return true;
+}
+
 bool RibParser::Clipping(const Request& r) {
   if (!Numbers(r, 2)) return false;
   if (!(num_[0] > 0 && num_[1] > num_[0])) return Fail(r.line, "Clipping: expected 0 < near < far");

@@ -47,6 +47,7 @@ struct SceneImage {
   bool orthographic = false;                // Projection "orthographic"
   double fovDeg = 90.0;                     // Projection "perspective" "fov"
   std::optional<Vec4> screenWindow;         // ScreenWindow (left, right, bottom, top)
+  std::optional<Vec4> cropWindow;           // CropWindow (xmin, xmax, ymin, ymax), NDC: y down
   std::optional<std::pair<int, int>> size;  // Format
   std::optional<double> hither;             // Clipping's near
   std::optional<int> pixelSamples;          // PixelSamples, as the side of a square grid

@@ -20,6 +20,7 @@ struct ImageWriter::Impl {
   std::unique_ptr<PngEncoder> png;
   std::filesystem::path target, temp;
   int width = 0, channels = 4;
+  int y0 = 0;  // the first row's y in the frame (OpenImageIO takes rows by it)
   bool srgb8 = false;              // JPEG: the row converted to sRGB bytes first
   std::vector<std::uint8_t> bytes;  // that row
   bool committed = false;
@@ -58,7 +59,8 @@ std::optional<std::string> ImageWriter::CheckFormat(const std::string& path, boo
 
 std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const std::string& path,
                                                                           int width, int height,
-                                                                          bool aovs, int threads) {
+                                                                          bool aovs, int threads,
+                                                                          Window window) {
   auto impl = std::make_unique<Impl>();
   impl->target = path;
   if (auto why = CheckFormat(path, aovs)) return *why;
@@ -87,6 +89,14 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   if (!impl->out) return path + ": cannot create an image writer: " + OIIO::geterror();
   OIIO::ImageSpec spec(width, height, impl->channels, type);
   if (impl->channels >= 4) spec.alpha_channel = 3;
+  if (window.frameWidth > 0) {
+    spec.x = window.x;
+    spec.y = window.y;
+    spec.full_x = spec.full_y = 0;
+    spec.full_width = window.frameWidth;
+    spec.full_height = window.frameHeight;
+    impl->y0 = window.y;
+  }
   // 8-bit files hold sRGB-encoded colour; EXR and 16-bit TIFF linear (raster/srgb.h).
   impl->srgb8 = type == OIIO::TypeDesc::UINT8;
   spec.attribute("oiio:ColorSpace", impl->srgb8 ? "sRGB" : "Linear");
@@ -109,9 +119,9 @@ bool ImageWriter::WriteRow(int y, const float* pixels) {
       for (int c = 0; c < impl_->channels; ++c)
         impl_->bytes[static_cast<std::size_t>(x * impl_->channels + c)] =
             SrgbCode(pixels[static_cast<std::size_t>(x) * kChannels + c]);
-    return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::UINT8, impl_->bytes.data());
+    return impl_->out->write_scanline(y + impl_->y0, 0, OIIO::TypeDesc::UINT8, impl_->bytes.data());
   }
-  return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, pixels, kChannels * sizeof(float));
+  return impl_->out->write_scanline(y + impl_->y0, 0, OIIO::TypeDesc::FLOAT, pixels, kChannels * sizeof(float));
 }
 
 std::variant<std::monostate, std::string> ImageWriter::Commit() {

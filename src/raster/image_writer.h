@@ -12,16 +12,27 @@
 
 namespace patchscan::raster {
 
+// Where an image lies in a larger frame (ImageWriter::Open).
+struct ImageWindow {
+  int x = 0, y = 0;                     // the image's top-left pixel in the frame
+  int frameWidth = 0, frameHeight = 0;  // 0: the image is the frame
+};
+
 class ImageWriter final : public RowSink {
  public:
   // Opens the temporary file for `path`, with the format its extension names (.png, .tif,
   // .tiff, .jpg, .jpeg, .exr): RGBA (RGB for JPEG); with `aovs`, which only EXR takes, also
   // the channels Z (eye distance), N.x N.y N.z, u v and id. A message when that fails.
   // PNG is encoded by PngEncoder, deflating on `threads` threads (the same bytes for any).
+  // An image that is a window of a larger frame (a crop) says where it lies in `window`:
+  // EXR and TIFF record it (OpenEXR's data window in the display window); PNG and JPEG
+  // hold the window alone.
+  using Window = ImageWindow;
   static std::variant<std::unique_ptr<ImageWriter>, std::string> Open(const std::string& path,
                                                                      int width, int height,
                                                                      bool aovs = false,
-                                                                     int threads = 1);
+                                                                     int threads = 1,
+                                                                     Window window = ImageWindow());
   ~ImageWriter() override;
   // Whether `path` names a format Open takes (with `aovs`, an .exr): the message if not. A
   // refusal here is the user's choice of name; a failure of Open after it is the file system's.

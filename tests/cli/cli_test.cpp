@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -526,6 +527,61 @@ TEST(Cli, PngIsTheExrOfTheSameRenderInSrgb) {
     ++compared;
   }
   EXPECT_GT(compared, 1000);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, CropRendersAWindowWithTheFullRendersPixels) {
+  // --crop and RIB CropWindow: the pixels whose centres lie in the window (RenderMan's
+  // rule: from ceil(W xmin) to ceil(W xmax) - 1), bit for bit those of the full render, in
+  // every mode and format; an EXR records where the window lies in the frame.
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_crop_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  constexpr int kW = 160, kH = 120;
+  const int x0 = 40, x1 = 96, y0 = 36, y1 = 96;  // ceil(160 0.25), ceil(160 0.6), ceil(120 0.3), ceil(120 0.8)
+  for (const char* mode : {"exact", "theta", "tess"})
+    for (const char* ext : {".png", ".exr"}) {
+      const std::string full = (dir / (std::string("full") + ext)).string();
+      const std::string crop = (dir / (std::string("crop") + ext)).string();
+      const std::string common = " --size 160x120 --mode " + std::string(mode) + (std::string(ext) == ".exr" ? " --aov" : "");
+      ASSERT_EQ(Patchscan("render " + kTeapot + " -o " + full + common).code, 0);
+      ASSERT_EQ(Patchscan("render " + kTeapot + " -o " + crop + common + " --crop 0.25,0.6,0.3,0.8").code, 0);
+      auto in = OIIO::ImageInput::open(crop);
+      ASSERT_TRUE(in);
+      EXPECT_EQ(in->spec().width, x1 - x0);
+      EXPECT_EQ(in->spec().height, y1 - y0);
+      if (std::string(ext) == ".exr") {
+        EXPECT_EQ(in->spec().x, x0);
+        EXPECT_EQ(in->spec().y, y0);
+        EXPECT_EQ(in->spec().full_width, kW);
+        EXPECT_EQ(in->spec().full_height, kH);
+      }
+      const int n = in->spec().nchannels;
+      in.reset();
+      const std::vector<float> a = Pixels(full), b = Pixels(crop);
+      ASSERT_EQ(b.size(), static_cast<std::size_t>((x1 - x0) * (y1 - y0) * n));
+      long differ = 0;
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+          for (int c = 0; c < n; ++c)
+            differ += std::memcmp(&a[static_cast<std::size_t>((y * kW + x) * n + c)],
+                                  &b[static_cast<std::size_t>(((y - y0) * (x1 - x0) + x - x0) * n + c)], sizeof(float)) != 0;
+      EXPECT_EQ(differ, 0) << mode << ext;
+    }
+  // The same window from a RIB scene's CropWindow.
+  std::ofstream(dir / "c.rib") << "Format 160 120 1\nCropWindow 0.25 0.6 0.3 0.8\nProjection \"perspective\" \"fov\" 40\n"
+                                  "WorldBegin\nTranslate 0 0 5\nSphere 1 -1 1 360\nWorldEnd\n";
+  ASSERT_EQ(Patchscan("render " + (dir / "c.rib").string() + " -o " + (dir / "c.png").string()).code, 0);
+  const std::vector<float> c = Pixels((dir / "c.png").string());
+  EXPECT_EQ(c.size(), static_cast<std::size_t>((x1 - x0) * (y1 - y0) * 4));
+  // Windows that are no window, or hold no pixel centre.
+  for (const char* bad : {"0.5,0.5,0,1", "0,1,0.6,0.2", "-0.1,0.5,0,1", "0,1,0,1.5", "0.1,0.2,0.3", "a,b,c,d"}) {
+    const Result r = Patchscan("render " + kTeapot + " -o " + (dir / "x.png").string() + " --size 160x120 --crop " + bad);
+    EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
+    EXPECT_NE(r.err.find("--crop"), std::string::npos) << r.err;
+  }
+  const Result none = Patchscan("render " + kTeapot + " -o " + (dir / "x.png").string() + " --size 160x120 --crop 0.001,0.002,0,1");
+  EXPECT_EQ(none.code, 2) << none.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
   std::filesystem::remove_all(dir);
 }
 

@@ -662,7 +662,9 @@ TEST(ImageWriter, EightBitOutputsAreSrgbOthersLinear) {
     ASSERT_TRUE(in->read_image(0, 0, 0, n, OIIO::TypeDesc::FLOAT, got.data()));
     const std::string ext = std::filesystem::path(name).extension().string();
     const bool srgb = ext == ".png" || ext == ".jpg";
-    if (srgb) EXPECT_EQ(in->spec().get_string_attribute("oiio:ColorSpace"), "sRGB") << name;
+    if (srgb) {
+      EXPECT_EQ(in->spec().get_string_attribute("oiio:ColorSpace"), "sRGB") << name;
+    }
     // One 8-bit code; JPEG's lossy coding of a smooth ramp a few more; 16-bit and half.
     const double tol = ext == ".png" ? 0.5 / 255 + 1e-6 : ext == ".jpg" ? 4.0 / 255 : ext == ".tif" ? 1.0 / 65535 : 1e-3;
     for (int y = 0; y < 2; ++y)
