@@ -96,7 +96,7 @@ class Paraboloid {
 
   // z / zmax is floored at this ratio when derivatives are taken, so that the collapsed
   // apex edge yields large finite derivatives (a rho' of about 5e5 * rmax) instead of inf.
-  static constexpr double kParaboloidApexRatio = 1e-12;
+  static constexpr double kParaboloidApexRatio = 1e-30;
 
  private:
   double rMax_, zMin_, zMax_, thetaMax_;

@@ -165,21 +165,117 @@ int LengthRate(const CurvePoints& world, const Mat4& screenFromWorld, double pix
   return wanted < kMaxAdaptiveRate ? std::max(1, static_cast<int>(wanted)) : kMaxAdaptiveRate;
 }
 
+// True when the curve is one point (a collapsed edge: a sphere's pole, a cone's apex), to
+// kCollapsedRel of the surface's size.
+bool Collapsed(const CurvePoints& world, double size) {
+  for (const Vec3& p : world)
+    if ((p - world[0]).norm() > kCollapsedRel * size) return false;
+  return true;
+}
+
+// True when the normal of `s` turns along its collapsed edge `e` (a cone point): the
+// limits from inside at a quarter, half and three quarters along differ by more than
+// kConePointTurnRad.
+constexpr double kConePointTurnRad = 1e-3;
+bool NormalTurnsAlong(const Surface& s, PatchEdge e) {
+  auto at = [&](double t) {
+    const double u = e == PatchEdge::U0 ? 0 : e == PatchEdge::U1 ? 1 : t;
+    const double v = e == PatchEdge::V0 ? 0 : e == PatchEdge::V1 ? 1 : t;
+    return WorldNormal(s, u, v);
+  };
+  const Vec3 mid = at(0.5);
+  return std::max(at(0.25).cross(mid).norm(), at(0.75).cross(mid).norm()) > kConePointTurnRad;
+}
+
+// Rings around a cone point are at most this wide on the screen.
+constexpr double kConePointRingPx = 2.0;
+
 // The edge rates of `s` by rateOf(curve points), then its two inner rates: the most any
 // of kInnerIsoLines - 1 interior iso-lines needs, and no fewer than the edges along them
 // (a collapsed edge's rate 1 must not set the inner rate: Bfr would infer it so).
-template <class RateOf>
-std::array<int, 6> RatesOf(const Surface& s, RateOf&& rateOf) {
+// `refineInner(rates)` may raise the inner rates further; then a collapsed edge takes the
+// inner rate along it (so does a quadric's straight edge, below): its vertices are one point but carry the normal and uv of their
+// own u (a cone's apex has a normal for each direction; with two vertices there every
+// triangle at the apex took the normal of u = 0). Its neighbours meet it at that one point
+// whatever its rate, so no crack opens.
+template <class RateOf, class RefineInner>
+std::array<int, 6> RatesOf(const Surface& s, const Mat4& screenFromWorld, RateOf&& rateOf, RefineInner&& refineInner) {
   std::array<int, 6> rates;
-  for (int e = 0; e < 4; ++e) rates[e] = rateOf(EdgePoints(s, kBfrEdges[e]));
-  rates[4] = std::max(rates[0], rates[2]);
-  rates[5] = std::max(rates[1], rates[3]);
+  std::array<bool, 4> collapsed;
+  const double size = WorldBounds(s).Diagonal().norm();
+  for (int e = 0; e < 4; ++e) {
+    const CurvePoints edge = EdgePoints(s, kBfrEdges[e]);
+    rates[e] = rateOf(edge);
+    collapsed[e] = Collapsed(edge, size);
+  }
+  rates[4] = std::max(collapsed[0] ? 1 : rates[0], collapsed[2] ? 1 : rates[2]);
+  rates[5] = std::max(collapsed[1] ? 1 : rates[1], collapsed[3] ? 1 : rates[3]);
   for (int k = 1; k < kInnerIsoLines; ++k) {
     const double c = double(k) / kInnerIsoLines;
     rates[4] = std::max(rates[4], rateOf(IsoPoints(s, true, c)));
     rates[5] = std::max(rates[5], rateOf(IsoPoints(s, false, c)));
   }
+  refineInner(&rates);
+  // A cone point: a collapsed edge whose normal turns along it (a cone's apex, unlike a
+  // sphere's pole). Flat triangles there interpolate the normals of two directions over a
+  // whole ring, a sawtooth of shading around the point; rings of kConePointRingPx keep it
+  // within the pixels next to the point.
+  for (int e = 0; e < 4; ++e)
+    if (collapsed[e] && NormalTurnsAlong(s, kBfrEdges[e])) {
+      const bool alongU = e % 2 == 0;
+      const double across = ScreenLength(IsoPoints(s, !alongU, 0.5), screenFromWorld);
+      const double wanted = std::ceil(across / kConePointRingPx);
+      int& rate = rates[alongU ? 5 : 4];
+      if (wanted > rate) rate = wanted < kMaxAdaptiveRate ? static_cast<int>(wanted) : kMaxAdaptiveRate;
+    }
+  // A quadric's edges meet no other surface's but its own seam (u = 0 and u = 1 are one
+  // curve, given one rate here): a straight edge of one (rate 1: a ruling) takes the inner
+  // rate along it, or Bfr fans it to the inner grid in long slivers across the twist (a
+  // hyperboloid's, 1.4 px off at 0.4 asked). Patches and subdivision faces keep rates
+  // from the edge alone, which their neighbours share.
+  const bool ownEdges = !std::holds_alternative<BicubicPatch>(s.shape) &&
+                        !std::holds_alternative<BilinearPatch>(s.shape) && !std::holds_alternative<SubdivFace>(s.shape);
+  for (int e = 0; e < 4; ++e)
+    if (collapsed[e] || (ownEdges && rates[e] == 1)) rates[e] = rates[e % 2 == 0 ? 4 : 5];  // 0 and 2 run along u
+  // Where the edges differ from the inner rates, Bfr stitches the edges to an inner grid,
+  // and with an inner rate of 1 that grid is one point, the domain's centre: every
+  // triangle a fan to it. A cylinder (its straight v-lines rate 1) became a disc, each
+  // triangle spanning half a turn. Two inner rows keep the stitching local along each edge.
+  const bool uniform = rates[0] == rates[4] && rates[2] == rates[4] && rates[1] == rates[5] && rates[3] == rates[5];
+  if (!uniform) {
+    rates[4] = std::max(rates[4], 2);
+    rates[5] = std::max(rates[5], 2);
+  }
   return rates;
+}
+
+// The largest twist of `s` in pixels per unit parameter squared: |n . p_uv| from the
+// mixed differences of a kTwistCells x kTwistCells grid, n the normal at each cell's
+// centre, scaled by the pixels per unit at its corner; infinity if a point is not in front
+// of the eye. A triangle's diagonal crosses its quad's twist: its midpoint is off the
+// surface by h_u h_v |n . p_uv| / 4 (a hyperboloid's straight rulings need rate 1 along
+// them, yet its quads are twisted). Only the normal part counts: a cone's or a disk's
+// p_uv lies along the surface (their flat fans are on it).
+constexpr int kTwistCells = 8;
+double MaxTwistPx(const Surface& s, const Mat4& screenFromWorld) {
+  std::array<std::array<Vec3, kTwistCells + 1>, kTwistCells + 1> p;
+  for (int i = 0; i <= kTwistCells; ++i)
+    for (int j = 0; j <= kTwistCells; ++j) {
+      SurfaceDerivs d;
+      EvaluateObject(s, double(i) / kTwistCells, double(j) / kTwistCells, DerivOrder::Position, &d);
+      p[i][j] = s.worldFromObject * d.p;
+    }
+  double worst = 0.0;
+  for (int i = 0; i < kTwistCells; ++i)
+    for (int j = 0; j < kTwistCells; ++j) {
+      const double ppu = PixelsPerUnit(screenFromWorld, p[i][j]);
+      if (!std::isfinite(ppu)) return INFINITY;
+      const Vec3 n = WorldNormal(s, (i + 0.5) / kTwistCells, (j + 0.5) / kTwistCells);
+      const double twist =
+          std::abs(n.dot(p[i + 1][j + 1] - p[i + 1][j] - p[i][j + 1] + p[i][j])) * kTwistCells * kTwistCells;
+      worst = std::max(worst, twist * ppu);
+    }
+  return worst;
 }
 
 void AppendRates(const Surface& s, const std::array<int, 6>& rates, std::uint32_t surfaceId, TessMesh* out) {
@@ -200,7 +296,21 @@ std::array<int, 4> ScreenEdgeRates(const Surface& s, const Camera& camera, doubl
 std::array<int, 6> ChordErrorRates(const Surface& s, const Camera& camera, double errorPx) {
   const Mat4 screenFromWorld = ScreenFromWorld(camera);
   const double curveErrorPx = kCurveShareOfChordError * errorPx;
-  return RatesOf(s, [&](const CurvePoints& c) { return ChordRate(c, screenFromWorld, curveErrorPx); });
+  // The twist's error h_u h_v T / 4 held to the same share: the smaller inner rate is
+  // raised first (it is the one the iso-lines found straight).
+  auto twist = [&](std::array<int, 6>* rates) {
+    const double t = MaxTwistPx(s, screenFromWorld);
+    if (!std::isfinite(t)) {
+      (*rates)[4] = (*rates)[5] = kMaxAdaptiveRate;
+      return;
+    }
+    int& lo = (*rates)[4] <= (*rates)[5] ? (*rates)[4] : (*rates)[5];
+    const int hi = std::max((*rates)[4], (*rates)[5]);
+    const double wanted = std::ceil(t / (4.0 * curveErrorPx * hi));
+    if (wanted > lo) lo = wanted < kMaxAdaptiveRate ? static_cast<int>(wanted) : kMaxAdaptiveRate;
+  };
+  return RatesOf(s, screenFromWorld, [&](const CurvePoints& c) { return ChordRate(c, screenFromWorld, curveErrorPx); },
+                 twist);
 }
 
 void TessellateToChordError(const Surface& s, const Camera& camera, double errorPx, std::uint32_t surfaceId,
@@ -211,8 +321,10 @@ void TessellateToChordError(const Surface& s, const Camera& camera, double error
 void TessellateToScreen(const Surface& s, const Camera& camera, double pixels,
                         std::uint32_t surfaceId, TessMesh* out) {
   const Mat4 screenFromWorld = ScreenFromWorld(camera);
-  AppendRates(s, RatesOf(s, [&](const CurvePoints& c) { return LengthRate(c, screenFromWorld, pixels); }), surfaceId,
-              out);
+  AppendRates(s,
+              RatesOf(s, screenFromWorld, [&](const CurvePoints& c) { return LengthRate(c, screenFromWorld, pixels); },
+                      [](std::array<int, 6>*) {}),
+              surfaceId, out);
 }
 
 }  // namespace patchscan

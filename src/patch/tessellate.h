@@ -47,7 +47,11 @@ void TessellateToScreen(const Surface& s, const Camera& camera, double pixels,
 // curve, in 3D scaled to pixels at each point, so that a curve seen end-on still counts).
 // The edge rates depend only on the edge curve (as in TessellateToScreen); the two inner
 // rates are the largest any of kInnerIsoLines - 1 interior iso-lines, or the edges along
-// them, need. A collapsed edge gets rate 1, its neighbourhood the inner rate.
+// them, need, raised for the twist across the diagonals (the normal part of p_uv) and
+// near a cone point (rings of at most 2 px around a collapsed edge whose normal turns
+// along it). A collapsed edge, and a quadric's straight edge, take the inner rate along
+// them; where the pattern is not uniform the inner rates are at least 2 (Bfr fans an
+// inner rate of 1 to the domain's centre).
 constexpr int kInnerIsoLines = 4;
 // The iso-lines are held to this share of the error asked: a triangle's diagonal bends in
 // both directions at once, and 16 samples miss a curve's sharpest point; with a share of 1
