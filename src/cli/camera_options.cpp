@@ -5,6 +5,7 @@
 #include <numbers>
 #include <ostream>
 
+#include "cli/choice_option.h"
 #include "cli/exit_codes.h"
 
 namespace patchscan::cli {
@@ -64,6 +65,12 @@ void AddCameraOptions(CLI::App* cmd, CameraOptions* o) {
                   "the distance to the look-at point; a RIB scene's Clipping)");
   cmd->add_option("--frame", o->frame,
                   "RIB scenes: the frame to read, by its FrameBegin number (default: the first)");
+  AddChoiceOption(cmd, "--obj-scheme", &o->objScheme,
+                  {{"catmull-clark", SubdivScheme::CatmullClark},
+                   {"loop", SubdivScheme::Loop},
+                   {"bilinear", SubdivScheme::Bilinear}},
+                  ".obj scenes: the cage's subdivision rules (RenderMan's names): catmull-clark, loop (a cage of "
+                  "triangles), or bilinear to render the cage itself, flat");
   cmd->option_defaults()->group("Options");
 }
 
@@ -175,6 +182,7 @@ std::variant<LoadedScene, int> LoadSceneAndCamera(const std::string& file,
                                                   const CameraOptions& opts, std::ostream& err) {
   LoadOptions lo;
   lo.frame = opts.frame;
+  lo.objScheme = opts.objScheme;
   auto loaded = LoadScene(file, lo);
   if (auto* e = std::get_if<SourceError>(&loaded)) {
     err << "patchscan: " << e->What() << '\n';

@@ -17,6 +17,7 @@ struct CameraOptions {
   std::optional<double> fovDeg;  // none: the scene's Projection, else 30
   std::string hither;  // empty: the scene's Clipping, else automatic
   int frame = -1;      // RIB: the frame to read; -1: the first
+  SubdivScheme objScheme = SubdivScheme::CatmullClark;  // .obj: how its cage is subdivided
 };
 
 constexpr int kDefaultWidth = 640, kDefaultHeight = 480;

@@ -18,7 +18,7 @@ CLI::App* AddConvertCommand(CLI::App* app, ConvertOptions* o) {
       "ReverseOrientation, Surface shader and parameters) as a Patch (bicubic patches in Bézier "
       "form) or its quadric. Subdivision meshes are not written yet. The file is written to a "
       "temporary name and renamed into place.");
-  cmd->add_option("FILE", o->file, "scene file: .bpt or .rib")->required();
+  cmd->add_option("FILE", o->file, "scene file: .bpt, .rib or .obj")->required();
   cmd->add_option("-o,--output", o->output, "the RIB file to write")->required();
   cmd->add_option("--aa", o->aa, "PixelSamples to write, as the side of the grid (default: 3)")
       ->check(CLI::Range(1, 8));

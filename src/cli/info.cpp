@@ -46,7 +46,7 @@ CLI::App* AddInfoCommand(CLI::App* app, InfoOptions* o) {
       "Describe a scene file: surface count, control points, world bounds, collapsed "
       "(degenerate) patch edges, the camera, and one line per surface with its bounds in "
       "world and screen space.");
-  cmd->add_option("FILE", o->file, "scene file (.bpt)")->required();
+  cmd->add_option("FILE", o->file, "scene file: .bpt, .rib or .obj")->required();
   AddCameraOptions(cmd, &o->camera);
   return cmd;
 }
@@ -89,6 +89,17 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
   }
   if (!scene.lights.empty() || !scene.appearances.empty())
     out << "lights: " << scene.lights.size() << ", materials: " << scene.appearances.size() << '\n';
+
+  for (const SceneCage& c : scene.cages) {
+    const SubdivCounts& n = c.counts;
+    const char* scheme = c.scheme == SubdivScheme::Loop       ? "loop"
+                         : c.scheme == SubdivScheme::Bilinear ? "bilinear"
+                                                              : "catmull-clark";
+    out << "subdivision cage: " << c.file << ':' << c.line << ", " << scheme << ", " << n.faces << " faces, "
+        << n.vertices << " vertices, " << n.irregularFaces << " irregular faces, " << n.extraordinaryVertices
+        << " extraordinary vertices; tags: " << n.creaseEdges << " crease edges, " << n.corners << " corners, "
+        << n.holes << " holes; " << n.surfaces << " surfaces\n";
+  }
 
   // Step 2: one line per surface.
   out << "surface  line  kind             collapsed  world bounds | screen bounds (x, y px)\n";

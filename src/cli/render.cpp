@@ -80,7 +80,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
       "sRGB-encoded colour (PNG with straight alpha); 16-bit TIFF and half-float EXR the linear, "
       "premultiplied values. The image is written to a temporary file and renamed into place, "
       "so a failed render leaves no file.");
-  cmd->add_option("FILE", o->file, "scene file: .bpt (Bézier patches) or .rib (RenderMan scene)")->required();
+  cmd->add_option("FILE", o->file, "scene file: .bpt (Bézier patches), .rib (RenderMan scene) or .obj (a subdivision cage)")->required();
   cmd->add_option("-o,--output", o->output,
                   "output image file (default: a RIB scene's Display file name; required otherwise)");
   AddChoiceOption(cmd, "--mode", &o->mode, kRenderModeNames,

@@ -236,14 +236,21 @@ bool RibParser::SubdivisionMesh(const Request& r) {
   if (!InWorld(r)) return false;
   std::string scheme;
   if (!StringArg(r, 0, &scheme)) return false;
-  if (scheme != "catmull-clark") {
+  SubdivMesh mesh;
+  if (scheme == "catmull-clark") {
+    mesh.scheme = SubdivScheme::CatmullClark;
+  } else if (scheme == "loop") {
+    mesh.scheme = SubdivScheme::Loop;
+  } else if (scheme == "bilinear") {
+    mesh.scheme = SubdivScheme::Bilinear;
+  } else {
     Warn(r.line, "SubdivisionMesh " + scheme,
-         "SubdivisionMesh: scheme " + Shown(scheme) + " is not supported here (only \"catmull-clark\"): skipped");
+         "SubdivisionMesh: scheme " + Shown(scheme) +
+             " is not supported here (\"catmull-clark\", \"loop\" and \"bilinear\" are): skipped");
     return true;
   }
   if (r.args.size() < 3 || !r.args[1].Numeric() || !r.args[2].Numeric())
     return Fail(r.line, "SubdivisionMesh expects scheme, nvertices and vertices (arrays of numbers)");
-  SubdivMesh mesh;
   for (const double n : r.args[1].numbers) {
     const auto k = WholeIn(n, 0, 1'000'000);
     if (!k) return Fail(r.args[1].line, "SubdivisionMesh: nvertices are whole numbers");
@@ -265,11 +272,13 @@ bool RibParser::SubdivisionMesh(const Request& r) {
   if (!Points(r, first, static_cast<std::size_t>(maxIndex + 1))) return false;
   mesh.points = pts_;
   std::vector<SubdivFace> faces;
+  SceneCage cage{file_, r.line, mesh.scheme, {}};
   try {
-    faces = PrepareSubdivFaces(mesh);
+    faces = PrepareSubdivFaces(mesh, &cage.counts);
   } catch (const std::invalid_argument& e) {
     return Fail(r.line, std::string("SubdivisionMesh: ") + e.what());
   }
+  scene_.cages.push_back(cage);
   for (SubdivFace& f : faces) AddSurface(r, std::move(f));
   return true;
 }

@@ -3,6 +3,7 @@
 #include <filesystem>
 
 #include "patch/bpt_reader.h"
+#include "patch/obj_reader.h"
 #include "patch/rib_reader.h"
 
 namespace patchscan {
@@ -16,8 +17,9 @@ Bounds3 Scene::WorldBounds() const {
 std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOptions& options) {
   const std::string ext = std::filesystem::path(path).extension().string();
   if (ext == ".rib") return ReadRib(path, options);
+  if (ext == ".obj") return ReadObj(path, ObjOptions{options.objScheme});
   if (ext != ".bpt")
-    return SourceError{path, 0, "unknown scene format '" + ext + "' (known: .bpt, .rib)"};
+    return SourceError{path, 0, "unknown scene format '" + ext + "' (known: .bpt, .rib, .obj)"};
   auto read = ReadBpt(path);
   if (auto* e = std::get_if<SourceError>(&read)) return *e;
   Scene scene;

@@ -54,6 +54,15 @@ struct SceneImage {
   std::string displayName;                  // Display's file name ("" when none)
 };
 
+// A subdivision cage of the scene, for `patchscan info` (its faces are among the scene's
+// surfaces).
+struct SceneCage {
+  std::string file;
+  int line = 0;  // where it is defined: the request, or an .obj file's first face
+  SubdivScheme scheme = SubdivScheme::CatmullClark;
+  SubdivCounts counts;
+};
+
 struct Scene {
   std::string source;             // the file it was read from
   std::vector<Surface> surfaces;
@@ -64,6 +73,7 @@ struct Scene {
   std::vector<SceneLight> lights;        // empty: the renderer's default lights
   SceneImage image;
   std::vector<std::string> warnings;     // statements read and skipped, file:line: what
+  std::vector<SceneCage> cages;
 
   // A conservative world-space box of the whole scene.
   Bounds3 WorldBounds() const;
@@ -71,10 +81,12 @@ struct Scene {
 
 struct LoadOptions {
   int frame = -1;  // RIB: the FrameBegin number to read; -1: the first frame
+  SubdivScheme objScheme = SubdivScheme::CatmullClark;  // .obj: how its cage is subdivided
 };
 
-// Read a scene file. Known extensions: .bpt (Bézier patch text) and .rib (RenderMan
-// Interface Bytestream). Errors name file:line.
+// Read a scene file. Known extensions: .bpt (Bézier patch text), .rib (RenderMan
+// Interface Bytestream) and .obj (Wavefront, read as a subdivision cage). Errors name
+// file:line.
 std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOptions& options = {});
 
 }  // namespace patchscan

@@ -20,24 +20,40 @@ struct SubdivFace::Prepared {
 
 SubdivFace::SubdivFace(std::shared_ptr<const Prepared> face, int subFace) : face_(std::move(face)), subFace_(subFace) {
   if (subFace_ < 0) return;
-  // A sub-face's normalized (u, v) in [0,1]^2 to the face's coordinates: an affine map,
-  // read off at three corners (Bfr::Parameterization, quadrangulated sub-faces).
+  double c00[2], c10[2], c01[2], c11[2];
   const osd::Bfr::Parameterization param = face_->surface.GetParameterization();
-  double o[2], eu[2], ev[2];
-  const double s00[2] = {0.0, 0.0}, s10[2] = {1.0, 0.0}, s01[2] = {0.0, 1.0};
-  param.ConvertNormalizedSubFaceToCoord(subFace_, s00, o);
-  param.ConvertNormalizedSubFaceToCoord(subFace_, s10, eu);
-  param.ConvertNormalizedSubFaceToCoord(subFace_, s01, ev);
-  origin_[0] = o[0];
-  origin_[1] = o[1];
-  a_[0][0] = eu[0] - o[0];
-  a_[1][0] = eu[1] - o[1];
-  a_[0][1] = ev[0] - o[0];
-  a_[1][1] = ev[1] - o[1];
+  if (param.GetType() == osd::Bfr::Parameterization::TRI) {
+    // The kite at corner k of the triangle (0,0), (1,0), (0,1): the corner, the midpoint of
+    // the edge after it, the centre, the midpoint of the edge before it.
+    const double corner[3][2] = {{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}};
+    const double* a = corner[subFace_];
+    const double* b = corner[(subFace_ + 1) % 3];
+    const double* c = corner[(subFace_ + 2) % 3];
+    for (int i = 0; i < 2; ++i) {
+      c00[i] = a[i];
+      c10[i] = 0.5 * (a[i] + b[i]);
+      c11[i] = (a[i] + b[i] + c[i]) / 3.0;
+      c01[i] = 0.5 * (a[i] + c[i]);
+    }
+  } else {
+    // Bfr's quadrangulated sub-face: an affine map, read off at its corners.
+    const double s00[2] = {0.0, 0.0}, s10[2] = {1.0, 0.0}, s01[2] = {0.0, 1.0};
+    param.ConvertNormalizedSubFaceToCoord(subFace_, s00, c00);
+    param.ConvertNormalizedSubFaceToCoord(subFace_, s10, c10);
+    param.ConvertNormalizedSubFaceToCoord(subFace_, s01, c01);
+    for (int i = 0; i < 2; ++i) c11[i] = c10[i] + c01[i] - c00[i];
+  }
+  for (int i = 0; i < 2; ++i) {
+    c00_[i] = c00[i];
+    eu_[i] = c10[i] - c00[i];
+    ev_[i] = c01[i] - c00[i];
+    twist_[i] = c11[i] - c10[i] - c01[i] + c00[i];
+  }
 }
 
 void SubdivFace::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const {
-  const double uv[2] = {origin_[0] + a_[0][0] * u + a_[0][1] * v, origin_[1] + a_[1][0] * u + a_[1][1] * v};
+  const double uv[2] = {c00_[0] + eu_[0] * u + ev_[0] * v + twist_[0] * u * v,
+                        c00_[1] + eu_[1] * u + ev_[1] * v + twist_[1] * u * v};
   const osd::Bfr::Surface<double>::PointDescriptor desc(3);
   double p[3], du[3], dv[3], duu[3], duv[3], dvv[3];
   const double* pts = face_->patchPoints.data();
@@ -47,14 +63,17 @@ void SubdivFace::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* o
   out->p = Vec3(p[0], p[1], p[2]);
   if (!Wants(order, DerivOrder::First)) return;
   const Vec3 Du(du[0], du[1], du[2]), Dv(dv[0], dv[1], dv[2]);
-  // The chain rule through the affine map (s, t) -> (U, V) = origin + A (s, t).
-  const double a00 = a_[0][0], a01 = a_[0][1], a10 = a_[1][0], a11 = a_[1][1];
+  // The chain rule through the map (u, v) -> (U, V): its Jacobian columns are
+  // dU/du = eu + twist v and dU/dv = ev + twist u; its only second derivative is
+  // d2U/dudv = twist.
+  const double a00 = eu_[0] + twist_[0] * v, a10 = eu_[1] + twist_[1] * v;  // d(U, V)/du
+  const double a01 = ev_[0] + twist_[0] * u, a11 = ev_[1] + twist_[1] * u;  // d(U, V)/dv
   out->dpdu = a00 * Du + a10 * Dv;
   out->dpdv = a01 * Du + a11 * Dv;
   if (!Wants(order, DerivOrder::Second)) return;
   const Vec3 Duu(duu[0], duu[1], duu[2]), Duv(duv[0], duv[1], duv[2]), Dvv(dvv[0], dvv[1], dvv[2]);
   out->d2pdu2 = a00 * a00 * Duu + 2.0 * a00 * a10 * Duv + a10 * a10 * Dvv;
-  out->d2pduv = a00 * a01 * Duu + (a00 * a11 + a10 * a01) * Duv + a10 * a11 * Dvv;
+  out->d2pduv = a00 * a01 * Duu + (a00 * a11 + a10 * a01) * Duv + a10 * a11 * Dvv + twist_[0] * Du + twist_[1] * Dv;
   out->d2pdv2 = a01 * a01 * Duu + 2.0 * a01 * a11 * Duv + a11 * a11 * Dvv;
 }
 
@@ -99,6 +118,9 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
         if (mesh.faceVertices[start + static_cast<std::size_t>(i)] == mesh.faceVertices[start + static_cast<std::size_t>(j)])
           throw std::invalid_argument("face " + std::to_string(f) + " uses vertex " +
                                       std::to_string(mesh.faceVertices[start + static_cast<std::size_t>(i)]) + " twice");
+    if (mesh.scheme == SubdivScheme::Loop && n != 3)
+      throw std::invalid_argument("face " + std::to_string(f) + " has " + std::to_string(n) +
+                                  " vertices: a Loop cage is of triangles");
     start += static_cast<std::size_t>(n);
   }
   std::vector<Index> creasePairs;
@@ -142,8 +164,10 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
                                   : mesh.interpolateBoundary == 2 ? osd::Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
                                                                   : osd::Sdc::Options::VTX_BOUNDARY_NONE);
   using RefinerFactory = osd::Far::TopologyRefinerFactory<osd::Far::TopologyDescriptor>;
-  std::unique_ptr<osd::Far::TopologyRefiner> refiner(
-      RefinerFactory::Create(desc, RefinerFactory::Options(osd::Sdc::SCHEME_CATMARK, sdc)));
+  const osd::Sdc::SchemeType scheme = mesh.scheme == SubdivScheme::Loop       ? osd::Sdc::SCHEME_LOOP
+                                      : mesh.scheme == SubdivScheme::Bilinear ? osd::Sdc::SCHEME_BILINEAR
+                                                                              : osd::Sdc::SCHEME_CATMARK;
+  std::unique_ptr<osd::Far::TopologyRefiner> refiner(RefinerFactory::Create(desc, RefinerFactory::Options(scheme, sdc)));
   if (!refiner) throw std::invalid_argument("OpenSubdiv cannot build the cage's topology");
 
   // Step 3: one Bfr surface per rendered face, its patch points prepared once.
@@ -153,6 +177,8 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
   c.faces = level.GetNumFaces();
   c.vertices = level.GetNumVertices();
   c.holes = static_cast<int>(mesh.holes.size());
+  c.creaseEdges = static_cast<int>(creaseWeights.size());
+  c.corners = static_cast<int>(cornerWeights.size());
   for (Index v = 0; v < level.GetNumVertices(); ++v)
     if (!level.IsVertexValenceRegular(v)) ++c.extraordinaryVertices;
   std::vector<double> meshPoints;
@@ -171,10 +197,11 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
       prepared->hull.emplace_back(prepared->patchPoints[k], prepared->patchPoints[k + 1], prepared->patchPoints[k + 2]);
     const int n = prepared->surface.GetFaceSize();
     std::shared_ptr<const SubdivFace::Prepared> shared = std::move(prepared);
-    if (!shared->surface.GetParameterization().HasSubFaces()) {
-      faces.emplace_back(shared, -1);
-    } else {
+    const osd::Bfr::Parameterization param = shared->surface.GetParameterization();
+    if (param.HasSubFaces() || param.GetType() == osd::Bfr::Parameterization::TRI) {
       for (int k = 0; k < n; ++k) faces.emplace_back(shared, k);
+    } else {
+      faces.emplace_back(shared, -1);
     }
   }
   c.surfaces = static_cast<int>(faces.size());

@@ -20,8 +20,13 @@
 
 namespace patchscan {
 
+// The subdivision rules: RenderMan's "catmull-clark", "loop" (triangles only) and
+// "bilinear" (the cage itself, flat: each face bilinear, an n-gon as n bilinear quarters).
+enum class SubdivScheme { CatmullClark, Loop, Bilinear };
+
 // A control cage and its tags, as RenderMan's SubdivisionMesh gives them.
 struct SubdivMesh {
+  SubdivScheme scheme = SubdivScheme::CatmullClark;
   std::vector<int> faceSizes;     // vertices of each face
   std::vector<int> faceVertices;  // each face's vertex indices, counter-clockwise seen from outside
   std::vector<Vec3> points;
@@ -39,7 +44,11 @@ struct SubdivMesh {
   int interpolateBoundary = 0;
 };
 
-// One base face (or one sub-face of a non-quadrilateral face) of a prepared cage.
+// One base face (or one sub-face of a non-quadrilateral face) of a prepared cage. A
+// sub-face is a quarter of the face at one corner: Bfr's own for Catmull-Clark and bilinear
+// n-gons, and for a Loop triangle the kite from its corner to the midpoints of its two
+// edges there and its centre (in Bfr's triangle coordinates), so that every surface has
+// the domain [0,1]^2 and no collapsed edge.
 class SubdivFace {
  public:
   struct Prepared;  // the Bfr surface of the face and its patch points, shared by sub-faces
@@ -58,20 +67,22 @@ class SubdivFace {
  private:
   std::shared_ptr<const Prepared> face_;
   int subFace_;
-  // The sub-face's (u, v) to the face's Bfr coordinates: origin + A (u, v).
-  double origin_[2] = {0.0, 0.0};
-  double a_[2][2] = {{1.0, 0.0}, {0.0, 1.0}};
+  // The sub-face's (u, v) to the face's Bfr coordinates, bilinearly: c00 + eu u + ev v +
+  // twist u v (affine, twist 0, for Bfr's quadrangulated sub-faces).
+  double c00_[2] = {0.0, 0.0}, eu_[2] = {1.0, 0.0}, ev_[2] = {0.0, 1.0}, twist_[2] = {0.0, 0.0};
 };
 
 // Statistics of a cage, for `patchscan info`.
 struct SubdivCounts {
   int faces = 0, vertices = 0, irregularFaces = 0, extraordinaryVertices = 0, holes = 0, surfaces = 0;
+  int creaseEdges = 0, corners = 0;
 };
 
 // Prepares every face of `mesh` that is rendered (not a hole, nor a boundary face where
 // interpolateBoundary is 0). Throws std::invalid_argument naming what is wrong with a cage
-// that is not a valid mesh (indices out of range, a face of fewer than 3 vertices, a
-// non-manifold edge OpenSubdiv refuses).
+// that is not a valid mesh (indices out of range, a face of fewer than 3 vertices, a face
+// using a vertex twice, a face of a Loop cage that is not a triangle, a non-manifold edge
+// OpenSubdiv refuses).
 std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts* counts = nullptr);
 
 }  // namespace patchscan

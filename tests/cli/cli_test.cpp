@@ -419,7 +419,7 @@ TEST(Cli, RibScenesRenderInEveryMode) {
   const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_rib_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   for (const char* mode : {"exact", "theta", "tess"})
-    for (const char* scene : {"quadrics.rib", "teapot_lit.rib", "patchmesh.rib", "cages.rib"}) {
+    for (const char* scene : {"quadrics.rib", "teapot_lit.rib", "patchmesh.rib", "cages.rib", "cube_tags.obj"}) {
       const std::string out = (dir / (std::string(mode) + "_" + scene + ".png")).string();
       const Result r = Patchscan("render " PATCHSCAN_SURFACES_DIR "/" + std::string(scene) + " -o " + out +
                                  " --size 96x72 --aa 2 --mode " + mode);

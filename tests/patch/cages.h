@@ -61,6 +61,33 @@ inline SubdivMesh Grid(int n, int interpolateBoundary) {
   return m;
 }
 
+// A regular octahedron (every vertex of valence 4) or icosahedron (valence 5) of
+// triangles, counter-clockwise seen from outside: for Loop, every vertex extraordinary.
+inline SubdivMesh Octahedron() {
+  SubdivMesh m;
+  m.scheme = SubdivScheme::Loop;
+  m.points = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  m.faceSizes.assign(8, 3);
+  m.faceVertices = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+  return m;
+}
+inline SubdivMesh Icosahedron() {
+  SubdivMesh m;
+  m.scheme = SubdivScheme::Loop;
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  m.points = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+              {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  for (Vec3& p : m.points) p /= std::sqrt(1.0 + t * t);
+  m.faceSizes.assign(20, 3);
+  m.faceVertices = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
+                    3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+  return m;
+}
+
+// Grid(n) with each quadrilateral cut into two triangles along the same diagonal: interior
+// vertices of valence 6, Loop's regular case.
+inline SubdivMesh TriangleGrid(int n, int interpolateBoundary);
+
 inline std::vector<Cage> Cages() {
   std::vector<Cage> c;
   c.push_back({"cube", Cube()});
@@ -80,7 +107,35 @@ inline std::vector<Cage> Cages() {
   c.push_back({"pyramid, pentagonal base", Pyramid(5)});
   c.push_back({"open grid, boundary edges and corners sharp", Grid(4, 1)});
   c.push_back({"open grid, boundary faces dropped", Grid(4, 0)});
+  c.push_back({"octahedron, Loop, valence 4", Octahedron()});
+  SubdivMesh loopTetra = tetra;
+  loopTetra.scheme = SubdivScheme::Loop;
+  for (Vec3& p : loopTetra.points) p *= 2.0;  // Loop shrinks a tetrahedron to a third
+  c.push_back({"tetrahedron, Loop", loopTetra});
+  SubdivMesh creasedIco = Icosahedron();
+  creasedIco.creases = {{{0, 11, 5, 0}, 10.0}};
+  c.push_back({"icosahedron, Loop, valence 5, a sharp crease", creasedIco});
+  c.push_back({"open triangle grid, Loop, boundary sharp", TriangleGrid(3, 1)});
+  SubdivMesh flatCube = Cube();
+  flatCube.scheme = SubdivScheme::Bilinear;
+  c.push_back({"cube, bilinear (the cage flat)", flatCube});
+  SubdivMesh flatPyramid = Pyramid(5);
+  flatPyramid.scheme = SubdivScheme::Bilinear;
+  c.push_back({"pyramid, pentagonal base, bilinear", flatPyramid});
   return c;
+}
+
+inline SubdivMesh TriangleGrid(int n, int interpolateBoundary) {
+  SubdivMesh m = Grid(n, interpolateBoundary);
+  m.scheme = SubdivScheme::Loop;
+  std::vector<int> tris;
+  for (std::size_t f = 0; f < m.faceSizes.size(); ++f) {
+    const int* q = &m.faceVertices[4 * f];
+    tris.insert(tris.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+  }
+  m.faceVertices = tris;
+  m.faceSizes.assign(tris.size() / 3, 3);
+  return m;
 }
 
 }  // namespace patchscan::test

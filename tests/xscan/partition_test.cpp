@@ -43,7 +43,7 @@ struct SceneCase {
 std::vector<SceneCase> Scenes() {
   std::vector<SceneCase> out;
   for (const char* file : {"teapot.bpt", "teacup.bpt", "teaspoon.bpt", "sphere.bpt", "quadrics.rib",
-                           "patchmesh.rib", "teapot_lit.rib", "cages.rib"}) {
+                           "patchmesh.rib", "teapot_lit.rib", "cages.rib", "cube_tags.obj"}) {
     auto loaded = LoadScene(std::string(PATCHSCAN_SURFACES_DIR) + "/" + file);
     EXPECT_TRUE(std::holds_alternative<Scene>(loaded)) << file;
     if (!std::holds_alternative<Scene>(loaded)) continue;
@@ -113,7 +113,7 @@ TEST(Partition, SameImageForAnyNumberOfWorkers) {
       }
     }
   }
-  EXPECT_EQ(compared, 9 * 4 * 5);  // scenes, modes, worker counts
+  EXPECT_EQ(compared, 10 * 4 * 5);  // scenes, modes, worker counts
 }
 
 TEST(Partition, EverySurfaceOnceInScanOrderAndBalanced) {
