@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <numbers>
+#include <set>
 #include <sstream>
 
 namespace patchscan {
@@ -80,6 +81,62 @@ void Attributes(std::ostream& out, const Appearance& a) {
 
 }  // namespace
 
+namespace {
+
+// A cage as RenderMan's SubdivisionMesh: scheme, face sizes and vertices, its tags (each
+// crease chain a "crease" of one sharpness, corners one sharpness each, holes,
+// interpolateboundary), "P".
+void SubdivisionMesh(std::ostream& out, const SubdivMesh& m) {
+  const char* scheme = m.scheme == SubdivScheme::Loop       ? "loop"
+                       : m.scheme == SubdivScheme::Bilinear ? "bilinear"
+                                                            : "catmull-clark";
+  auto list = [&](const auto& values) {
+    out << '[';
+    for (std::size_t i = 0; i < values.size(); ++i) out << (i ? " " : "") << values[i];
+    out << ']';
+  };
+  out << "SubdivisionMesh \"" << scheme << "\" ";
+  list(m.faceSizes);
+  out << "\n  ";
+  list(m.faceVertices);
+  std::vector<std::string> tags;
+  std::vector<int> nargs, ints;
+  std::vector<double> floats;
+  for (const SubdivMesh::Crease& c : m.creases) {
+    tags.push_back("\"crease\"");
+    nargs.insert(nargs.end(), {static_cast<int>(c.chain.size()), 1});
+    ints.insert(ints.end(), c.chain.begin(), c.chain.end());
+    floats.push_back(c.sharpness);
+  }
+  if (!m.corners.empty()) {
+    tags.push_back("\"corner\"");
+    nargs.insert(nargs.end(), {static_cast<int>(m.corners.size()), static_cast<int>(m.corners.size())});
+    for (const auto& [v, sharpness] : m.corners) ints.push_back(v);
+    for (const auto& [v, sharpness] : m.corners) floats.push_back(sharpness);
+  }
+  if (!m.holes.empty()) {
+    tags.push_back("\"hole\"");
+    nargs.insert(nargs.end(), {static_cast<int>(m.holes.size()), 0});
+    ints.insert(ints.end(), m.holes.begin(), m.holes.end());
+  }
+  tags.push_back("\"interpolateboundary\"");
+  nargs.insert(nargs.end(), {1, 0});
+  ints.push_back(m.interpolateBoundary);
+  out << "\n  ";
+  list(tags);
+  out << ' ';
+  list(nargs);
+  out << ' ';
+  list(ints);
+  out << ' ';
+  list(floats);
+  out << "\n  \"P\" [";
+  for (const Vec3& p : m.points) Point(out, p);
+  out << " ]\n";
+}
+
+}  // namespace
+
 std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Camera& camera,
                                                 const RibWriteOptions& options) {
   std::ostringstream out;
@@ -125,8 +182,12 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
   Lights(out, scene.lights);
   // Step 3: the surfaces, each in its own attribute block when it is placed or has an
   // appearance of its own.
+  std::set<const SubdivMesh*> cagesWritten;
   for (size_t k = 0; k < scene.surfaces.size(); ++k) {
     const Surface& s = scene.surfaces[k];
+    // A cage's faces come from one request: the cage is written once, at its first face.
+    const auto* face = std::get_if<SubdivFace>(&s.shape);
+    if (face && !cagesWritten.insert(&face->Cage()).second) continue;
     const bool placed = !s.worldFromObject.matrix().isIdentity(0.0);
     const bool dressed = !scene.appearanceOf.empty();
     if (placed || dressed) out << "AttributeBegin\n";
@@ -152,9 +213,11 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
       out << "Patch \"bilinear\" \"P\" [";
       for (const Vec3& p : l->Hull()) Point(out, p);
       out << " ]\n";
+    } else if (face) {
+      SubdivisionMesh(out, face->Cage());
     } else {
       return RibWriteError{"surface " + std::to_string(k + 1) + " (" + Describe(s) +
-                           ") has no RIB form here: bicubic and bilinear patches and the quadrics are written"};
+                           ") has no RIB form here: patches, quadrics and subdivision meshes are written"};
     }
     if (placed || dressed) out << "AttributeEnd\n";
   }

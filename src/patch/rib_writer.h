@@ -1,7 +1,8 @@
 // Writing scenes as RenderMan Interface Bytestream (.rib) that patchscan's RIB reader
 // renders to the same image: the camera as Format, PixelSamples, Projection, Clipping and
 // an explicit world-to-camera Transform, the scene's lights, then each surface with its
-// appearance (Color, Opacity, Sides, ReverseOrientation, Surface) as a Patch or a quadric.
+// appearance (Color, Opacity, Sides, ReverseOrientation, Surface) as a Patch, a quadric or
+// a SubdivisionMesh.
 #pragma once
 
 #include <string>
@@ -22,9 +23,10 @@ struct RibWriteOptions {
 };
 
 // The RIB text of `scene` seen by `camera` (a valid camera), or why it cannot be written
-// (a surface kind with no RIB form here: subdivision faces, the test saddles). Bicubic
-// patches are written in Bézier form, bilinear patches as they are, quadrics by their own
-// requests; numbers with 17 significant digits, so they read back exactly.
+// (a surface kind with no RIB form here: the test saddles). Bicubic patches are written
+// in Bézier form, bilinear patches as they are, quadrics by their own requests, a
+// subdivision cage once, as the SubdivisionMesh it was read as (an .obj cage too);
+// numbers with 17 significant digits, so they read back exactly.
 std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Camera& camera,
                                                 const RibWriteOptions& options);
 

@@ -12,6 +12,7 @@ namespace patchscan {
 namespace osd = OpenSubdiv;
 
 struct SubdivFace::Prepared {
+  std::shared_ptr<const SubdivMesh> cage;
   int face = 0;
   osd::Bfr::Surface<double> surface;
   std::vector<double> patchPoints;  // x y z per point: the control points, then any Bfr adds
@@ -82,6 +83,8 @@ std::span<const Vec3> SubdivFace::Hull() const { return face_->hull; }
 int SubdivFace::Face() const { return face_->face; }
 
 bool SubdivFace::Regular() const { return face_->surface.IsRegular(); }
+
+const SubdivMesh& SubdivFace::Cage() const { return *face_->cage; }
 
 std::string SubdivFace::Describe() const {
   std::string s = "subdivision face " + std::to_string(face_->face);
@@ -186,8 +189,10 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
   for (const Vec3& p : mesh.points) meshPoints.insert(meshPoints.end(), {p.x(), p.y(), p.z()});
   const osd::Bfr::Surface<double>::PointDescriptor pointDesc(3);
   std::vector<SubdivFace> faces;
+  const auto cage = std::make_shared<const SubdivMesh>(mesh);
   for (Index f = 0; f < level.GetNumFaces(); ++f) {
     auto prepared = std::make_shared<SubdivFace::Prepared>();
+    prepared->cage = cage;
     prepared->face = f;
     if (!factory.InitVertexSurface(f, &prepared->surface)) continue;  // a hole, or a dropped boundary face
     if (!prepared->surface.IsRegular()) ++c.irregularFaces;

@@ -63,6 +63,8 @@ class SubdivFace {
   int Face() const;
   int SubFace() const { return subFace_; }
   bool Regular() const;
+  // The cage the face belongs to, as given (one copy shared by all its faces).
+  const SubdivMesh& Cage() const;
 
  private:
   std::shared_ptr<const Prepared> face_;
