@@ -19,6 +19,7 @@ import subprocess
 import sys
 import time
 
+import make_cage
 import povray
 from common import camera_args, framed_camera, run
 
@@ -27,6 +28,7 @@ SCENES = [  # name, file, extra camera options
     ("teacup", "surfaces/teacup.bpt", ["--up", "0,1,0"]),
     ("teaspoon", "surfaces/teaspoon.bpt", ["--up", "0,1,0"]),
     ("sphere", "surfaces/sphere.bpt", []),
+    ("cage", None, []),  # bench/make_cage.py's torus cage of 2,176 faces, written into --out
 ]
 THETA_STEPS = [4, 8, 16, 32, 64]
 TESS_RATES = [2, 4, 8, 16, 32]
@@ -42,14 +44,19 @@ FIELDS = ["scene", "aa", "mode", "setting", "seconds", "seconds_wall", "peak_rss
           "depth_rel_max", "normal_deg_p99", "normal_deg_max", "rmse", "psnr_db"]
 
 
-def settings():
-    yield "exact", "", []
+def settings(only=None):
+    """(mode, setting, options) of every setting, or of those `only` names (a set of short
+    names: exact, theta16, tess8, px4, ...)."""
+    every = [("exact", "", [], "exact")]
     for n in THETA_STEPS:
-        yield "theta", f"steps {n}", ["--mode", "theta", "--theta-steps", str(n)]
+        every.append(("theta", f"steps {n}", ["--mode", "theta", "--theta-steps", str(n)], f"theta{n}"))
     for r in TESS_RATES:
-        yield "tess", f"rate {r}", ["--mode", "tess", "--tess-rate", str(r)]
+        every.append(("tess", f"rate {r}", ["--mode", "tess", "--tess-rate", str(r)], f"tess{r}"))
     for p in TESS_PIXELS:
-        yield "tess-pixels", f"{p} px", ["--mode", "tess", "--tess-pixels", str(p)]
+        every.append(("tess-pixels", f"{p} px", ["--mode", "tess", "--tess-pixels", str(p)], f"px{p}"))
+    for mode, setting, options, short in every:
+        if only is None or short in only:
+            yield mode, setting, options
 
 
 def render(binary, scene, extra, aa, mode_args, size, out_exr, stats_json, repeat):
@@ -237,6 +244,10 @@ def main():
     ap.add_argument("--size", default="1024x768")
     ap.add_argument("--repeat", type=int, default=1, help="renders per setting; the fastest counts")
     ap.add_argument("--scenes", default=",".join(s[0] for s in SCENES))
+    ap.add_argument("--settings", default="",
+                    help="only these settings, by short name: exact (always), theta16, tess8, px4, ... "
+                         "(default: all)")
+    ap.add_argument("--aa", default=",".join(map(str, AAS)), help="supersampling levels, e.g. 1,4")
     ap.add_argument("--povray-steps", type=int, default=4,
                     help="POV-Ray's u_steps/v_steps (2^n pieces per patch side); 0: no POV-Ray")
     ap.add_argument("--report-only", action="store_true",
@@ -257,11 +268,14 @@ def main():
     for name, path, extra in SCENES:
         if name not in wanted:
             continue
+        if path is None:
+            path = make_cage.write(os.path.join(work, "torus_cage.obj"))
         cam = framed_camera(args.binary, path, extra, args.size)
         extra = camera_args(cam)
-        for aa in AAS:
+        only = set(args.settings.split(",")) | {"exact"} if args.settings else None
+        for aa in (int(a) for a in args.aa.split(",")):
             ref = os.path.join(work, f"{name}_aa{aa}_exact.exr")
-            for mode, setting, margs in settings():
+            for mode, setting, margs in settings(only):
                 exr = ref if mode == "exact" else os.path.join(work, "candidate.exr")
                 secs, wall, st = render(args.binary, path, extra, aa, margs, args.size, exr,
                                         os.path.join(work, "stats.json"), args.repeat)
@@ -281,7 +295,7 @@ def main():
                 print(f"{name} aa {aa} {mode} {setting}: {secs:.3f} s, silhouette "
                       f"{fmt(row['silhouette_max_px'])} px, RMSE {fmt(row['rmse'])}", file=sys.stderr)
             # POV-Ray's bicubic_patch on the same patches, camera, size and supersampling.
-            if args.povray_steps > 0 and shutil.which("povray"):
+            if args.povray_steps > 0 and shutil.which("povray") and path.endswith(".bpt"):
                 w, h = (int(x) for x in args.size.split("x"))
                 pov_scene, pov_png = os.path.join(work, "scene.pov"), os.path.join(work, "pov.png")
                 povray.write_scene(path, pov_scene, cam["eye"], cam["look-at"], cam["up"], cam["fov"], w, h,

@@ -167,9 +167,11 @@ TEST(ObjReader, MalformedFilesAreRefusedAtTheirLine) {
 }
 
 TEST(ObjReader, TheCorpusReadsOrIsRefusedWithALine) {
-  // tests/corpus/obj: the seeds of fuzz/fuzz_obj, in every scheme.
-  for (const char* name : {"cube_tags", "ngons_negative", "triangles"}) {
-    const std::string path = std::string(PATCHSCAN_TESTS_DIR "/corpus/obj/") + name + ".obj";
+  // tests/corpus/obj and surfaces/cube_tags.obj: the seeds of fuzz/fuzz_obj, in every scheme.
+  for (const std::string& path : {std::string(PATCHSCAN_SURFACES_DIR "/cube_tags.obj"),
+                                 std::string(PATCHSCAN_TESTS_DIR "/corpus/obj/ngons_negative.obj"),
+                                 std::string(PATCHSCAN_TESTS_DIR "/corpus/obj/triangles.obj")}) {
+    const std::string& name = path;
     EXPECT_FALSE(Read(ReadObj(path)).surfaces.empty()) << name;
     EXPECT_FALSE(Read(ReadObj(path, {SubdivScheme::Bilinear})).surfaces.empty()) << name;
   }
