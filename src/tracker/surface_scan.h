@@ -83,6 +83,8 @@ class SurfaceScan {
   const Mat3& NormalFromObject() const { return normalFromObject_; }  // world normals from dp/du x dp/dv
   // The pre-pass's maxima and saddles on the screen, by y.
   const std::vector<ScreenStationary>& StationaryOnScreen() const { return stationary_; }
+  // The y ranges of the degenerate level sets LineFor steps off (EdgeScan::DegenerateRanges).
+  const std::vector<std::pair<double, double>>& DegenerateRanges() const { return edges_.DegenerateRanges(); }
   // The trackers themselves (their folds, births and deaths at the latest line).
   const EdgeScan& Edges() const { return edges_; }
   const SilhouetteScan& Silhouettes() const { return silhouettes_; }

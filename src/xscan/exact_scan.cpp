@@ -31,6 +31,10 @@ namespace {
 // A texture footprint longer than the whole domain per pixel says nothing more.
 constexpr double kMaxUvPerPixel = 1.0;
 
+// θ slabs are not taken this near (pixels) a degenerate level set: dark pixels were
+// measured up to 1.5 px from a cone point's row at 64 steps.
+constexpr double kDegenerateSlabPx = 2.0;
+
 Vec2 ClampLength(const Vec2& v, double len) {
   const double n = v.norm();
   return std::isfinite(n) ? (n > len ? Vec2(v * (len / n)) : v) : Vec2(len, 0.0);
@@ -234,6 +238,13 @@ bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
     bool quiet = !a.lineBroken && a.scan->Events() == events;
     for (const ScreenStationary& st : a.scan->StationaryOnScreen())
       if (st.p.y() > yTop && st.p.y() <= yBottom) quiet = false;
+    // A degenerate level set (a cone point, a pole, an edge seen edge-on) changes the
+    // sections as an event does, and near it they bend as sharply as the line is close to
+    // it: slabs zipped to such chains made slivers whose normals blend both sides of a cone
+    // point (dark pixels on the rows beside it). Rows within kDegenerateSlabPx of one are
+    // sampled one by one.
+    for (const auto& [lo, hi] : a.scan->DegenerateRanges())
+      if (hi + kDegenerateSlabPx >= yTop && lo - kDegenerateSlabPx <= yBottom) quiet = false;
     // Between lines with no event the chains of the top line are advanced as θ trackers
     // (§4.1); a chain that cannot be, or any event, has the bottom line crawled afresh.
     if (quiet && AdvanceSurface(a, yBottom, columns)) {
