@@ -20,7 +20,9 @@
 //
 // Errors name file:line: a number that is not one, an index of 0 or out of range, a face of
 // fewer than 3 vertices or using a vertex twice, a Loop face that is not a triangle, a tag
-// with the wrong counts or an index out of range. Vertices at the same position are
+// with the wrong counts or an index out of range; and at the first face's line, a cage
+// that is not a manifold (PrepareSubdivFaces: an edge of three faces, orientations that
+// disagree, a bowtie vertex, a crease off the edges). Vertices at the same position are
 // distinct vertices (the cage is open there, as the file says).
 #pragma once
 

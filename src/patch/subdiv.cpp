@@ -2,10 +2,13 @@
 
 #include <opensubdiv/bfr/refinerSurfaceFactory.h>
 #include <opensubdiv/bfr/surface.h>
+#include <opensubdiv/far/error.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
+#include <cstdint>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace patchscan {
 
@@ -93,7 +96,93 @@ std::string SubdivFace::Describe() const {
   return s;
 }
 
+namespace {
+
+// The cage's edges, each once, with the faces that use it. Refuses what OpenSubdiv's Bfr
+// cannot be trusted with (a fuzzed cage crashed it inside IrregularPatchBuilder): an edge of
+// three or more faces, two faces running an edge the same way (their orientations disagree),
+// and a vertex where separate fans of faces meet (a bowtie).
+void CheckManifold(const SubdivMesh& mesh, std::unordered_map<std::uint64_t, int>* edgeUses) {
+  struct Use {
+    int count = 0, face = -1;
+    bool forward = false;  // the first face runs it from the smaller vertex
+  };
+  std::unordered_map<std::uint64_t, Use> edges;
+  auto key = [](int a, int b) {
+    return (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+  };
+  // The corners at each vertex: (face, the vertex before, the vertex after).
+  struct Corner {
+    int face, prev, next;
+  };
+  std::vector<std::vector<Corner>> corners(mesh.points.size());
+  std::size_t start = 0;
+  for (std::size_t f = 0; f < mesh.faceSizes.size(); ++f) {
+    const int n = mesh.faceSizes[f];
+    for (int k = 0; k < n; ++k) {
+      const int a = mesh.faceVertices[start + static_cast<std::size_t>(k)];
+      const int b = mesh.faceVertices[start + static_cast<std::size_t>((k + 1) % n)];
+      const int before = mesh.faceVertices[start + static_cast<std::size_t>((k + n - 1) % n)];
+      corners[static_cast<std::size_t>(a)].push_back({static_cast<int>(f), before, b});
+      Use& u = edges[key(a, b)];
+      const std::string edge = "the edge between vertices " + std::to_string(a) + " and " + std::to_string(b);
+      if (u.count >= 2)
+        throw std::invalid_argument(edge + " is used by 3 or more faces (a non-manifold edge)");
+      if (u.count == 1 && u.forward == (a < b))
+        throw std::invalid_argument("faces " + std::to_string(u.face) + " and " + std::to_string(f) + " both run " + edge +
+                                    " the same way (their orientations disagree)");
+      if (u.count == 0) {
+        u.face = static_cast<int>(f);
+        u.forward = a < b;
+      }
+      ++u.count;
+    }
+    start += static_cast<std::size_t>(n);
+  }
+  // A vertex's corners form one fan: linked where one face's edge out of it is the next
+  // face's edge into it.
+  std::vector<int> parent;
+  for (std::size_t v = 0; v < corners.size(); ++v) {
+    const auto& c = corners[v];
+    parent.resize(c.size());
+    for (std::size_t i = 0; i < c.size(); ++i) parent[i] = static_cast<int>(i);
+    auto root = [&](int i) {
+      while (parent[static_cast<std::size_t>(i)] != i) i = parent[static_cast<std::size_t>(i)];
+      return i;
+    };
+    std::size_t fans = c.size();
+    for (std::size_t i = 0; i < c.size(); ++i)
+      for (std::size_t j = 0; j < c.size(); ++j)
+        if (i != j && c[i].next == c[j].prev) {
+          const int ri = root(static_cast<int>(i)), rj = root(static_cast<int>(j));
+          if (ri != rj) {
+            parent[static_cast<std::size_t>(ri)] = rj;
+            --fans;
+          }
+        }
+    if (fans > 1)
+      throw std::invalid_argument("vertex " + std::to_string(v) + " joins " + std::to_string(fans) +
+                                  " separate fans of faces (a non-manifold vertex)");
+  }
+  edgeUses->clear();
+  for (const auto& [k, u] : edges) (*edgeUses)[k] = u.count;
+}
+
+// OpenSubdiv reports through printf by default; the cage is checked before it is given
+// to OpenSubdiv, so what it would still say is not for the user's terminal.
+void QuietOpenSubdiv() {
+  static const bool once = [] {
+    osd::Far::SetErrorCallback([](osd::Far::ErrorType, const char*) {});
+    osd::Far::SetWarningCallback([](const char*) {});
+    return true;
+  }();
+  (void)once;
+}
+
+}  // namespace
+
 std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts* counts) {
+  QuietOpenSubdiv();
   using osd::Far::Index;
   const int nPoints = static_cast<int>(mesh.points.size());
   // Step 1: what OpenSubdiv cannot be trusted to refuse cleanly, refused here.
@@ -147,6 +236,15 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
     if (h < 0 || h >= static_cast<int>(mesh.faceSizes.size()))
       throw std::invalid_argument("hole face " + std::to_string(h) + " is out of range (" +
                                   std::to_string(mesh.faceSizes.size()) + " faces)");
+  std::unordered_map<std::uint64_t, int> edgeUses;
+  CheckManifold(mesh, &edgeUses);
+  for (std::size_t k = 0; k + 1 < creasePairs.size(); k += 2) {
+    const int a = creasePairs[k], b = creasePairs[k + 1];
+    const std::uint64_t key = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+    if (a == b || !edgeUses.contains(key))
+      throw std::invalid_argument("crease: vertices " + std::to_string(a) + " and " + std::to_string(b) +
+                                  " are not the ends of an edge of the cage");
+  }
 
   // Step 2: the topology, with RenderMan's boundary rule.
   osd::Far::TopologyDescriptor desc;

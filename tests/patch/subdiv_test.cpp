@@ -213,6 +213,27 @@ TEST(Subdiv, CagesThatAreNotMeshesAreRefused) {
   m = test::Cube();
   m.creases = {{{0, 9}, 2.0}};
   EXPECT_NE(refused(m).find("crease vertex index 9"), std::string::npos);
+  // What OpenSubdiv's Bfr cannot be trusted with (a fuzzed cage crashed it): an edge of three
+  // faces, faces whose orientations disagree, a vertex joining two fans; and a crease
+  // between vertices that share no edge (OpenSubdiv printed a warning to stdout for it).
+  m = test::Cube();
+  m.faceSizes.push_back(3);
+  m.faceVertices.insert(m.faceVertices.end(), {0, 1, 7});  // 0-1 is already two faces' edge
+  EXPECT_NE(refused(m).find("is used by 3 or more faces (a non-manifold edge)"), std::string::npos) << refused(m);
+  m = test::Cube();
+  std::reverse(m.faceVertices.begin(), m.faceVertices.begin() + 4);  // face 0 turned inside out
+  EXPECT_NE(refused(m).find("the same way (their orientations disagree)"), std::string::npos) << refused(m);
+  SubdivMesh bowtie;
+  bowtie.points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}};
+  bowtie.faceSizes = {3, 3};
+  bowtie.faceVertices = {0, 1, 2, 0, 3, 4};
+  EXPECT_NE(refused(bowtie).find("vertex 0 joins 2 separate fans of faces (a non-manifold vertex)"), std::string::npos)
+      << refused(bowtie);
+  m = test::Cube();
+  m.creases = {{{0, 3}, 2.0}};  // a face's diagonal
+  EXPECT_NE(refused(m).find("crease: vertices 0 and 3 are not the ends of an edge"), std::string::npos) << refused(m);
+  m.creases = {{{2, 2}, 2.0}};
+  EXPECT_NE(refused(m).find("crease: vertices 2 and 2"), std::string::npos) << refused(m);
 }
 
 TEST(Subdiv, RibSubdivisionMesh) {
