@@ -245,6 +245,24 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
       throw std::invalid_argument("crease: vertices " + std::to_string(a) + " and " + std::to_string(b) +
                                   " are not the ends of an edge of the cage");
   }
+  // An interior vertex of valence 2 folds the control hull over on itself. OpenSubdiv 3.5's
+  // Bfr builds the irregular patches around one from uninitialised indices when the cage also
+  // has creases (valgrind and a fuzzed crash inside IrregularPatchBuilder agree; without
+  // creases it is clean), so a cage is refused the combination rather than evaluated wrongly.
+  if (!creasePairs.empty()) {
+    std::vector<int> valence(mesh.points.size(), 0);
+    std::vector<bool> boundary(mesh.points.size(), false);
+    for (const auto& [k, uses] : edgeUses)
+      for (const int v : {static_cast<int>(k >> 32), static_cast<int>(k & 0xffffffffu)}) {
+        ++valence[static_cast<std::size_t>(v)];
+        if (uses == 1) boundary[static_cast<std::size_t>(v)] = true;
+      }
+    for (std::size_t v = 0; v < valence.size(); ++v)
+      if (valence[v] == 2 && !boundary[v])
+        throw std::invalid_argument("vertex " + std::to_string(v) +
+                                    " is an interior vertex of valence 2, and OpenSubdiv 3.5 cannot evaluate a cage "
+                                    "that has one together with creases: remove the creases or the vertex");
+  }
 
   // Step 2: the topology, with RenderMan's boundary rule.
   osd::Far::TopologyDescriptor desc;

@@ -176,7 +176,7 @@ TEST(ObjReader, TheCorpusReadsOrIsRefusedWithALine) {
     EXPECT_FALSE(Read(ReadObj(path, {SubdivScheme::Bilinear})).surfaces.empty()) << name;
   }
   EXPECT_FALSE(Read(ReadObj(PATCHSCAN_TESTS_DIR "/corpus/obj/triangles.obj", {SubdivScheme::Loop})).surfaces.empty());
-  for (const char* name : {"degenerate_face", "index_out_of_range", "index_zero", "nan", "tag_counts"}) {
+  for (const char* name : {"degenerate_face", "folded_crease", "index_out_of_range", "index_zero", "nan", "tag_counts"}) {
     const auto r = ReadObj(std::string(PATCHSCAN_TESTS_DIR "/corpus/obj/") + name + ".obj");
     ASSERT_TRUE(std::holds_alternative<SourceError>(r)) << name;
     EXPECT_GT(std::get<SourceError>(r).line, 0) << name;

@@ -234,6 +234,17 @@ TEST(Subdiv, CagesThatAreNotMeshesAreRefused) {
   EXPECT_NE(refused(m).find("crease: vertices 0 and 3 are not the ends of an edge"), std::string::npos) << refused(m);
   m.creases = {{{2, 2}, 2.0}};
   EXPECT_NE(refused(m).find("crease: vertices 2 and 2"), std::string::npos) << refused(m);
+  // Vertex 4 is interior with two edges: faces 0 and 1 fold over it. Without creases
+  // OpenSubdiv evaluates the cage; with a crease anywhere near it, it read uninitialised
+  // memory (and crashed on a fuzzed cage), so the pair is refused.
+  SubdivMesh folded;
+  folded.points = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}, {1, 1, 0.5}, {3, 0, 0}, {3, 2, 0}};
+  folded.faceSizes = {4, 4, 4};
+  folded.faceVertices = {0, 1, 4, 3, 1, 2, 3, 4, 1, 5, 6, 2};
+  folded.interpolateBoundary = 1;  // every face is on the boundary
+  EXPECT_EQ(PrepareSubdivFaces(folded).size(), 3U);
+  folded.creases = {{{1, 2}, 10.0}};  // not itself at vertex 4
+  EXPECT_NE(refused(folded).find("vertex 4 is an interior vertex of valence 2"), std::string::npos) << refused(folded);
 }
 
 TEST(Subdiv, RibSubdivisionMesh) {
