@@ -16,7 +16,8 @@
 int main(int argc, char** argv) {
   using namespace patchscan::cli;
   CLI::App app(
-      "patchscan renders parametric surfaces (bicubic patches in any basis, quadrics) "
+      "patchscan renders parametric surfaces (bicubic patches in any basis, quadrics, NURBS, "
+      "subdivision surfaces) "
       "directly, with Blinn's scan-line algorithm, and compares them with tessellated "
       "renders through the same back end.",
       "patchscan");

@@ -4,18 +4,41 @@
 
 namespace patchscan {
 
+namespace {
+
+// Per coordinate, with G(i,j) the control point (i along u, j along v):
+// power coefficients  A = Mu G Mv^T   (A(r,s) multiplies u^(3-r) v^(3-s)),
+// Bézier points       B = Mb^-1 A Mb^-T.
+template <int N>
+void ToPowerAndBezier(const std::array<Eigen::Matrix<double, N, 1>, 16>& cv, const Basis& uBasis, const Basis& vBasis,
+                      int k, Mat4* a, Mat4* b) {
+  static const Mat4 bezierInv = BezierBasis().m.inverse();
+  Mat4 g;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) g(i, j) = cv[4 * j + i][k];
+  *a = uBasis.m * g * vBasis.m.transpose();
+  *b = bezierInv * *a * bezierInv.transpose();
+}
+
+}  // namespace
+
+std::array<Vec4, 16> BezierHomogeneous(const std::array<Vec4, 16>& cv, const Basis& uBasis, const Basis& vBasis) {
+  if (uBasis.m == BezierBasis().m && vBasis.m == BezierBasis().m) return cv;
+  std::array<Vec4, 16> out;
+  for (int k = 0; k < 4; ++k) {
+    Mat4 a, b;
+    ToPowerAndBezier(cv, uBasis, vBasis, k, &a, &b);
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) out[4 * j + i][k] = b(i, j);
+  }
+  return out;
+}
+
 BicubicPatch::BicubicPatch(const std::array<Vec3, 16>& cv, const Basis& uBasis,
                            const Basis& vBasis) {
-  // Per coordinate, with G(i,j) the control point (i along u, j along v):
-  // power coefficients  A = Mu G Mv^T   (A(r,s) multiplies u^(3-r) v^(3-s)),
-  // Bézier points       B = Mb^-1 A Mb^-T.
-  const Mat4 bezierInv = BezierBasis().m.inverse();
   for (int k = 0; k < 3; ++k) {
-    Mat4 g;
-    for (int j = 0; j < 4; ++j)
-      for (int i = 0; i < 4; ++i) g(i, j) = cv[4 * j + i][k];
-    const Mat4 a = uBasis.m * g * vBasis.m.transpose();
-    const Mat4 b = bezierInv * a * bezierInv.transpose();
+    Mat4 a, b;
+    ToPowerAndBezier(cv, uBasis, vBasis, k, &a, &b);
     for (int i = 0; i < 4; ++i)
       for (int j = 0; j < 4; ++j) {
         a_[i][j][k] = a(3 - i, 3 - j);

@@ -33,6 +33,10 @@ class BicubicPatch {
   std::array<Vec3, 16> bezier_;
 };
 
+// The Bézier control points of a bicubic patch given in any basis, homogeneous: a rational
+// patch ("Pw") changes basis in (w x, w y, w z, w). Bézier input is returned as it is.
+std::array<Vec4, 16> BezierHomogeneous(const std::array<Vec4, 16>& cv, const Basis& uBasis, const Basis& vBasis);
+
 // A bilinear patch through four corners given as in RenderMan: P0 at (0,0), P1 at (1,0),
 // P2 at (0,1), P3 at (1,1). Evaluation allocates nothing.
 class BilinearPatch {

@@ -78,22 +78,40 @@ bool RibParser::BasisRequest(const Request& r) {
   return true;
 }
 
-bool RibParser::Points(const Request& r, size_t first, size_t count) {
+bool RibParser::Points(const Request& r, size_t first, size_t count, bool rationalAllowed) {
   std::vector<Param> params;
   if (!Params(r, first, &params)) return false;
   const Value* p = nullptr;
+  const Value* pw = nullptr;
   for (const Param& q : params) {
     if (q.name == "P") p = q.value;
-    else if (q.name == "Pw") return Fail(q.value->line, r.name + ": \"Pw\" (rational patches) is not supported; give \"P\"");
+    else if (q.name == "Pw" && rationalAllowed) pw = q.value;
+    else if (q.name == "Pw") return Fail(q.value->line, r.name + ": \"Pw\" (rational points) is not supported here; give \"P\"");
     else if (q.name == "Pz") return Fail(q.value->line, r.name + ": \"Pz\" (height fields) is not supported; give \"P\"");
     else IgnoreParam(r, q);
   }
-  if (!p) return Fail(r.line, r.name + ": no \"P\"");
-  if (!p->Numeric() || p->numbers.size() != 3 * count)
-    return Fail(p->line, r.name + ": \"P\" expects " + std::to_string(3 * count) + " numbers (" +
-                             std::to_string(count) + " points), found " + std::to_string(p->Size()));
+  if (p && pw) return Fail(pw->line, r.name + ": both \"P\" and \"Pw\": give one");
+  if (!p && !pw) return Fail(r.line, r.name + (rationalAllowed ? ": no \"P\" or \"Pw\"" : ": no \"P\""));
+  const Value* given = p ? p : pw;
+  const size_t dims = p ? 3 : 4;
+  if (!given->Numeric() || given->numbers.size() != dims * count)
+    return Fail(given->line, r.name + (p ? ": \"P\" expects " : ": \"Pw\" expects ") + std::to_string(dims * count) +
+                                 " numbers (" + std::to_string(count) + " points), found " + std::to_string(given->Size()));
   pts_.resize(count);
-  for (size_t k = 0; k < count; ++k) pts_[k] = Vec3(p->numbers[3 * k], p->numbers[3 * k + 1], p->numbers[3 * k + 2]);
+  hpts_.resize(count);
+  rational_ = false;
+  const double* n = given->numbers.data();
+  for (size_t k = 0; k < count; ++k) {
+    const Vec4 h = p ? Vec4(n[3 * k], n[3 * k + 1], n[3 * k + 2], 1.0) : Vec4(n[4 * k], n[4 * k + 1], n[4 * k + 2], n[4 * k + 3]);
+    // Homogeneous points (RenderMan Interface 3.2, "Pw": (w x, w y, w z, w)) with a
+    // positive weight: the surface then lies in the hull of the points divided by it.
+    if (!(h.w() > 0.0) || !std::isfinite(h.w()))
+      return Fail(given->line, r.name + ": point " + std::to_string(k) + " of \"Pw\" has weight " +
+                                   ShortestNumber(h.w()) + " (weights are positive)");
+    hpts_[k] = h;
+    pts_[k] = h.head<3>() / h.w();
+    rational_ = rational_ || h.w() != 1.0;
+  }
   return true;
 }
 
@@ -109,7 +127,9 @@ bool RibParser::PatchType(const Request& r, bool* bicubic) {
 bool RibParser::Patch(const Request& r) {
   bool bicubic = false;
   if (!InWorld(r) || !PatchType(r, &bicubic) || !Points(r, 1, bicubic ? 16 : 4)) return false;
-  if (bicubic) {
+  if (rational_) {
+    AddRationalPatch(r, hpts_, bicubic);
+  } else if (bicubic) {
     std::array<Vec3, 16> cv;
     std::copy(pts_.begin(), pts_.end(), cv.begin());
     AddSurface(r, BicubicPatch(cv, attr_.uBasis, attr_.vBasis));
@@ -117,6 +137,19 @@ bool RibParser::Patch(const Request& r) {
     AddSurface(r, BilinearPatch({pts_[0], pts_[1], pts_[2], pts_[3]}));
   }
   return true;
+}
+
+void RibParser::AddRationalPatch(const Request& r, std::vector<Vec4> cv, bool bicubic) {
+  // A rational patch is a rational Bézier patch: its homogeneous points in the Bézier basis,
+  // a NuPatch piece of degree 3 (or 1) on [0,1]^2.
+  if (bicubic) {
+    std::array<Vec4, 16> given;
+    std::copy(cv.begin(), cv.end(), given.begin());
+    const std::array<Vec4, 16> b = BezierHomogeneous(given, attr_.uBasis, attr_.vBasis);
+    cv.assign(b.begin(), b.end());
+  }
+  const int degree = bicubic ? 3 : 1;
+  AddSurface(r, NurbsPiece(degree, degree, std::move(cv), 0.0, 1.0, 0.0, 1.0));
 }
 
 bool RibParser::MeshCount(const Request& r, int n, bool periodic, bool bicubic, int step, const char* dir, int* count) {
@@ -163,12 +196,15 @@ bool RibParser::PatchMesh(const Request& r) {
   for (int pv = 0; pv < nvPatches; ++pv)
     for (int pu = 0; pu < nuPatches; ++pu) {
       std::array<Vec3, 16> cv;
+      std::vector<Vec4> hcv(static_cast<size_t>(order * order));
       for (int j = 0; j < order; ++j)
         for (int i = 0; i < order; ++i) {
           const int iu = (pu * uStep + i) % nu, iv = (pv * vStep + j) % nv;
           cv[static_cast<size_t>(order * j + i)] = pts_[static_cast<size_t>(iv) * nu + iu];
+          hcv[static_cast<size_t>(order * j + i)] = hpts_[static_cast<size_t>(iv) * nu + iu];
         }
-      if (bicubic) AddSurface(r, BicubicPatch(cv, attr_.uBasis, attr_.vBasis));
+      if (rational_) AddRationalPatch(r, std::move(hcv), bicubic);
+      else if (bicubic) AddSurface(r, BicubicPatch(cv, attr_.uBasis, attr_.vBasis));
       else AddSurface(r, BilinearPatch({cv[0], cv[1], cv[2], cv[3]}));
     }
   return true;
@@ -269,7 +305,7 @@ bool RibParser::SubdivisionMesh(const Request& r) {
     if (!SubdivTags(r.args[3], r.args[4], r.args[5], r.args[6], &mesh)) return false;
     first = 7;
   }
-  if (!Points(r, first, static_cast<std::size_t>(maxIndex + 1))) return false;
+  if (!Points(r, first, static_cast<std::size_t>(maxIndex + 1), false)) return false;
   mesh.points = pts_;
   std::vector<SubdivFace> faces;
   SceneCage cage{file_, r.line, mesh.scheme, {}};
@@ -280,6 +316,49 @@ bool RibParser::SubdivisionMesh(const Request& r) {
   }
   scene_.cages.push_back(cage);
   for (SubdivFace& f : faces) AddSurface(r, std::move(f));
+  return true;
+}
+
+bool RibParser::NuPatch(const Request& r) {
+  // NuPatch nu uorder uknot umin umax nv vorder vknot vmin vmax, then "P" or "Pw"
+  // (RenderMan Interface 3.2, "Non-uniform Rational B-spline Patches").
+  if (!InWorld(r)) return false;
+  if (r.args.size() < 10 || r.args[2].kind == Value::Kind::String)
+    return Fail(r.line, "NuPatch expects nu uorder uknot umin umax nv vorder vknot vmin vmax, then \"P\" or \"Pw\"");
+  NurbsSurface n;
+  for (int k = 0; k < 2; ++k) {
+    const char* dir = k == 0 ? "u" : "v";
+    const Value* a = &r.args[static_cast<size_t>(5 * k)];
+    auto number = [&](const Value& v, const std::string& what, double* out) {
+      if (!v.Numeric() || v.numbers.size() != 1) return Fail(v.line, "NuPatch: " + what + " is one number");
+      *out = v.numbers[0];
+      return true;
+    };
+    double count = 0, order = 0;
+    double* range = k == 0 ? &n.umin : &n.vmin;
+    double* rangeEnd = k == 0 ? &n.umax : &n.vmax;
+    if (!number(a[0], std::string("n") + dir, &count) || !number(a[1], std::string(dir) + "order", &order) ||
+        !number(a[3], std::string(dir) + "min", range) || !number(a[4], std::string(dir) + "max", rangeEnd))
+      return false;
+    const auto nCount = WholeIn(count, 1, 10'000'000);
+    const auto nOrder = WholeIn(order, 1, 1000);
+    if (!nCount) return Fail(a[0].line, std::string("NuPatch: n") + dir + " is a whole number from 1 to 10000000");
+    if (!nOrder) return Fail(a[1].line, std::string("NuPatch: ") + dir + "order is a whole number from 1");
+    if (!a[2].Numeric()) return Fail(a[2].line, std::string("NuPatch: ") + dir + "knot is an array of numbers");
+    (k == 0 ? n.nu : n.nv) = *nCount;
+    (k == 0 ? n.uorder : n.vorder) = *nOrder;
+    (k == 0 ? n.uknot : n.vknot) = a[2].numbers;
+  }
+  if (static_cast<long long>(n.nu) * n.nv > 10'000'000LL) return Fail(r.line, "NuPatch: more than 10000000 points");
+  if (!Points(r, 10, static_cast<size_t>(n.nu) * static_cast<size_t>(n.nv))) return false;
+  n.pw = hpts_;
+  std::vector<NurbsPiece> pieces;
+  try {
+    pieces = SplitNurbs(n);
+  } catch (const std::invalid_argument& e) {
+    return Fail(r.line, std::string("NuPatch: ") + e.what());
+  }
+  for (NurbsPiece& piece : pieces) AddSurface(r, std::move(piece));
   return true;
 }
 

@@ -156,16 +156,21 @@ class RibParser {
   void AddSurface(const Request& r, Shape shape);
   static std::size_t HashOf(const Appearance& a);
   bool BasisRequest(const Request& r);
-  // The "P" of a patch's parameter list: exactly `count` points into pts_.
-  bool Points(const Request& r, size_t first, size_t count);
+  // The "P" or "Pw" of a patch's parameter list: exactly `count` points into hpts_
+  // (homogeneous, w = 1 for "P") and pts_ (divided by w); rational_ when a weight is not 1.
+  // `rationalAllowed` false refuses "Pw".
+  bool Points(const Request& r, size_t first, size_t count, bool rationalAllowed = true);
   bool PatchType(const Request& r, bool* bicubic);
   bool Patch(const Request& r);
+  // A patch given by "Pw" with a weight other than 1, as a rational Bézier NurbsPiece.
+  void AddRationalPatch(const Request& r, std::vector<Vec4> cv, bool bicubic);
   // Patches along one direction of a mesh of n points: RenderMan Interface 3.2,
   // "PatchMesh": bicubic nonperiodic (n - 4) / step + 1, periodic n / step; bilinear
   // nonperiodic n - 1, periodic n.
   bool MeshCount(const Request& r, int n, bool periodic, bool bicubic, int step, const char* dir, int* count);
   bool PatchMesh(const Request& r);
   bool SubdivisionMesh(const Request& r);
+  bool NuPatch(const Request& r);
   // SubdivisionMesh's tags (RenderMan Interface 3.2 and prman: crease, corner, hole,
   // interpolateboundary) into `mesh`; unknown tags are warned about and ignored.
   bool SubdivTags(const Value& tags, const Value& nargs, const Value& ints, const Value& floats,
@@ -182,6 +187,8 @@ class RibParser {
   std::set<std::string, std::less<>> warned_;
   std::vector<double> num_;
   std::vector<Vec3> pts_;
+  std::vector<Vec4> hpts_;
+  bool rational_ = false;
   std::unordered_map<std::size_t, std::vector<std::uint32_t>> appearanceIndex_;
   Mat4 cameraFromWorld_ = Mat4::Identity();
   bool sawWorld_ = false, skippingWorld_ = false, skippingFrame_ = false, done_ = false;

@@ -24,6 +24,20 @@ void Matrix(std::ostream& out, const Mat4& m) {
   out << ']';
 }
 
+// A NURBS piece as the NuPatch of one Bézier span (clamped knots 0 and 1, each of
+// multiplicity order), its points homogeneous: read back, it is the same piece.
+void NuPatch(std::ostream& out, const NurbsPiece& n) {
+  out << "NuPatch";
+  for (const int degree : {n.UDegree(), n.VDegree()}) {
+    out << ' ' << degree + 1 << ' ' << degree + 1 << " [";
+    for (int k = 0; k < 2 * (degree + 1); ++k) out << (k == 0 ? "" : " ") << (k <= degree ? 0 : 1);
+    out << "] 0 1";
+  }
+  out << " \"Pw\" [";
+  for (const Vec4& h : n.Points()) out << ' ' << h.x() << ' ' << h.y() << ' ' << h.z() << ' ' << h.w();
+  out << " ]\n";
+}
+
 void Triple(std::ostream& out, const Vec3& v) { out << '[' << v.x() << ' ' << v.y() << ' ' << v.z() << ']'; }
 
 // The scene's lights in world space, as RenderMan's standard light shaders read them
@@ -213,11 +227,13 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
       out << "Patch \"bilinear\" \"P\" [";
       for (const Vec3& p : l->Hull()) Point(out, p);
       out << " ]\n";
+    } else if (const auto* n = std::get_if<NurbsPiece>(&s.shape)) {
+      NuPatch(out, *n);
     } else if (face) {
       SubdivisionMesh(out, face->Cage());
     } else {
       return RibWriteError{"surface " + std::to_string(k + 1) + " (" + Describe(s) +
-                           ") has no RIB form here: patches, quadrics and subdivision meshes are written"};
+                           ") has no RIB form here: patches, NURBS, quadrics and subdivision meshes are written"};
     }
     if (placed || dressed) out << "AttributeEnd\n";
   }

@@ -10,13 +10,14 @@
 #include <variant>
 
 #include "patch/bicubic.h"
+#include "patch/nurbs.h"
 #include "patch/quadrics.h"
 #include "patch/subdiv.h"
 
 namespace patchscan {
 
 using Shape = std::variant<BicubicPatch, BilinearPatch, Sphere, Cylinder, Cone, Paraboloid,
-                           Hyperboloid, Disk, Torus, Saddle, MonkeySaddle, SubdivFace>;
+                           Hyperboloid, Disk, Torus, Saddle, MonkeySaddle, SubdivFace, NurbsPiece>;
 
 using Affine3 = Eigen::Affine3d;
 

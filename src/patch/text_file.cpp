@@ -57,4 +57,10 @@ std::optional<Number> ParseNumber(std::string_view t) {
   return Number{std::isfinite(value), value};
 }
 
+std::string ShortestNumber(double x) {
+  char buffer[32];
+  const auto end = std::to_chars(buffer, buffer + sizeof buffer, x).ptr;
+  return std::string(buffer, end);
+}
+
 }  // namespace patchscan

@@ -30,4 +30,7 @@ struct Number {
 };
 std::optional<Number> ParseNumber(std::string_view token);
 
+// x in the fewest digits that read back as x, for messages ("0.1", "-1", "1e+300").
+std::string ShortestNumber(double x);
+
 }  // namespace patchscan

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "patch/surface.h"
+#include "patch/nurbs_shapes.h"
 
 namespace patchscan::test {
 
@@ -38,6 +39,13 @@ inline std::vector<std::pair<std::string, Surface>> AllSurfaceKinds() {
   add("torus part", Torus(1.0, 0.5, -60, 200, 120));
   add("saddle", Saddle(1.0));
   add("monkey saddle", MonkeySaddle(0.9));
+  // A piece at the sphere's south pole (its v = 0 edge collapsed) and a wavy rational one.
+  const std::vector<NurbsPiece> sphere = SplitNurbs(NurbsSphere(1.2));
+  add("NURBS sphere, pole piece", sphere.front());
+  add("NURBS sphere, piece at the north pole", sphere.back());
+  const std::vector<NurbsPiece> wavy = SplitNurbs(WavyNurbs());
+  add("NURBS wavy, first piece", wavy.front());
+  add("NURBS wavy, last piece", wavy.back());
   return s;
 }
 

@@ -120,8 +120,9 @@ TEST(Surfaces, HullContainsSurfaceAndIsTight) {
                 (seen.hi.array() <= hull.hi.array() + kInside).all())
         << name << ": hull " << hull.lo.transpose() << " .. " << hull.hi.transpose()
         << ", surface " << seen.lo.transpose() << " .. " << seen.hi.transpose();
-    const bool bicubic = std::holds_alternative<BicubicPatch>(surface.shape);
-    if (!bicubic && name != "hyperboloid") {  // control hulls and the full annulus are looser
+    const bool controlHull =
+        std::holds_alternative<BicubicPatch>(surface.shape) || std::holds_alternative<NurbsPiece>(surface.shape);
+    if (!controlHull && name != "hyperboloid") {  // control hulls and the full annulus are looser
       EXPECT_LE((hull.Diagonal() - seen.Diagonal()).norm(), kTightness * size) << name;
     }
   }

@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "patch/mutator.h"
+#include "patch/nurbs_shapes.h"
 #include "patch/rib_reader.h"
 #include "patch/screen.h"
 
@@ -244,6 +245,87 @@ std::string GridPoints(double bump) {
   return Array(p);
 }
 
+// Homogeneous points as a RIB array: (w x, w y, w z, w).
+std::string Array(const std::vector<Vec4>& points) {
+  std::ostringstream out;
+  out << std::setprecision(17) << '[';
+  for (const Vec4& p : points) out << ' ' << p.x() << ' ' << p.y() << ' ' << p.z() << ' ' << p.w();
+  out << " ]";
+  return out.str();
+}
+
+std::string Knots(const std::vector<double>& knots) {
+  std::ostringstream out;
+  out << std::setprecision(17) << '[';
+  for (const double k : knots) out << ' ' << k;
+  out << " ]";
+  return out.str();
+}
+
+TEST(Rib, NuPatchIsSplitIntoItsBezierPieces) {
+  const NurbsSurface n = test::NurbsSphere(2.0);
+  std::ostringstream text;
+  text << "NuPatch " << n.nu << ' ' << n.uorder << ' ' << Knots(n.uknot) << " 0 1 " << n.nv << ' ' << n.vorder << ' '
+       << Knots(n.vknot) << " 0 1 \"Pw\" " << Array(n.pw) << '\n'
+       // A part of it, non-rational points (weights 1): the plain B-spline of the same points.
+       << "NuPatch 4 4 [0 0 0 0 1 1 1 1] 0.25 0.75 2 2 [0 0 1 1] 0 1 \"P\" "
+       << Array(std::vector<Vec3>{{0, 0, 0}, {1, 0, 1}, {2, 0, 1}, {3, 0, 0}, {0, 1, 0}, {1, 1, 1}, {2, 1, 1}, {3, 1, 0}});
+  const Scene s = Parse(World(text.str()));
+  ASSERT_EQ(s.surfaces.size(), 8u + 1u);
+  for (std::size_t k = 0; k < 8; ++k) {
+    ASSERT_TRUE(std::holds_alternative<NurbsPiece>(s.surfaces[k].shape));
+    for (const double u : {0.0, 0.3, 1.0}) EXPECT_NEAR(At(s.surfaces[k], u, 0.6).norm(), 2.0, kPosTol);
+  }
+  // u in [0.25, 0.75] of a cubic Bézier in x: x(0.25) = 0.75; its z at (0.5 of the
+  // piece) is the Bézier's at 0.5, 0.75.
+  ExpectNear(At(s.surfaces[8], 0, 0), Vec3(0.75, 0, 0.5625));
+  ExpectNear(At(s.surfaces[8], 0.5, 1), Vec3(1.5, 1, 0.75));
+}
+
+TEST(Rib, RationalPatchesAreRationalBezierPieces) {
+  // Weights all 2: the same surface as the points divided by them, in any basis.
+  std::vector<Vec4> doubled;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) doubled.emplace_back(2.0 * i, 2.0 * j, (i == 1 || i == 2) && (j == 1 || j == 2) ? 2.0 : 0.0, 2.0);
+  // A rational Bézier patch with weights from 0.5 to 2.
+  std::vector<Vec4> varied;
+  std::vector<Vec3> plain;
+  std::vector<double> weights;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) {
+      const Vec3 p(i, j, std::sin(i + 2.0 * j));
+      const double w = 0.5 + 0.1 * ((5 * i + 3 * j) % 16);
+      plain.push_back(p);
+      weights.push_back(w);
+      varied.emplace_back(w * p.x(), w * p.y(), w * p.z(), w);
+    }
+  const Scene s = Parse(World("Basis \"b-spline\" 1 \"catmull-rom\" 1\nPatch \"bicubic\" \"P\" " + GridPoints(1) +
+                              "\nPatch \"bicubic\" \"Pw\" " + Array(doubled) + "\nBasis \"bezier\" 3 \"bezier\" 3\n" +
+                              "Patch \"bicubic\" \"Pw\" " + Array(varied) +
+                              "\nPatch \"bilinear\" \"Pw\" [0 0 0 1  2 0 0 2  0 1 0 1  1 1 1 1]\n" +
+                              "PatchMesh \"bicubic\" 4 \"nonperiodic\" 4 \"nonperiodic\" \"Pw\" " + Array(varied)));
+  ASSERT_EQ(s.surfaces.size(), 5u);
+  ASSERT_TRUE(std::holds_alternative<NurbsPiece>(s.surfaces[1].shape));
+  for (const double u : {0.0, 0.4, 1.0})
+    for (const double v : {0.0, 0.7, 1.0}) {
+      ExpectNear(At(s.surfaces[1], u, v), At(s.surfaces[0], u, v));
+      // sum B_i(u) B_j(v) w_ij P_ij / sum B_i(u) B_j(v) w_ij
+      Vec3 num = Vec3::Zero();
+      double den = 0.0;
+      auto b = [](int i, double t) { return std::array{1.0, 3.0, 3.0, 1.0}[i] * std::pow(1 - t, 3 - i) * std::pow(t, i); };
+      for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i) {
+          const double c = b(i, u) * b(j, v) * weights[4 * j + i];
+          num += c * plain[4 * j + i];
+          den += c;
+        }
+      ExpectNear(At(s.surfaces[2], u, v), num / den);
+      ExpectNear(At(s.surfaces[4], u, v), num / den);
+    }
+  // The bilinear one: ((1-u) 0 + u 2 * 2/2 ...) at (0.5, 0): (0 + 2) / (1 + 2) along x.
+  ExpectNear(At(s.surfaces[3], 0.5, 0), Vec3(2.0 / 3.0, 0, 0));
+}
+
 TEST(Rib, PatchesInEveryBasisAndBilinear) {
   const Scene s = Parse(World(
       "Patch \"bicubic\" \"P\" " + GridPoints(1) + "\n" +
@@ -465,9 +547,29 @@ TEST(Rib, MalformedScenesAreAnsweredWithFileAndLine) {
       {World("Sphere 1 -1 1 1e300"), "t.rib:2: Sphere: thetamax must be from -360 to 360 degrees"},
       {World("Torus 1 0.5 0 1e300 360"), "t.rib:2: Torus: phimin and phimax must be from -360 to 360 degrees"},
       {World("Patch \"bicubic\" \"P\" [0 0 0]"), "t.rib:2: Patch: \"P\" expects 48 numbers (16 points), found 3"},
-      {World("Patch \"bilinear\" \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1 1 1 0 1]"),
-       "t.rib:2: Patch: \"Pw\" (rational patches) is not supported; give \"P\""},
-      {World("Patch \"bicubic\""), "t.rib:2: Patch: no \"P\""},
+      {World("Patch \"bilinear\" \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1 1 1 0 0]"),
+       "t.rib:2: Patch: point 3 of \"Pw\" has weight 0 (weights are positive)"},
+      {World("Patch \"bilinear\" \"P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1 1 1 0 1]"),
+       "t.rib:2: Patch: both \"P\" and \"Pw\": give one"},
+      {World("Patch \"bilinear\" \"Pz\" [0 0 0 1]"),
+       "t.rib:2: Patch: \"Pz\" (height fields) is not supported; give \"P\""},
+      {World("SubdivisionMesh \"catmull-clark\" [3] [0 1 2] \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1]"),
+       "t.rib:2: SubdivisionMesh: \"Pw\" (rational points) is not supported here; give \"P\""},
+      {World("NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1"),
+       "t.rib:2: NuPatch: no \"P\" or \"Pw\""},
+      {World("NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1]"),
+       "t.rib:2: NuPatch expects nu uorder uknot umin umax nv vorder vknot vmin vmax, then \"P\" or \"Pw\""},
+      {World("NuPatch 2 2 [0 1 1] 0 1 2 2 [0 0 1 1] 0 1 \"P\" [0 0 0 1 0 0 0 1 0 1 1 0]"),
+       "t.rib:2: NuPatch: uknot has 3 values, nu + uorder = 4"},
+      {World("NuPatch 2.5 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1 \"P\" [0 0 0 1 0 0 0 1 0 1 1 0]"),
+       "t.rib:2: NuPatch: nu is a whole number from 1 to 10000000"},
+      {World("NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 2 \"P\" [0 0 0 1 0 0 0 1 0 1 1 0]"),
+       "t.rib:2: NuPatch: vrange [0, 2] is not within the knots' [0, 1]"},
+      {World("NuPatch 2 2 [0 0 1 1] [0 0] 1 2 2 [0 0 1 1] 0 1 \"P\" [0 0 0 1 0 0 0 1 0 1 1 0]"),
+       "t.rib:2: NuPatch: umin is one number"},
+      {World("NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1 \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1]"),
+       "t.rib:2: NuPatch: \"Pw\" expects 16 numbers (4 points), found 12"},
+      {World("Patch \"bicubic\""), "t.rib:2: Patch: no \"P\" or \"Pw\""},
       {World("Patch \"trilinear\" \"P\" [0 0 0]"), "t.rib:2: Patch: unknown type 'trilinear' (known: \"bilinear\", \"bicubic\")"},
       {World("Basis \"nurbs\" 3 \"bezier\" 3"),
        "t.rib:2: Basis: unknown basis 'nurbs' (known: bezier, b-spline, catmull-rom, hermite, power)"},
@@ -520,7 +622,7 @@ TEST(RibFuzz, MutantsAreReadOrRefusedWithALocatedMessage) {
       "1e308", "-1e308", "1e-320", "nan", "inf", "-0", "0", "1", "99999999999", "10000000", "[", "]",
       "\"", "\"\"", "[]", "WorldBegin", "WorldEnd", "AttributeBegin", "AttributeEnd", "TransformEnd",
       "FrameBegin", "FrameEnd", "ObjectBegin", "ObjectEnd", "\"periodic\"", "\"b-spline\"", "\"P\"",
-      "\"Pw\"", "Sphere", "Torus", "PatchMesh", "Basis", "Rotate", "Scale", "ReadArchive", "\"teapot\"",
+      "\"Pw\"", "NuPatch", "Sphere", "Torus", "PatchMesh", "Basis", "Rotate", "Scale", "ReadArchive", "\"teapot\"",
       "#", "\n", "\xc3\xa9"};
   test::Mutator mutate(20261123, alphabet, tokens);
   long accepted = 0, refused = 0;

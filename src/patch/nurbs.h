@@ -1,0 +1,72 @@
+// NURBS surfaces (RenderMan's NuPatch) as surfaces (DESIGN.md, round 2): a patch of any
+// order and knot vector, rational or not, is split at its knots into rational Bézier
+// pieces by knot insertion (Boehm's algorithm: every knot inside the parameter range raised
+// to multiplicity degree, so that each span's control points are its Bézier points). One
+// piece of each non-empty span of [umin,umax] x [vmin,vmax] is one Surface on [0,1]^2,
+// evaluated in homogeneous coordinates with the quotient rule for the weight. Pieces that
+// share a knot line are one curve there: the scans see no crack between them.
+#pragma once
+
+#include <span>
+#include <string>
+#include <vector>
+
+#include "core/vec.h"
+#include "patch/surface_derivs.h"
+
+namespace patchscan {
+
+// A NuPatch as RenderMan gives it: control points u fastest, homogeneous (w x, w y, w z, w)
+// ("Pw"; "P" is w = 1), knot vectors of nu + uorder and nv + vorder values, and the
+// parameter range rendered.
+struct NurbsSurface {
+  int nu = 0, uorder = 0, nv = 0, vorder = 0;
+  std::vector<double> uknot, vknot;
+  double umin = 0.0, umax = 1.0, vmin = 0.0, vmax = 1.0;
+  std::vector<Vec4> pw;
+};
+
+// The highest order a NuPatch may have here (degree 15): evaluation keeps its Bernstein
+// values on the stack.
+constexpr int kMaxNurbsOrder = 16;
+
+// One knot span of a NuPatch: a rational tensor-product Bézier patch of degree (p, q) on
+// [0,1]^2, control points u fastest and homogeneous. Evaluation allocates nothing.
+class NurbsPiece {
+ public:
+  // (u0,u1) x (v0,v1): where the piece lies in the NuPatch's own parameters.
+  NurbsPiece(int uDegree, int vDegree, std::vector<Vec4> pw, double u0, double u1, double v0, double v1);
+
+  void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
+  // The control points divided by their weights: with positive weights the piece lies in
+  // their convex hull.
+  std::span<const Vec3> Hull() const { return hull_; }
+  std::string Describe() const;
+
+  int UDegree() const { return p_; }
+  int VDegree() const { return q_; }
+  const std::vector<Vec4>& Points() const { return pw_; }
+  double U0() const { return u0_; }
+  double U1() const { return u1_; }
+  double V0() const { return v0_; }
+  double V1() const { return v1_; }
+
+ private:
+  int p_, q_;
+  std::vector<Vec4> pw_;
+  std::vector<Vec3> hull_;
+  double u0_, u1_, v0_, v1_;
+};
+
+// The Bézier pieces of `nurbs`, v spans outer, u spans inner. Throws std::invalid_argument
+// naming what is wrong: an order below 2 or above kMaxNurbsOrder or above the number of
+// control points, a knot vector of the wrong length, decreasing or not finite, a parameter
+// range empty or outside the knots' (RenderMan: umin >= uknot[uorder-1], umax <= uknot[nu]),
+// a weight that is not positive, a point that is not finite.
+std::vector<NurbsPiece> SplitNurbs(const NurbsSurface& nurbs);
+
+// The Bernstein polynomials of degree n (n < kMaxNurbsOrder) at t and their first and
+// second derivatives, b[0..n].
+void Bernstein(int n, double t, double* b, double* db, double* ddb);
+
+}  // namespace patchscan
