@@ -101,6 +101,24 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
         << n.holes << " holes; " << n.surfaces << " surfaces\n";
   }
 
+  // Trimmed NURBS pieces, with their trim loops and segments (one set per TrimCurve).
+  std::set<const TrimLoops*> trims;
+  std::size_t trimmed = 0;
+  for (const Surface& s : scene.surfaces)
+    if (const PieceTrim* t = TrimOf(s)) {
+      ++trimmed;
+      trims.insert(t->loops.get());
+    }
+  if (trimmed > 0) {
+    std::size_t loops = 0, segments = 0;
+    for (const TrimLoops* t : trims) {
+      loops += static_cast<std::size_t>(t->Loops());
+      segments += t->Segments().size();
+    }
+    out << "trimmed NURBS pieces: " << trimmed << ", by " << trims.size() << " trim curve sets of " << loops
+        << " loops, " << segments << " Bézier segments\n";
+  }
+
   // Step 2: one line per surface.
   out << "surface  line  kind             collapsed  world bounds | screen bounds (x, y px)\n";
   Bounds3 screenAll;

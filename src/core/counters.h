@@ -47,6 +47,11 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(YScan, EdgeRepairs, "edge_repairs", "edge trackers repaired by bisection", "repairs", Sum)                      \
   X(YScan, EdgeBorn, "edge_trackers_born", "edge trackers born at the top of a monotone piece", "trackers", Sum)    \
   X(YScan, EdgeDied, "edge_trackers_died", "edge trackers died at the bottom of a piece", "trackers", Sum)          \
+  X(YScan, TrimNewtonCalls, "trim_newton_calls", "trim-curve tracker Newton solves", "calls", Sum)               \
+  X(YScan, TrimNewtonIterations, "trim_newton_iterations", "trim-curve tracker Newton iterations", "iterations", Sum) \
+  X(YScan, TrimRepairs, "trim_repairs", "trim-curve trackers repaired by bisection", "repairs", Sum)              \
+  X(YScan, TrimBorn, "trim_trackers_born", "trim-curve trackers born at the top of a monotone piece", "trackers", Sum) \
+  X(YScan, TrimDied, "trim_trackers_died", "trim-curve trackers died at the bottom of a piece", "trackers", Sum)   \
   X(YScan, Folds, "folds", "silhouettes crossing a boundary edge (J changed sign)", "folds", Sum)                  \
   X(YScan, SilhouetteNewtonCalls, "silhouette_newton_calls", "silhouette-tracker Newton solves", "calls", Sum)      \
   X(YScan, SilhouetteNewtonIterations, "silhouette_newton_iterations", "silhouette-tracker Newton iterations", "iterations", Sum) \
@@ -69,6 +74,7 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(XScan, SilhouettePoints, "silhouette_points", "silhouette points passed by the walks", "points", Sum)          \
   X(XScan, UntrackedSilhouettes, "untracked_silhouettes", "silhouettes found with no tracker (repaired)", "points", Sum) \
   X(XScan, UntrackedExits, "untracked_exits", "boundary exits found with no edge tracker (repaired)", "points", Sum) \
+  X(XScan, TrimCrossings, "trim_crossings", "trim-curve crossings passed by the walks", "points", Sum)         \
   X(XScan, Failures, "failures", "walks or samples given up", "failures", Sum)                                     \
   X(XScan, Fragments, "fragments", "exact or chord fragments handed to the back end", "fragments", Sum)            \
   X(Theta, ThetaChains, "theta_chains", "chains crawled", "chains", Sum)                                          \

@@ -1,6 +1,7 @@
 #include "patch/nurbs.h"
 
 #include "patch/text_file.h"
+#include "patch/trim.h"
 
 #include <algorithm>
 #include <cmath>
@@ -41,6 +42,8 @@ std::string NurbsPiece::Describe() const {
   std::ostringstream s;
   s << "NURBS piece, degree " << p_ << "x" << q_ << ", u [" << u0_ << ", " << u1_ << "] v [" << v0_ << ", " << v1_
     << "]";
+  if (trim_)
+    s << ", trimmed: " << trim_->segments.size() << " of " << trim_->loops->Segments().size() << " trim segments reach it";
   return s.str();
 }
 
@@ -194,6 +197,33 @@ std::vector<Span> Spans(const std::vector<double>& knots, int degree, double lo,
 }
 
 }  // namespace
+
+std::vector<std::vector<Vec3>> SplitNurbsCurve(int order, const std::vector<double>& knot, double tmin, double tmax,
+                                               const std::vector<Vec3>& points) {
+  CheckDirection("", static_cast<int>(points.size()), order, knot, &tmin, &tmax);
+  Grid g{static_cast<int>(points.size()), 1, {}};
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const Vec3& h = points[k];
+    if (!h.allFinite()) throw std::invalid_argument("control point " + std::to_string(k) + " is not finite");
+    if (!(h.z() > 0.0))
+      throw std::invalid_argument("control point " + std::to_string(k) + " has weight " + Str(h.z()) +
+                                  " (weights are positive)");
+    g.pts.emplace_back(h.x(), h.y(), 0.0, h.z());
+  }
+  const int p = order - 1;
+  std::vector<double> k = knot;
+  SplitAtKnots(&g, &k, p, tmin, tmax);
+  std::vector<std::vector<Vec3>> segments;
+  for (const Span& s : Spans(k, p, tmin, tmax)) {
+    std::vector<Vec3> seg;
+    for (int i = 0; i <= p; ++i) {
+      const Vec4& h = g.pts[static_cast<std::size_t>(s.first + i)];
+      seg.emplace_back(h.x(), h.y(), h.w());
+    }
+    segments.push_back(std::move(seg));
+  }
+  return segments;
+}
 
 std::vector<NurbsPiece> SplitNurbs(const NurbsSurface& in) {
   double umin = in.umin, umax = in.umax, vmin = in.vmin, vmax = in.vmax;

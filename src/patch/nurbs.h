@@ -7,6 +7,7 @@
 // share a knot line are one curve there: the scans see no crack between them.
 #pragma once
 
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -25,6 +26,8 @@ struct NurbsSurface {
   double umin = 0.0, umax = 1.0, vmin = 0.0, vmax = 1.0;
   std::vector<Vec4> pw;
 };
+
+struct PieceTrim;  // trim.h
 
 // The highest order a NuPatch may have here (degree 15): evaluation keeps its Bernstein
 // values on the stack.
@@ -50,12 +53,16 @@ class NurbsPiece {
   double U1() const { return u1_; }
   double V0() const { return v0_; }
   double V1() const { return v1_; }
+  // The trim curves that cut into the piece (trim.h), or null: the piece is whole.
+  const PieceTrim* Trim() const { return trim_.get(); }
+  void SetTrim(std::shared_ptr<const PieceTrim> trim) { trim_ = std::move(trim); }
 
  private:
   int p_, q_;
   std::vector<Vec4> pw_;
   std::vector<Vec3> hull_;
   double u0_, u1_, v0_, v1_;
+  std::shared_ptr<const PieceTrim> trim_;
 };
 
 // The Bézier pieces of `nurbs`, v spans outer, u spans inner. Throws std::invalid_argument
@@ -64,6 +71,12 @@ class NurbsPiece {
 // range empty or outside the knots' (RenderMan: umin >= uknot[uorder-1], umax <= uknot[nu]),
 // a weight that is not positive, a point that is not finite.
 std::vector<NurbsPiece> SplitNurbs(const NurbsSurface& nurbs);
+
+// The rational Bézier segments of a NURBS curve (a trim curve: homogeneous (u w, v w, w)
+// points) over [tmin, tmax], each as its degree + 1 control points. Throws
+// std::invalid_argument as SplitNurbs does for one direction.
+std::vector<std::vector<Vec3>> SplitNurbsCurve(int order, const std::vector<double>& knot, double tmin, double tmax,
+                                               const std::vector<Vec3>& points);
 
 // The Bernstein polynomials of degree n (n < kMaxNurbsOrder) at t and their first and
 // second derivatives, b[0..n].

@@ -358,7 +358,104 @@ bool RibParser::NuPatch(const Request& r) {
   } catch (const std::invalid_argument& e) {
     return Fail(r.line, std::string("NuPatch: ") + e.what());
   }
+  if (attr_.trim) {
+    auto trim = attr_.trim;
+    if (trim->KeepsInside() != attr_.trimKeepsInside) trim = std::make_shared<const TrimLoops>(trim->WithSense(attr_.trimKeepsInside));
+    TrimPieces(trim, &pieces);
+  }
   for (NurbsPiece& piece : pieces) AddSurface(r, std::move(piece));
+  return true;
+}
+
+bool RibParser::TrimCurve(const Request& r) {
+  // TrimCurve [ncurves] [order] [knot] [min] [max] [n] [u] [v] [w]: nloops is the length
+  // of ncurves; curves are NURBS in homogeneous (u, v, w), concatenated.
+  const char* names[] = {"ncurves", "order", "knot", "min", "max", "n", "u", "v", "w"};
+  if (r.args.size() != 9) return Fail(r.line, "TrimCurve expects 9 arrays: ncurves order knot min max n u v w");
+  for (std::size_t k = 0; k < 9; ++k)
+    if (!r.args[k].Numeric()) return Fail(r.args[k].line, std::string("TrimCurve: ") + names[k] + " is an array of numbers");
+  const auto& ncurves = r.args[0].numbers;
+  const auto& order = r.args[1].numbers;
+  const auto& knot = r.args[2].numbers;
+  const auto& tmin = r.args[3].numbers;
+  const auto& tmax = r.args[4].numbers;
+  const auto& n = r.args[5].numbers;
+  const auto& u = r.args[6].numbers;
+  const auto& v = r.args[7].numbers;
+  const auto& w = r.args[8].numbers;
+  std::size_t curves = 0;
+  for (double c : ncurves) {
+    const auto k = WholeIn(c, 1, 10'000'000);
+    if (!k) return Fail(r.args[0].line, "TrimCurve: ncurves are whole numbers from 1");
+    curves += static_cast<std::size_t>(*k);
+  }
+  if (ncurves.empty()) return Fail(r.args[0].line, "TrimCurve: ncurves is empty (no loops)");
+  for (const std::size_t k : {1, 3, 4, 5})
+    if (r.args[k].numbers.size() != curves)
+      return Fail(r.args[k].line, std::string("TrimCurve: ") + names[k] + " has " + std::to_string(r.args[k].numbers.size()) +
+                                      " values for " + std::to_string(curves) + " curves");
+  std::size_t points = 0, knots = 0;
+  std::vector<int> orders, counts;
+  for (std::size_t c = 0; c < curves; ++c) {
+    const auto o = WholeIn(order[c], 1, 1000), m = WholeIn(n[c], 1, 10'000'000);
+    if (!o) return Fail(r.args[1].line, "TrimCurve: order " + std::to_string(c + 1) + " is not a whole number from 1");
+    if (!m) return Fail(r.args[5].line, "TrimCurve: n " + std::to_string(c + 1) + " is not a whole number from 1");
+    orders.push_back(*o);
+    counts.push_back(*m);
+    points += static_cast<std::size_t>(*m);
+    knots += static_cast<std::size_t>(*m + *o);
+    if (points > 10'000'000) return Fail(r.line, "TrimCurve: more than 10000000 points");
+  }
+  if (knot.size() != knots)
+    return Fail(r.args[2].line, "TrimCurve: knot has " + std::to_string(knot.size()) + " values, the curves' n + order add up to " +
+                                    std::to_string(knots));
+  for (std::size_t k = 6; k < 9; ++k)
+    if (r.args[k].numbers.size() != points)
+      return Fail(r.args[k].line, std::string("TrimCurve: ") + names[k] + " has " + std::to_string(r.args[k].numbers.size()) +
+                                      " values, the curves' n add up to " + std::to_string(points));
+  std::vector<std::vector<TrimCurveInput>> loops;
+  std::size_t c = 0, kk = 0, pp = 0;
+  for (double nc : ncurves) {
+    loops.emplace_back();
+    for (int j = 0; j < static_cast<int>(nc); ++j, ++c) {
+      TrimCurveInput in;
+      in.order = orders[c];
+      in.knot.assign(knot.begin() + static_cast<std::ptrdiff_t>(kk), knot.begin() + static_cast<std::ptrdiff_t>(kk + static_cast<std::size_t>(counts[c] + orders[c])));
+      kk += static_cast<std::size_t>(counts[c] + orders[c]);
+      in.tmin = tmin[c];
+      in.tmax = tmax[c];
+      for (int i = 0; i < counts[c]; ++i, ++pp) in.uvw.emplace_back(u[pp], v[pp], w[pp]);
+      loops.back().push_back(std::move(in));
+    }
+  }
+  try {
+    attr_.trim = std::make_shared<const TrimLoops>(loops, attr_.trimKeepsInside);
+  } catch (const std::invalid_argument& e) {
+    return Fail(r.line, std::string("TrimCurve: ") + e.what());
+  }
+  return true;
+}
+
+bool RibParser::AttributeRequest(const Request& r) {
+  std::string name;
+  if (!StringArg(r, 0, &name)) return false;
+  std::vector<Param> params;
+  if (!Params(r, 1, &params)) return false;
+  if (name != "trimcurve") {
+    Warn(r.line, "Attribute " + name, "Attribute " + Shown(name) + " is not supported here: skipped");
+    return true;
+  }
+  for (const Param& p : params) {
+    if (p.name != "sense") {
+      IgnoreParam(r, p);
+      continue;
+    }
+    std::string sense;
+    if (!ParamString(r, p, &sense)) return false;
+    if (sense != "inside" && sense != "outside")
+      return Fail(p.value->line, "Attribute \"trimcurve\" \"sense\" is \"inside\" or \"outside\", not " + Shown(sense));
+    attr_.trimKeepsInside = sense == "inside";
+  }
   return true;
 }
 

@@ -16,6 +16,7 @@
 #include "patch/basis.h"
 #include "patch/rib_lexer.h"
 #include "patch/scene.h"
+#include "patch/trim.h"
 
 namespace patchscan::rib {
 
@@ -35,6 +36,8 @@ struct Attributes {
   Appearance appearance;
   Basis uBasis = BezierBasis(), vBasis = BezierBasis();
   bool insideOrientation = false;  // Orientation "inside" / ReverseOrientation
+  std::shared_ptr<const TrimLoops> trim;  // the current TrimCurve (null: none)
+  bool trimKeepsInside = true;            // Attribute "trimcurve" "sense": "inside" keeps the loops' inside
 };
 
 struct Block {
@@ -171,6 +174,11 @@ class RibParser {
   bool PatchMesh(const Request& r);
   bool SubdivisionMesh(const Request& r);
   bool NuPatch(const Request& r);
+  // TrimCurve ncurves order knot min max n u v w (RenderMan Interface 3.2): the loops that
+  // trim the NuPatches that follow in the attribute block.
+  bool TrimCurve(const Request& r);
+  // Attribute "name" params: "trimcurve" "sense" is read, every other attribute skipped.
+  bool AttributeRequest(const Request& r);
   // SubdivisionMesh's tags (RenderMan Interface 3.2 and prman: crease, corner, hole,
   // interpolateboundary) into `mesh`; unknown tags are warned about and ignored.
   bool SubdivTags(const Value& tags, const Value& nargs, const Value& ints, const Value& floats,

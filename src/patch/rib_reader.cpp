@@ -21,7 +21,7 @@ const char* BlockName(Block::Kind k) {
 // what a parametric surface looks like here.
 const std::set<std::string, std::less<>>& SkippedRequests() {
   static const std::set<std::string, std::less<>> k = {
-      "Option", "Attribute", "Hider", "Declare", "Displacement", "Atmosphere", "Interior",
+      "Option", "Hider", "Declare", "Displacement", "Atmosphere", "Interior",
       "Exterior", "Imager", "Exposure", "Quantize", "PixelFilter", "PixelVariance",
       "ShadingRate", "ShadingInterpolation", "Matte", "Bound", "Detail", "DetailRange",
       "GeometricApproximation", "MakeTexture", "MakeShadow", "MakeLatLongEnvironment",
@@ -30,7 +30,7 @@ const std::set<std::string, std::less<>>& SkippedRequests() {
       "AreaLightSource", "CoordinateSystem", "CoordSysTransform", "ScopedCoordinateSystem",
       "Perspective", "Skew", "Deformation", "SolidBegin", "SolidEnd", "MotionBegin",
       "MotionEnd", "ObjectInstance", "Polygon", "GeneralPolygon", "PointsPolygons",
-      "PointsGeneralPolygons", "TrimCurve",
+      "PointsGeneralPolygons",
       "HierarchicalSubdivisionMesh", "Points", "Curves", "Blobby", "Procedural", "Version",
       "ErrorHandler", "System", "IfBegin", "IfEnd", "Else", "ElseIf", "Resource",
       "ResourceBegin", "ResourceEnd", "Camera", "DisplayChannel", "ArchiveBegin", "ArchiveEnd",
@@ -115,6 +115,8 @@ const std::unordered_map<std::string_view, RibParser::Handler>& RibParser::Reque
       {"PatchMesh", &RibParser::PatchMesh},
       {"SubdivisionMesh", &RibParser::SubdivisionMesh},
       {"NuPatch", &RibParser::NuPatch},
+      {"TrimCurve", &RibParser::TrimCurve},
+      {"Attribute", &RibParser::AttributeRequest},
       {"Sphere", &RibParser::Quadric},
       {"Cylinder", &RibParser::Quadric},
       {"Cone", &RibParser::Quadric},

@@ -24,18 +24,53 @@ void Matrix(std::ostream& out, const Mat4& m) {
   out << ']';
 }
 
-// A NURBS piece as the NuPatch of one Bézier span (clamped knots 0 and 1, each of
-// multiplicity order), its points homogeneous: read back, it is the same piece.
+// A NURBS piece as the NuPatch of one Bézier span (clamped knots at the ends of the span
+// it came from, each of multiplicity order), its points homogeneous: read back, it is the
+// same piece. A trimmed piece is written in its own attribute block after the sense and
+// every trim loop of its NuPatch, each segment a curve of one Bézier span, in the
+// NuPatch's (u,v): read back, the loops are the same segments.
 void NuPatch(std::ostream& out, const NurbsPiece& n) {
+  const PieceTrim* trim = n.Trim();
+  if (trim) {
+    const TrimLoops& loops = *trim->loops;
+    out << "AttributeBegin\nAttribute \"trimcurve\" \"sense\" \"" << (loops.KeepsInside() ? "inside" : "outside")
+        << "\"\nTrimCurve [";
+    for (int l = 0; l < loops.Loops(); ++l) out << (l ? " " : "") << loops.LoopBegin(l + 1) - loops.LoopBegin(l);
+    const auto& segs = loops.Segments();
+    auto each = [&](auto&& item) {
+      out << " [";
+      for (std::size_t k = 0; k < segs.size(); ++k) {
+        if (k) out << ' ';
+        item(segs[k]);
+      }
+      out << ']';
+    };
+    out << ']';
+    each([&](const TrimSegment& g) { out << g.Degree() + 1; });
+    each([&](const TrimSegment& g) {
+      for (int i = 0; i < 2 * (g.Degree() + 1); ++i) out << (i ? " " : "") << (i <= g.Degree() ? 0 : 1);
+    });
+    each([&](const TrimSegment&) { out << 0; });
+    each([&](const TrimSegment&) { out << 1; });
+    each([&](const TrimSegment& g) { out << g.Degree() + 1; });
+    for (int c = 0; c < 3; ++c)
+      each([&](const TrimSegment& g) {
+        for (std::size_t i = 0; i < g.Points().size(); ++i) out << (i ? " " : "") << g.Points()[i][c];
+      });
+    out << '\n';
+  }
   out << "NuPatch";
-  for (const int degree : {n.UDegree(), n.VDegree()}) {
+  const double ends[2][2] = {{n.U0(), n.U1()}, {n.V0(), n.V1()}};
+  for (int d = 0; d < 2; ++d) {
+    const int degree = d == 0 ? n.UDegree() : n.VDegree();
     out << ' ' << degree + 1 << ' ' << degree + 1 << " [";
-    for (int k = 0; k < 2 * (degree + 1); ++k) out << (k == 0 ? "" : " ") << (k <= degree ? 0 : 1);
-    out << "] 0 1";
+    for (int k = 0; k < 2 * (degree + 1); ++k) out << (k == 0 ? "" : " ") << ends[d][k <= degree ? 0 : 1];
+    out << "] " << ends[d][0] << ' ' << ends[d][1];
   }
   out << " \"Pw\" [";
   for (const Vec4& h : n.Points()) out << ' ' << h.x() << ' ' << h.y() << ' ' << h.z() << ' ' << h.w();
   out << " ]\n";
+  if (trim) out << "AttributeEnd\n";
 }
 
 void Triple(std::ostream& out, const Vec3& v) { out << '[' << v.x() << ' ' << v.y() << ' ' << v.z() << ']'; }

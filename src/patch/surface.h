@@ -13,6 +13,7 @@
 #include "patch/nurbs.h"
 #include "patch/quadrics.h"
 #include "patch/subdiv.h"
+#include "patch/trim.h"
 
 namespace patchscan {
 
@@ -29,6 +30,12 @@ struct Surface {
 template <class F>
 decltype(auto) VisitShape(const Surface& s, F&& f) {
   return std::visit(std::forward<F>(f), s.shape);
+}
+
+// The trim of a trimmed NURBS piece; null for every other surface.
+inline const PieceTrim* TrimOf(const Surface& s) {
+  const auto* n = std::get_if<NurbsPiece>(&s.shape);
+  return n ? n->Trim() : nullptr;
 }
 
 // Object-space evaluation of any surface (one dispatch per call: for tests and

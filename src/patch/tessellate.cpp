@@ -44,7 +44,16 @@ void AppendPattern(const Surface& s, const Bfr::Tessellation& tess, std::uint32_
     EvaluateObject(s, u, v, DerivOrder::Position, &d);
     out->vertices.push_back({s.worldFromObject * d.p, WorldNormal(s, u, v), Vec2(u, v)});
   }
+  // A trimmed NURBS piece keeps the triangles whose centroid in (u,v) its trim keeps: the
+  // cut edge is as fine as the tessellation, and two pieces sharing a knot line decide
+  // each side by the same rule.
+  const PieceTrim* trim = TrimOf(s);
   for (int f = 0; f < tess.GetNumFacets(); ++f) {
+    if (trim) {
+      Vec2 c = Vec2::Zero();
+      for (int i = 0; i < 3; ++i) c += Vec2(coords[2 * facets[3 * f + i]], coords[2 * facets[3 * f + i] + 1]) / 3.0;
+      if (!trim->Kept(c)) continue;
+    }
     out->triangles.push_back({base + static_cast<std::uint32_t>(facets[3 * f]),
                               base + static_cast<std::uint32_t>(facets[3 * f + 1]),
                               base + static_cast<std::uint32_t>(facets[3 * f + 2])});
@@ -187,6 +196,9 @@ bool NormalTurnsAlong(const Surface& s, PatchEdge e) {
   return std::max(at(0.25).cross(mid).norm(), at(0.75).cross(mid).norm()) > kConePointTurnRad;
 }
 
+// The cells of a trimmed NURBS piece's inner grid are at most this long on the screen.
+constexpr double kTrimTessPx = 1.0;
+
 // Rings around a cone point are at most this wide on the screen.
 constexpr double kConePointRingPx = 2.0;
 
@@ -216,6 +228,14 @@ std::array<int, 6> RatesOf(const Surface& s, const Mat4& screenFromWorld, RateOf
     rates[5] = std::max(rates[5], rateOf(IsoPoints(s, false, c)));
   }
   refineInner(&rates);
+  // A trimmed NURBS piece keeps whole triangles (AppendPattern): its inner grid is made
+  // fine enough on the screen for the cut edge to be a staircase of kTrimTessPx steps.
+  if (TrimOf(s))
+    for (int k = 0; k <= kInnerIsoLines; ++k) {
+      const double c = double(k) / kInnerIsoLines;
+      rates[4] = std::max(rates[4], LengthRate(IsoPoints(s, true, c), screenFromWorld, kTrimTessPx));
+      rates[5] = std::max(rates[5], LengthRate(IsoPoints(s, false, c), screenFromWorld, kTrimTessPx));
+    }
   // A cone point: a collapsed edge whose normal turns along it (a cone's apex, unlike a
   // sphere's pole). Flat triangles there interpolate the normals of two directions over a
   // whole ring, a sawtooth of shading around the point; rings of kConePointRingPx keep it
@@ -233,8 +253,8 @@ std::array<int, 6> RatesOf(const Surface& s, const Mat4& screenFromWorld, RateOf
   // rate along it, or Bfr fans it to the inner grid in long slivers across the twist (a
   // hyperboloid's, 1.4 px off at 0.4 asked). Patches and subdivision faces keep rates
   // from the edge alone, which their neighbours share.
-  const bool ownEdges = !std::holds_alternative<BicubicPatch>(s.shape) &&
-                        !std::holds_alternative<BilinearPatch>(s.shape) && !std::holds_alternative<SubdivFace>(s.shape);
+  const bool ownEdges = !std::holds_alternative<BicubicPatch>(s.shape) && !std::holds_alternative<BilinearPatch>(s.shape) &&
+                        !std::holds_alternative<SubdivFace>(s.shape) && !std::holds_alternative<NurbsPiece>(s.shape);
   for (int e = 0; e < 4; ++e)
     if (collapsed[e] || (ownEdges && rates[e] == 1)) rates[e] = rates[e % 2 == 0 ? 4 : 5];  // 0 and 2 run along u
   // Where the edges differ from the inner rates, Bfr stitches the edges to an inner grid,

@@ -1,5 +1,7 @@
 #include "tracker/edge_scan.h"
 
+#include "tracker/monotone_curve.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -37,24 +39,10 @@ std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEd
   // Step 2: critical points of y(t): sign changes of y_t between samples, refined by
   // Newton on y_t = 0 inside the bracket (bisection when Newton leaves it).
   std::vector<double> cuts = {0.0};
-  double tPrev = 0.0, gPrev = SampleEdge(shape, map, e, 0.0).yt;
-  for (int k = 1; k <= kEdgeCriticalSamples; ++k) {
-    const double t = double(k) / kEdgeCriticalSamples;
-    const double g = SampleEdge(shape, map, e, t).yt;
-    if ((gPrev < 0 && g > 0) || (gPrev > 0 && g < 0)) {
-      double lo = tPrev, hi = t, glo = gPrev;
-      double x = 0.5 * (lo + hi);
-      for (int it = 0; it < 100 && hi - lo > 1e-15; ++it) {
-        const EdgeSample s = SampleEdge(shape, map, e, x);
-        if ((s.yt > 0) == (glo > 0)) lo = x, glo = s.yt; else hi = x;
-        const double newton = x - s.yt / s.ytt;
-        x = (newton > lo && newton < hi && std::isfinite(newton)) ? newton : 0.5 * (lo + hi);
-      }
-      cuts.push_back(x);
-    }
-    tPrev = t;
-    gPrev = g;
-  }
+  SignChanges([&](double t) {
+    const EdgeSample s = SampleEdge(shape, map, e, t);
+    return std::pair(s.yt, s.ytt);
+  }, 0.0, 1.0, kEdgeCriticalSamples, &cuts);
   cuts.push_back(1.0);
   std::vector<EdgePiece> pieces;
   for (size_t k = 0; k + 1 < cuts.size(); ++k) {
@@ -140,31 +128,13 @@ void EdgeScan::Advance(double yScan) {
       // The piece is monotone and holds yScan, so it brackets the crossing: bisection
       // there seeds a new tracker (whose start is a critical point, where Newton divides
       // by zero) and repairs a failed Newton step.
-      auto bisect = [&]() {
-        double lo = p.t0, hi = p.t1, flo, dummy;
-        f(lo, &flo, &dummy);
-        for (int it = 0; it < 200; ++it) {
-          const double mid = 0.5 * (lo + hi);
-          if (mid <= lo || mid >= hi) break;
-          double fm;
-          f(mid, &fm, &dummy);
-          if ((fm > 0) == (flo > 0)) lo = mid, flo = fm; else hi = mid;
-        }
-        return std::abs(flo) < tolerancePx_ ? lo : hi;
-      };
-      double t;
-      if (!tr.hasPrev) {
-        t = bisect();
-      } else {
-        ++counters_[Counter::EdgeNewtonCalls];
-        const auto r = SolveNewton1(f, std::clamp(start, p.t0, p.t1), p.t0, p.t1, tolerancePx_);
-        counters_[Counter::EdgeNewtonIterations] += r.iterations;
-        t = r.t;
-        if (r.status != NewtonStatus::Converged) {
-          ++counters_[Counter::EdgeRepairs];
-          ++events_;
-          t = bisect();
-        }
+      if (tr.hasPrev) ++counters_[Counter::EdgeNewtonCalls];
+      bool repaired = false;
+      const double t = TrackOnPiece(f, p.t0, p.t1, start, tr.hasPrev, tolerancePx_,
+                                    &counters_[Counter::EdgeNewtonIterations], &repaired);
+      if (repaired) {
+        ++counters_[Counter::EdgeRepairs];
+        ++events_;
       }
       const double j = SampleEdge(shape, map_, p.edge, t).j;
       tr.folded = (j > 0 && tr.j < 0) || (j < 0 && tr.j > 0);

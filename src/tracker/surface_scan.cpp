@@ -20,6 +20,7 @@ SurfaceScan::SurfaceScan(const Surface& surface, const Camera& camera, bool extr
       counters_(counters),
       edges_(surface, map_, counters, extrapolate),
       silhouettes_(surface, map_, PrePass(), counters, extrapolate) {
+  if (const PieceTrim* trim = TrimOf(surface)) trims_ = std::make_unique<TrimScan>(surface, *trim, map_, counters, extrapolate);
   ++counters_[Counter::SurfacesSetUp];
 }
 
@@ -28,6 +29,7 @@ void SurfaceScan::StartAt(double yStart, double spacing) {
   for (double y = std::max(std::min(yTop_, yStart), yStart - kMaxPreAdvancePx); y < yStart; y += step) {
     edges_.Advance(LineFor(y));
     silhouettes_.Advance(LineFor(y), edges_);
+    if (trims_) trims_->Advance(LineFor(y));
   }
 }
 
@@ -66,6 +68,15 @@ void SurfaceScan::AdvanceTo(double y) {
     row_.edgeOf.push_back(edges_.Pieces()[t.piece].edge);
   }
   for (const SilhouetteTracker& t : silhouettes_.Trackers()) row_.silhouettePoints.push_back(t.uv);
+  if (trims_) {
+    trims_->Advance(y);
+    for (const Vec2& uv : trims_->Points()) {
+      ScreenDerivs d;
+      EvaluateScreen(surface_, map_, uv.x(), uv.y(), DerivOrder::Position, &d);
+      row_.trimPoints.push_back(uv);
+      row_.trimX.push_back(d.p.x());
+    }
+  }
   counters_[Counter::TrackerRows] += static_cast<std::int64_t>(row_.edgePoints.size() + row_.silhouettePoints.size());
 }
 

@@ -5,6 +5,7 @@
 // of the surfaces.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "core/counters.h"
@@ -14,6 +15,7 @@
 #include "tracker/edge_scan.h"
 #include "tracker/maxima.h"
 #include "tracker/silhouette_scan.h"
+#include "tracker/trim_scan.h"
 
 namespace patchscan {
 
@@ -22,10 +24,14 @@ struct RowTrackers {
   std::vector<Vec2> edgePoints;        // on the boundary, y = ys
   std::vector<PatchEdge> edgeOf;       // per edge point
   std::vector<Vec2> silhouettePoints;  // inside, y = ys and J = 0
+  std::vector<Vec2> trimPoints;        // on a trim curve, y = ys (trimmed NURBS pieces)
+  std::vector<double> trimX;           // their screen x
   void Clear() {
     edgePoints.clear();
     edgeOf.clear();
     silhouettePoints.clear();
+    trimPoints.clear();
+    trimX.clear();
   }
 };
 
@@ -72,7 +78,9 @@ class SurfaceScan {
 
   // Events so far (births, deaths, folds, merges, adoptions, repairs): two calls that
   // return the same number bracket lines whose level curves kept their topology.
-  long Events() const { return edges_.Events() + silhouettes_.Events(); }
+  long Events() const { return edges_.Events() + silhouettes_.Events() + (trims_ ? trims_->Events() : 0); }
+  // The trim of a trimmed NURBS piece (null: the surface is whole).
+  const PieceTrim* Trim() const { return TrimOf(surface_); }
 
   // Takes up a silhouette crossing of the current line that the X scan found and no
   // tracker held: tracked from the next line on.
@@ -101,6 +109,7 @@ class SurfaceScan {
   double yTop_ = 0.0;  // the topmost stationary point's y
   EdgeScan edges_;
   SilhouetteScan silhouettes_;
+  std::unique_ptr<TrimScan> trims_;  // trimmed NURBS pieces only
   RowTrackers row_;
 };
 

@@ -132,6 +132,8 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
     const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_};
     ThetaWalker<ShapeT> walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_, options_.thetaSteps, frame);
     walker.SetChainSink(chainSink_);
+    walker.SetTrim(a.scan->Trim(), &trimScratch_);
+    walker.SetTrimPieces(&trimPiece_, &trimFirst_);
     f(walker, [&](const LevelPoint& p) {
       return FragmentAt(p, surface, a.scan->NormalFromObject(), static_cast<std::uint32_t>(a.index));
     });
@@ -156,6 +158,7 @@ void ExactScan::WalkSurface(Active& a, double y, const RowTrackers& t, const ras
     const Surface& surface = surfaces_[a.index];
     VisitShape(surface, [&](const auto& shape) {
       LevelWalker walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_);
+      walker.SetTrim(a.scan->Trim(), &trimScratch_);
       walker.WalkAll(t, &edgeUsed_, &silUsed_, [&](int column, const LevelPoint& p) {
         ++counters_[Counter::Fragments];
         out.Add(column, FragmentAt(p, surface, a.scan->NormalFromObject(), static_cast<std::uint32_t>(a.index)));
@@ -235,7 +238,9 @@ bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
       a.rowTrackers[static_cast<std::size_t>(r)] = a.scan->Trackers();
     }
     AdvanceTo(a, yBottom);
-    bool quiet = !a.lineBroken && a.scan->Events() == events;
+    // A trimmed surface's chains end on trim crossings the θ trackers do not advance, and
+    // slabs would cut its trim curves by chords: taken row by row.
+    bool quiet = !a.lineBroken && a.scan->Events() == events && !a.scan->Trim();
     for (const ScreenStationary& st : a.scan->StationaryOnScreen())
       if (st.p.y() > yTop && st.p.y() <= yBottom) quiet = false;
     // A degenerate level set (a cone point, a pole, an edge seen edge-on) changes the

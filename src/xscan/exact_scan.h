@@ -130,6 +130,8 @@ class ExactScan final : public raster::FragmentSource {
   ThetaChainSink* chainSink_ = nullptr;
   TraceSink* trace_ = nullptr;
   std::vector<char> edgeUsed_, silUsed_;
+  TrimScratch trimScratch_;                        // the walks of trimmed surfaces
+  std::vector<ThetaVertex> trimPiece_, trimFirst_;  // θ chains cut by trims
   Counters counters_;
   // θ slabs: the interval of sample rows being scanned, and whether it is taken row by row.
   long intervalStart_ = 0, intervalEnd_ = -1;

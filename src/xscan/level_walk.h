@@ -12,7 +12,10 @@
 // repairs it (the point is found by Newton from a bracket, never guessed) and counts it.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "core/counters.h"
@@ -54,6 +57,24 @@ constexpr double kSameCrossingUv = 1e-6;
 constexpr long kWalkMaxStepsPerColumn = 4;
 constexpr long kWalkMaxStepsBase = 4096;
 
+// Trimmed NURBS pieces (tracker/trim_scan.h): whether a walk is in the kept region is
+// decided once, at a point this far (in (u,v)) along the curve from where it starts, and
+// from there toggled at every trim crossing the walk passes; crossings nearer the start
+// than this (a trim curve through the start, or along the boundary) are in that first
+// decision. Far above the crossings' own uncertainty (1e-7 px over the gradient).
+constexpr double kTrimStartUv = 1e-6;
+// A trim crossing lies on the arc being walked when Newton on the arc at its x lands this
+// close to it (in (u,v)): its uncertainty, plus a thousandth of the arc, far less than
+// the distance to any other branch the walk could take for this one.
+constexpr double kTrimMatchUv = 1e-5;
+constexpr double kTrimMatchArc = 1e-3;
+
+// Scratch the walks of a trimmed surface use, kept by the scan (no allocation per row).
+struct TrimScratch {
+  std::vector<char> used;     // per trim crossing of the row: passed already
+  std::vector<std::pair<double, int>> arc;  // the crossings on the current arc (x, index), in walk order
+};
+
 // What one try at a step along a level curve came to (LevelWalker::TryStep).
 enum class StepResult { Moved, Exit, Rejected };
 
@@ -67,21 +88,31 @@ class LevelWalker {
       : shape_(shape), map_(map), ys_(ys), cols_(cols), counters_(counters), events_(events) {}
 
   // Walks every curve of the row. `edgeUsed` and `silUsed` are scratch (resized here).
+  // On a trimmed surface (SetTrim) only the samples the trim keeps are emitted.
   template <class Emit>
   void WalkAll(const RowTrackers& t, std::vector<char>* edgeUsed, std::vector<char>* silUsed,
                Emit&& emit) {
     Bind(t, edgeUsed, silUsed);
+    auto kept = [&](int column, const LevelPoint& p) {
+      if (KeptAt(cols_.At(column))) emit(column, p);
+    };
     for (size_t k = 0; k < t.edgePoints.size(); ++k) {
       if ((*edgeUsed)[k]) continue;
       (*edgeUsed)[k] = 1;
-      WalkFromEdge(t.edgePoints[k], t.edgeOf[k], emit);
+      WalkFromEdge(t.edgePoints[k], t.edgeOf[k], kept);
     }
     // Closed curves: no boundary end, so a silhouette tracker no walk has passed.
     for (size_t k = 0; k < t.silhouettePoints.size(); ++k) {
       if ((*silUsed)[k]) continue;
       (*silUsed)[k] = 1;
-      WalkClosed(t.silhouettePoints[k], emit);
+      WalkClosed(t.silhouettePoints[k], kept);
     }
+  }
+
+  // The walks are of a trimmed NURBS piece: `trim` its trim, `scratch` kept by the caller.
+  void SetTrim(const PieceTrim* trim, TrimScratch* scratch) {
+    trim_ = trim;
+    trimScratch_ = scratch;
   }
 
   // The point of the surface at uv (tracker/level_point.h).
@@ -125,8 +156,11 @@ class LevelWalker {
 
   // The point of the level curve at column c, by Newton from `seed`.
   bool SolveColumn(int c, const Vec2& seed, LevelPoint* out) const {
-    const double xs = cols_.At(c);
     ++(*counters_)[Counter::XscanNewtonCalls];
+    return SolveX(cols_.At(c), seed, out, &(*counters_)[Counter::XscanNewtonIterations]);
+  }
+  // The point of the level curve at x = xs, by Newton from `seed`; adds the iterations.
+  bool SolveX(double xs, const Vec2& seed, LevelPoint* out, std::int64_t* iterations) const {
     // The solver's last evaluation is at the point it returns: kept, not repeated.
     const auto r = SolveNewton2(
         [&](const Vec2& uv, Vec2* f, Mat2* jac) {
@@ -137,7 +171,7 @@ class LevelWalker {
           if (!p.ok) *f = Vec2(NAN, NAN);
         },
         seed, Vec2(kEdgeTolPx, kEdgeTolPx));
-    (*counters_)[Counter::XscanNewtonIterations] += r.iterations;
+    *iterations += r.iterations;
     if (r.status != NewtonStatus::Converged) return false;
     if (out->uv != r.uv) *out = Eval(r.uv);
     return out->ok;
@@ -157,7 +191,13 @@ class LevelWalker {
   // those in (x_a, x_b] (kColumnEpsPx beyond each). Seeds interpolate a and b by x; a
   // failed solve splits the arc at its midpoint on the curve.
   template <class Emit>
-  void EmitBetween(const LevelPoint& a, const LevelPoint& b, Emit& emit, int depth = 0) {
+  void EmitBetween(const LevelPoint& a, const LevelPoint& b, Emit& emit) {
+    BeginArc(a.uv, a.x, b.uv, b.x);
+    EmitArc(a, b, emit, 0);
+    EndArc();
+  }
+  template <class Emit>
+  void EmitArc(const LevelPoint& a, const LevelPoint& b, Emit& emit, int depth) {
     const int dir = b.x > a.x ? 1 : -1;
     int c = NextColumn(a.x, dir);
     for (; c >= 0 && c < cols_.n && dir * (cols_.At(c) - b.x) <= kColumnEpsPx; c += dir) {
@@ -177,8 +217,8 @@ class LevelWalker {
         if (c != NextColumn(a.x, dir)) {  // columns before c are done: start just before c
           start.x = cols_.At(c - dir);
         }
-        EmitBetween(start, m, emit, depth + 1);
-        EmitBetween(m, b, emit, depth + 1);
+        EmitArc(start, m, emit, depth + 1);
+        EmitArc(m, b, emit, depth + 1);
       } else {
         Failed(c >= 0 && c < cols_.n ? a.uv : b.uv);
       }
@@ -237,6 +277,62 @@ class LevelWalker {
     silUsed_ = silUsed;
     edgeUsed->assign(t.edgePoints.size(), 0);
     silUsed->assign(t.silhouettePoints.size(), 0);
+    if (trim_) trimScratch_->used.assign(t.trimPoints.size(), 0);
+  }
+
+  // ---- trims (SetTrim) ----
+  // A walk starts at p going with `sense`: whether it is in the kept region, decided
+  // kTrimStartUv along the curve, and the trim crossings nearer the start than that passed.
+  void StartTrim(const LevelPoint& p, double sense) {
+    if (trim_) StartTrimToward(p.uv, Tangent(p, sense));
+  }
+  // The same, for a walk leaving uv in the unit direction `dir`.
+  void StartTrimToward(const Vec2& uv, const Vec2& dir) {
+    kept_ = trim_->Kept(uv + kTrimStartUv * dir);
+    for (std::size_t k = 0; k < trackers_->trimPoints.size(); ++k)
+      if ((trackers_->trimPoints[k] - uv).norm() <= kTrimStartUv) trimScratch_->used[k] = 1;
+  }
+  // Whether the walk keeps a sample at x on the current arc: the arc's crossings before x
+  // toggle the state.
+  bool KeptAt(double x) {
+    if (!trim_) return true;
+    auto& arc = trimScratch_->arc;
+    while (arcNext_ < arc.size() && arcDir_ * (x - arc[arcNext_].first) > 0.0) {
+      kept_ = !kept_;
+      ++arcNext_;
+    }
+    return kept_;
+  }
+  // The walk passes the arc of the level curve from a to b (x-monotone): the trim
+  // crossings on it, not yet passed, in walk order. Each is confirmed by Newton on the
+  // curve at its x from the arc's chord (another branch of the curve may pass there).
+  void BeginArc(const Vec2& a, double xa, const Vec2& b, double xb) {
+    if (!trim_) return;
+    auto& arc = trimScratch_->arc;
+    arc.clear();
+    arcNext_ = 0;
+    arcDir_ = xb >= xa ? 1.0 : -1.0;
+    const double lo = std::min(xa, xb) - kColumnEpsPx, hi = std::max(xa, xb) + kColumnEpsPx;
+    const double reach = kTrimMatchUv + kTrimMatchArc * (b - a).norm();
+    for (std::size_t k = 0; k < trackers_->trimPoints.size(); ++k) {
+      const double x = trackers_->trimX[k];
+      if (trimScratch_->used[k] || x < lo || x > hi) continue;
+      const double t = xb != xa ? std::clamp((x - xa) / (xb - xa), 0.0, 1.0) : 0.5;
+      LevelPoint q;
+      std::int64_t iterations = 0;
+      if (!SolveX(x, a + t * (b - a), &q, &iterations) || (q.uv - trackers_->trimPoints[k]).norm() > reach) continue;
+      trimScratch_->used[k] = 1;
+      ++(*counters_)[Counter::TrimCrossings];
+      arc.emplace_back(x, static_cast<int>(k));
+    }
+    std::sort(arc.begin(), arc.end(), [&](const auto& p, const auto& q) { return arcDir_ * p.first < arcDir_ * q.first; });
+  }
+  // The rest of the arc's crossings, after its last sample.
+  void EndArc() {
+    if (!trim_) return;
+    KeptAt(arcDir_ * INFINITY);
+    trimScratch_->arc.clear();
+    arcNext_ = 0;
   }
 
   // Where the straight step from a to q (outside) crosses the boundary, the crossing of
@@ -368,7 +464,9 @@ class LevelWalker {
       }
       if (aimed) {
         ++(*counters_)[Counter::ColumnsSolved];
+        BeginArc(p->uv, p->x, next.uv, next.x);
         emit(c, next);
+        EndArc();
         *p = next;
         return Step::Ok;
       }
@@ -407,6 +505,7 @@ class LevelWalker {
     }
     const double sense = InwardSense(p, edge);
     if (sense == 0.0) return;
+    StartTrim(p, sense);
     // A column exactly at the start belongs to this curve.
     const int c0 = cols_.Ceil(p.x - kColumnEpsPx);
     if (c0 < cols_.n && std::abs(cols_.At(c0) - p.x) <= kColumnEpsPx) emit(c0, p);
@@ -432,6 +531,7 @@ class LevelWalker {
     ++(*counters_)[Counter::ClosedWalks];
     LevelPoint p = start;
     p.jn = 0.0;  // the start is on the silhouette whatever rounding says
+    StartTrim(p, 1.0);
     double h = kWalkStepStart;
     LevelPoint passed;
     bool didPass;
@@ -445,6 +545,7 @@ class LevelWalker {
         if (!UseEdgeTracker(p.uv)) Repaired(p.uv, Counter::UntrackedExits);
         LevelPoint back = start;
         back.jn = 0.0;
+        StartTrim(back, -1.0);
         double hb = kWalkStepStart;
         for (long kb = 0; kb < MaxSteps(); ++kb) {
           const Step sb = Advance(&back, -1.0, &hb, emit, &passed, &didPass);
@@ -469,6 +570,11 @@ class LevelWalker {
   WalkEvents* events_;
   const RowTrackers* trackers_ = nullptr;
   std::vector<char>*edgeUsed_ = nullptr, *silUsed_ = nullptr;
+  const PieceTrim* trim_ = nullptr;
+  TrimScratch* trimScratch_ = nullptr;
+  bool kept_ = true;           // the walk is in the kept region
+  std::size_t arcNext_ = 0;    // the next crossing of the current arc to toggle at
+  double arcDir_ = 1.0;        // the current arc runs this way in x
 };
 
 }  // namespace patchscan

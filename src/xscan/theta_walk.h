@@ -130,6 +130,13 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   void WalkAll(const RowTrackers& t, std::vector<char>* edgeUsed, std::vector<char>* silUsed,
                std::vector<Vertex>* chain, Make&& make, Take&& take);
 
+  // A trimmed surface's chains are cut at its trim crossings (LevelWalker::SetTrim): these
+  // hold the pieces as they are made. Scratch kept by the caller.
+  void SetTrimPieces(std::vector<Vertex>* piece, std::vector<Vertex>* first) {
+    piece_ = piece;
+    first_ = first;
+  }
+
   // Every chain made is also shown to `sink` (none by default).
   void SetChainSink(ThetaChainSink* sink) { sink_ = sink; }
 
@@ -211,6 +218,57 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   ThetaFrame frame_;
   double table_;  // 2π / N
   ThetaChainSink* sink_ = nullptr;
+  std::vector<Vertex>*piece_ = nullptr, *first_ = nullptr;
+
+  // Hands `chain` to take, or on a trimmed surface the pieces of it the trim keeps, each
+  // ending on a vertex at the trim crossing (an End vertex, on the curve exactly): the
+  // chain's links are the walk's arcs (x-monotone between vertices), and the crossings on
+  // each are found and toggled as the exact walk does. A closed chain cut somewhere is
+  // open pieces; its last piece runs on into its first.
+  template <class Make, class Take>
+  void TakeTrimmed(const std::vector<Vertex>& chain, bool closed, Make& make, Take& take) {
+    if (!this->trim_ || chain.size() < 2) {
+      if (!this->trim_ || chain.empty() || this->trim_->Kept(chain.front().f.uv)) take(std::span<const Vertex>(chain), closed);
+      return;
+    }
+    std::vector<Vertex>& piece = *piece_;
+    std::vector<Vertex>& first = *first_;
+    piece.clear();
+    first.clear();
+    const Vec2 d0 = chain[1].f.uv - chain[0].f.uv;
+    this->StartTrimToward(chain[0].f.uv, d0.norm() > 0.0 ? Vec2(d0 / d0.norm()) : Vec2(1.0, 0.0));
+    const bool startKept = this->kept_;
+    bool cut = false;
+    if (this->kept_) piece.push_back(chain[0]);
+    for (std::size_t k = 1; k < chain.size(); ++k) {
+      const Vertex &a = chain[k - 1], &b = chain[k];
+      this->BeginArc(a.f.uv, a.x, b.f.uv, b.x);
+      for (const auto& [x, index] : this->trimScratch_->arc) {
+        const LevelPoint q = this->Eval(this->trackers_->trimPoints[static_cast<std::size_t>(index)]);
+        if (!q.ok) continue;
+        const Vertex v = MakeVertex(q, make);
+        if (this->kept_) {
+          piece.push_back(v);
+          if (!cut && closed && startKept) first.swap(piece);  // runs on from the last piece
+          else take(std::span<const Vertex>(piece), false);
+          piece.clear();
+        } else {
+          piece.assign(1, v);
+        }
+        this->kept_ = !this->kept_;
+        cut = true;
+      }
+      this->trimScratch_->arc.clear();
+      if (this->kept_) piece.push_back(b);
+    }
+    if (!cut) {
+      if (startKept) take(std::span<const Vertex>(chain), closed);
+      return;
+    }
+    if (!first.empty() && this->kept_) piece.insert(piece.end(), first.begin() + 1, first.end());
+    else if (!first.empty()) take(std::span<const Vertex>(first), false);  // an odd count: a crossing missed
+    if (this->kept_ && piece.size() >= 2) take(std::span<const Vertex>(piece), false);
+  }
 };
 
 template <class ShapeT>
@@ -234,7 +292,7 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
     Crawl(p, sense, false, chain, make);
     if (sink_) sink_->Chain(this->ys_, steps_, *chain);
     (*this->counters_)[Counter::ThetaVertices] += static_cast<long>(chain->size());
-    take(std::span<const Vertex>(*chain), false);
+    TakeTrimmed(*chain, false, make, take);
   }
   for (size_t k = 0; k < t.silhouettePoints.size(); ++k) {
     if ((*silUsed)[k]) continue;
@@ -248,7 +306,7 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
     Crawl(p, 1.0, true, chain, make);
     if (sink_) sink_->Chain(this->ys_, steps_, *chain);
     (*this->counters_)[Counter::ThetaVertices] += static_cast<long>(chain->size());
-    take(std::span<const Vertex>(*chain), true);
+    TakeTrimmed(*chain, true, make, take);
   }
 }
 

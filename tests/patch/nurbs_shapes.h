@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "patch/nurbs.h"
+#include "patch/trim.h"
 
 namespace patchscan::test {
 
@@ -53,6 +54,50 @@ inline NurbsSurface WavyNurbs() {
       const Vec3 p(i - 2.5, j - 2.0, 0.5 * std::sin(1.3 * i + 0.7 * j));
       n.pw.emplace_back(w * p.x(), w * p.y(), w * p.z(), w);
     }
+  return n;
+}
+
+// Trim loops in (u,v). A circle about c of radius r: four quadratic arcs, weights
+// sqrt(2)/2 at the square's corners, counter-clockwise (clockwise with `reverse`).
+inline TrimCurveInput TrimCircle(const Vec2& c, double r, bool reverse = false) {
+  const double s = std::sqrt(0.5);
+  const double pts[9][3] = {{1, 0, 1},  {1, 1, s},   {0, 1, 1},  {-1, 1, s}, {-1, 0, 1},
+                            {-1, -1, s}, {0, -1, 1}, {1, -1, s}, {1, 0, 1}};
+  TrimCurveInput in;
+  in.order = 3;
+  in.knot = {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1};
+  for (int k = 0; k < 9; ++k) {
+    const auto& p = pts[reverse ? 8 - k : k];
+    in.uvw.emplace_back(p[2] * (c.x() + r * p[0]), p[2] * (c.y() + r * p[1]), p[2]);
+  }
+  return in;
+}
+
+// A closed polygon through `corners` as one linear curve (order 2).
+inline TrimCurveInput TrimPolygon(const std::vector<Vec2>& corners) {
+  TrimCurveInput in;
+  in.order = 2;
+  const int n = static_cast<int>(corners.size());
+  in.knot = {0.0};
+  for (int k = 0; k <= n; ++k) in.knot.push_back(k);
+  in.knot.push_back(n);
+  in.tmax = n;
+  for (int k = 0; k <= n; ++k) in.uvw.emplace_back(corners[k % n].x(), corners[k % n].y(), 1.0);
+  return in;
+}
+
+// A flat square NuPatch of side 2 about the origin in z = 0, u along x and v along y, of
+// `spans` x `spans` linear spans (so that trims cross pieces).
+inline NurbsSurface FlatSquare(int spans = 1) {
+  NurbsSurface n;
+  n.nu = n.nv = spans + 1;
+  n.uorder = n.vorder = 2;
+  n.uknot = {0.0};
+  for (int k = 0; k <= spans; ++k) n.uknot.push_back(static_cast<double>(k) / spans);
+  n.uknot.push_back(1.0);
+  n.vknot = n.uknot;
+  for (int j = 0; j <= spans; ++j)
+    for (int i = 0; i <= spans; ++i) n.pw.emplace_back(-1.0 + 2.0 * i / spans, -1.0 + 2.0 * j / spans, 0.0, 1.0);
   return n;
 }
 

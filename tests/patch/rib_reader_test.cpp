@@ -282,6 +282,30 @@ TEST(Rib, NuPatchIsSplitIntoItsBezierPieces) {
   ExpectNear(At(s.surfaces[8], 0.5, 1), Vec3(1.5, 1, 0.75));
 }
 
+// A square of 2 x 2 linear spans on [0,1]^2 and, before it, the triangle loop
+// (0.1,0.1) (0.4,0.1) (0.1,0.4) (within the piece [0, 0.5]^2) as one linear TrimCurve.
+const char* kTrimTriangle = "TrimCurve [1] [2] [0 0 1 2 3 3] [0] [3] [4] [0.1 0.4 0.1 0.1] [0.1 0.1 0.4 0.1] [1 1 1 1]\n";
+const char* kSquare = "NuPatch 3 2 [0 0 0.5 1 1] 0 1 3 2 [0 0 0.5 1 1] 0 1 \"P\" [0 0 0  1 0 0  2 0 0  0 1 0  1 1 0  2 1 0  0 2 0  1 2 0  2 2 0]\n";
+
+TEST(Rib, TrimCurveTrimsTheNuPatchesThatFollowInItsBlock) {
+  const Scene s = Parse(World(std::string("AttributeBegin\n") + kTrimTriangle + kSquare +
+                              "Attribute \"trimcurve\" \"sense\" \"outside\"\n" + kSquare + "AttributeEnd\n" + kSquare));
+  // "inside" (the default) keeps the triangle alone: the one piece it lies in. "outside"
+  // keeps all four pieces, the first with the triangle cut from it; after the block, none
+  // is trimmed.
+  ASSERT_EQ(s.surfaces.size(), 1u + 4u + 4u);
+  const Vec2 inTriangle(0.3, 0.3), outside(0.8, 0.8);  // in the first piece's own (u,v)
+  const PieceTrim* kept = TrimOf(s.surfaces[0]);
+  ASSERT_NE(kept, nullptr);
+  EXPECT_TRUE(kept->Kept(inTriangle));
+  EXPECT_FALSE(kept->Kept(outside));
+  const PieceTrim* cut = TrimOf(s.surfaces[1]);
+  ASSERT_NE(cut, nullptr);
+  EXPECT_FALSE(cut->Kept(inTriangle));
+  EXPECT_TRUE(cut->Kept(outside));
+  for (std::size_t k = 2; k < s.surfaces.size(); ++k) EXPECT_EQ(TrimOf(s.surfaces[k]), nullptr) << k;
+}
+
 TEST(Rib, RationalPatchesAreRationalBezierPieces) {
   // Weights all 2: the same surface as the points divided by them, in any basis.
   std::vector<Vec4> doubled;
@@ -520,7 +544,8 @@ TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
       "t.rib:1: Option is not supported here: skipped",
       "t.rib:2: Hider is not supported here: skipped",
       "t.rib:3: Declare is not supported here: skipped",
-      "t.rib:5: Attribute is not supported here: skipped",
+      "t.rib:5: Attribute 'identifier' is not supported here: skipped",
+      "t.rib:6: Attribute 'visibility' is not supported here: skipped",
       "t.rib:7: Displacement is not supported here: skipped",
       "t.rib:8: MakeShadow is not supported here: skipped",
       "t.rib:9: Polygon is not supported here: skipped",
@@ -567,6 +592,18 @@ TEST(Rib, MalformedScenesAreAnsweredWithFileAndLine) {
        "t.rib:2: NuPatch: vrange [0, 2] is not within the knots' [0, 1]"},
       {World("NuPatch 2 2 [0 0 1 1] [0 0] 1 2 2 [0 0 1 1] 0 1 \"P\" [0 0 0 1 0 0 0 1 0 1 1 0]"),
        "t.rib:2: NuPatch: umin is one number"},
+      {World("TrimCurve [1] [2] [0 0 1 2 3 3] [0] [3] [4] [0.1 0.4 0.1 0.1] [0.1 0.1 0.4 0.1]"),
+       "t.rib:2: TrimCurve expects 9 arrays: ncurves order knot min max n u v w"},
+      {World("TrimCurve [1] [2] [0 0 1 2 3] [0] [3] [4] [0.1 0.4 0.1 0.1] [0.1 0.1 0.4 0.1] [1 1 1 1]"),
+       "t.rib:2: TrimCurve: knot has 5 values, the curves' n + order add up to 6"},
+      {World("TrimCurve [1] [2] [0 0 1 2 3 3] [0] [3] [4] [0.1 0.4 0.1 0.2] [0.1 0.1 0.4 0.1] [1 1 1 1]"),
+       "t.rib:2: TrimCurve: loop 1 is not closed: a curve ends at (0.2, 0.1) and the next starts at (0.1, 0.1)"},
+      {World("TrimCurve [1] [2] [0 0 1 2 3 3] [0] [3] [4] [0.1 0.4 0.1 0.1] [0.1 0.1 0.4 0.1] [1 1 -1 1]"),
+       "t.rib:2: TrimCurve: loop 1, curve 1: control point 2 has weight -1 (weights are positive)"},
+      {World("TrimCurve [0.5] [2] [0 0 1 2 3 3] [0] [3] [4] [0.1 0.4 0.1 0.1] [0.1 0.1 0.4 0.1] [1 1 1 1]"),
+       "t.rib:2: TrimCurve: ncurves are whole numbers from 1"},
+      {World("Attribute \"trimcurve\" \"sense\" \"sideways\""),
+       "t.rib:2: Attribute \"trimcurve\" \"sense\" is \"inside\" or \"outside\", not 'sideways'"},
       {World("NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1 \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1]"),
        "t.rib:2: NuPatch: \"Pw\" expects 16 numbers (4 points), found 12"},
       {World("Patch \"bicubic\""), "t.rib:2: Patch: no \"P\" or \"Pw\""},
@@ -622,7 +659,7 @@ TEST(RibFuzz, MutantsAreReadOrRefusedWithALocatedMessage) {
       "1e308", "-1e308", "1e-320", "nan", "inf", "-0", "0", "1", "99999999999", "10000000", "[", "]",
       "\"", "\"\"", "[]", "WorldBegin", "WorldEnd", "AttributeBegin", "AttributeEnd", "TransformEnd",
       "FrameBegin", "FrameEnd", "ObjectBegin", "ObjectEnd", "\"periodic\"", "\"b-spline\"", "\"P\"",
-      "\"Pw\"", "NuPatch", "Sphere", "Torus", "PatchMesh", "Basis", "Rotate", "Scale", "ReadArchive", "\"teapot\"",
+      "\"Pw\"", "NuPatch", "TrimCurve", "Sphere", "Torus", "PatchMesh", "Basis", "Rotate", "Scale", "ReadArchive", "\"teapot\"",
       "#", "\n", "\xc3\xa9"};
   test::Mutator mutate(20261123, alphabet, tokens);
   long accepted = 0, refused = 0;

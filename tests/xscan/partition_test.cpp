@@ -43,7 +43,7 @@ struct SceneCase {
 std::vector<SceneCase> Scenes() {
   std::vector<SceneCase> out;
   for (const char* file : {"teapot.bpt", "teacup.bpt", "teaspoon.bpt", "sphere.bpt", "quadrics.rib",
-                           "patchmesh.rib", "teapot_lit.rib", "cages.rib", "cube_tags.obj", "nurbs.rib"}) {
+                           "patchmesh.rib", "teapot_lit.rib", "cages.rib", "cube_tags.obj", "nurbs.rib", "trimmed.rib"}) {
     auto loaded = LoadScene(std::string(PATCHSCAN_SURFACES_DIR) + "/" + file);
     EXPECT_TRUE(std::holds_alternative<Scene>(loaded)) << file;
     if (!std::holds_alternative<Scene>(loaded)) continue;
@@ -115,7 +115,7 @@ TEST_P(SameImageForAnyNumberOfWorkers, InEveryScene) {
       ++compared;
     }
   }
-  EXPECT_EQ(compared, 11 * 5);  // scenes, worker counts
+  EXPECT_EQ(compared, 12 * 5);  // scenes, worker counts
 }
 
 INSTANTIATE_TEST_SUITE_P(Partition, SameImageForAnyNumberOfWorkers, ::testing::Range<std::size_t>(0, std::size(kModes)),

@@ -61,13 +61,18 @@ class RayCaster {
         }
   }
 
-  // Every surface point seen at (x, y), inside the image.
+  // Every surface point seen at (x, y), inside the image; on a trimmed NURBS piece only
+  // the points its trim keeps (by the odd winding rule at the hit, patch/trim.h).
   std::vector<RayHit> HitsAt(double x, double y) const {
     std::vector<RayHit> hits;
     const int tx = int(std::floor(x / kTilePx)), ty = int(std::floor(y / kTilePx));
     if (tx < 0 || ty < 0 || tx >= tilesX_ || ty >= tilesY_) return hits;
     for (const CellRef& c : tiles_[size_t(ty) * tilesX_ + tx])
       Search(c.surface, double(c.i) / kGrid, double(c.j) / kGrid, 1.0 / kGrid, x, y, 0, &hits);
+    std::erase_if(hits, [&](const RayHit& h) {
+      const PieceTrim* trim = TrimOf(surfaces_[h.surface]);
+      return trim && !trim->Kept(h.uv);
+    });
     return hits;
   }
 

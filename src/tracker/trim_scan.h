@@ -1,0 +1,68 @@
+// Trim-curve trackers of the Y scan (DESIGN.md, round 2): the points where the scan line
+// crosses the trim curves of a trimmed NURBS piece (patch/trim.h), tracked as the
+// boundary edges are (tracker/edge_scan.h, paper 001 §3.2.1): each curve, clipped to the
+// piece's domain, is cut where screen y turns; a tracker is born where the scan line
+// passes the top of a piece and dies at its bottom, and in between follows its crossing by
+// univariate Newton along the curve from an extrapolated start (§3.5), repaired by
+// bisection on the piece. The X scans toggle between kept and cut at these points.
+#pragma once
+
+#include <vector>
+
+#include "core/counters.h"
+#include "patch/screen.h"
+#include "patch/surface.h"
+#include "patch/trim.h"
+#include "tracker/edge_scan.h"
+
+namespace patchscan {
+
+// A piece [t0, t1] of trim curve `curve` (an index into PieceTrim::segments) inside the
+// domain on which screen y is monotone.
+struct TrimPiece {
+  int curve;
+  double t0, t1;
+  double yTop, yBottom;
+};
+
+// Samples per trim segment when looking for where it enters and leaves the domain and
+// where screen y turns along it: two such points within 1/64 of a segment are missed.
+constexpr int kTrimCriticalSamples = 64;
+
+class TrimScan {
+ public:
+  // The trackers of the trim of `surface` (a NURBS piece; `trim` its PieceTrim) seen
+  // through `map`. All references must outlive the scan.
+  TrimScan(const Surface& surface, const PieceTrim& trim, const ScreenMap& map, Counters& counters, bool extrapolate,
+           double tolerancePx = kEdgeTolPx);
+
+  // Moves every tracker to line yScan (non-decreasing from call to call), creating and
+  // deleting trackers at the pieces' ends. Allocation-free once the lists have their size.
+  void Advance(double yScan);
+
+  // The crossings of the latest line, in the piece's (u,v).
+  const std::vector<Vec2>& Points() const { return points_; }
+  const std::vector<TrimPiece>& Pieces() const { return pieces_; }
+  // Trackers born and died so far.
+  long Events() const { return events_; }
+
+ private:
+  struct Tracker {
+    int piece;
+    double t, tPrev, tPrev2;
+    int nSolved;
+  };
+  const Surface& surface_;
+  const PieceTrim& trim_;
+  const ScreenMap& map_;
+  Counters& counters_;
+  bool extrapolate_;
+  double tolerancePx_;
+  std::vector<TrimPiece> pieces_;  // sorted by yTop
+  std::vector<Tracker> trackers_;
+  std::vector<Vec2> points_;
+  std::size_t nextPiece_ = 0;
+  long events_ = 0;
+};
+
+}  // namespace patchscan

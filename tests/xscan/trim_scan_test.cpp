@@ -1,0 +1,159 @@
+// Trimmed NURBS through the scans: the exact scan of a square trimmed by a circle against
+// the analytic answer; trimmed surfaces (loops across pieces, nested and separate loops, a
+// loop along the patch's boundary and one touching it, a trimmed sphere) against the ray
+// caster sample by sample; θ rows against the same reference.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include "patch/nurbs_shapes.h"
+#include "patch/surface.h"
+#include "xscan/agreement.h"
+
+namespace patchscan {
+namespace {
+
+using test::TrimCircle;
+using test::TrimPolygon;
+
+std::vector<Surface> Trimmed(const NurbsSurface& n, const std::vector<std::vector<TrimCurveInput>>& loops, bool keepInside,
+                             const Affine3& placed = Affine3::Identity()) {
+  std::vector<NurbsPiece> pieces = SplitNurbs(n);
+  TrimPieces(std::make_shared<const TrimLoops>(loops, keepInside), &pieces);
+  std::vector<Surface> out;
+  for (NurbsPiece& p : pieces) out.push_back(Surface{std::move(p), placed});
+  return out;
+}
+
+// Which samples of a 1-sample-per-pixel image a scan with `options` covers.
+std::vector<char> Coverage(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options) {
+  struct Row final : raster::FragmentRow {
+    std::vector<char>* covered;
+    int row, width;
+    void Add(int column, const raster::Fragment&) override { (*covered)[static_cast<std::size_t>(row * width + column)] = 1; }
+    void AddTriangle(const raster::RasterVertex&, const raster::RasterVertex&, const raster::RasterVertex&,
+                     std::uint32_t) override {
+      ADD_FAILURE() << "a slab triangle";
+    }
+  };
+  ExactScan scan(surfaces, camera, options);
+  std::vector<char> covered(static_cast<std::size_t>(camera.width * camera.height), 0);
+  Row out;
+  out.covered = &covered;
+  out.width = camera.width;
+  const raster::SampleColumns cols{0.5, 1.0, camera.width};
+  for (int j = 0; j < camera.height; ++j) {
+    out.row = j;
+    EXPECT_TRUE(scan.ScanRow(0.5 + j, cols, out));
+  }
+  EXPECT_EQ(scan.Stats()[Counter::Failures], 0);
+  return covered;
+}
+
+// Samples where `covered` and want(x, y) differ, except within kEdgePx of a place where
+// want changes.
+template <class Want>
+long Mismatches(const std::vector<char>& covered, const Camera& camera, Want&& want, long* wanted) {
+  long wrong = 0;
+  *wanted = 0;
+  for (int j = 0; j < camera.height; ++j)
+    for (int i = 0; i < camera.width; ++i) {
+      const double x = 0.5 + i, y = 0.5 + j;
+      const bool w = want(x, y);
+      *wanted += w;
+      if (w == (covered[static_cast<std::size_t>(j * camera.width + i)] != 0)) continue;
+      bool nearEdge = false;
+      for (const auto& [dx, dy] : {std::pair{test::kEdgePx, 0.0}, {-test::kEdgePx, 0.0}, {0.0, test::kEdgePx}, {0.0, -test::kEdgePx}})
+        nearEdge = nearEdge || want(x + dx, y + dy) != w;
+      if (!nearEdge && ++wrong <= 5) ADD_FAILURE() << "sample (" << x << ", " << y << "): want " << w;
+    }
+  return wrong;
+}
+
+TEST(TrimScan, SquareTrimmedByACircleMatchesTheAnalyticAnswer) {
+  // The square's (u,v) at a sample from the untrimmed square (Newton on a plane), then the
+  // circle's equation: nothing of the trim code in the reference.
+  const Vec2 c(0.45, 0.55);
+  const double r = 0.3;
+  const std::vector<Surface> whole = Trimmed(test::FlatSquare(1), {}, false);  // no loops: nothing is inside
+  for (const Camera& camera : {test::View(Vec3(0.4, -0.5, 3.5), 96, Vec3(0, 1, 0)), test::View(Vec3(2.5, -1.5, 1.2), 96)}) {
+    const test::RayCaster caster(whole, camera);
+    for (const bool keepInside : {true, false}) {
+      const std::vector<Surface> trimmed = Trimmed(test::FlatSquare(1), {{TrimCircle(c, r)}}, keepInside);
+      ASSERT_EQ(trimmed.size(), 1u);
+      long wanted = 0;
+      for (const int theta : {0, 32}) {
+        const long wrong = Mismatches(Coverage(trimmed, camera, {true, theta, 0}), camera, [&](double x, double y) {
+          const auto hit = caster.Nearest(x, y);
+          return hit && (((hit->uv - c).norm() < r) == keepInside);
+        }, &wanted);
+        EXPECT_EQ(wrong, 0) << (keepInside ? "disc" : "hole") << (theta ? ", theta" : ", exact");
+      }
+      EXPECT_GT(wanted, 500);
+    }
+  }
+}
+
+// The loops of the agreement tests, on a square of 3 x 3 pieces.
+struct Case {
+  const char* name;
+  std::vector<std::vector<TrimCurveInput>> loops;
+  bool keepInside;
+};
+std::vector<Case> Cases() {
+  const std::vector<Vec2> boundary = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  return {
+      {"nested and separate loops across pieces",
+       {{TrimPolygon({{0.1, 0.1}, {0.7, 0.1}, {0.7, 0.9}, {0.1, 0.9}})}, {TrimCircle(Vec2(0.4, 0.5), 0.2, true)},
+        {TrimPolygon({{0.35, 0.45}, {0.45, 0.45}, {0.45, 0.55}, {0.35, 0.55}})},
+        {TrimPolygon({{0.75, 0.2}, {1.0, 0.5}, {0.75, 0.8}})}},
+       true},
+      // An exporter's loop along the whole boundary, with holes: one touching the boundary.
+      {"a loop along the boundary, a hole touching it",
+       {{TrimPolygon(boundary)}, {TrimCircle(Vec2(0.5, 0.5), 0.2, true)},
+        {TrimPolygon({{0.2, 0.0}, {0.2, 0.15}, {0.6, 0.15}, {0.6, 0.0}})}},
+       true},
+      {"a circle crossing the boundary, cut away", {{TrimCircle(Vec2(0.9, 0.3), 0.35)}}, false},
+  };
+}
+
+std::vector<Camera> Views() {
+  return {test::View(Vec3(0.3, -0.4, 3.6), 72, Vec3(0, 1, 0)), test::View(Vec3(2.6, -2.0, 1.4), 72),
+          test::View(Vec3(-0.2, -3.4, 0.35), 72)};
+}
+
+TEST(TrimScan, TrimmedSquaresAgreeWithTheRayCaster) {
+  for (const Case& k : Cases()) {
+    const std::vector<Surface> s = Trimmed(test::FlatSquare(3), k.loops, k.keepInside);
+    for (const Camera& c : Views()) test::ExpectAgree(s, c, k.name);
+  }
+}
+
+TEST(TrimScan, TrimmedSphereAgreesWithTheRayCaster) {
+  // Circles in (u,v) across the sphere's knot lines and its seam: curved trim edges on a
+  // curved surface, silhouettes crossing them.
+  const std::vector<Surface> s = Trimmed(test::NurbsSphere(1.0),
+                                         {{TrimCircle(Vec2(0.5, 0.5), 0.2)}, {TrimCircle(Vec2(0.05, 0.35), 0.12)},
+                                          {TrimPolygon({{0.2, 0.6}, {0.35, 0.9}, {0.1, 0.8}})},
+                                          // The cap about the north pole, the loop around it outside the domain.
+                                          {TrimPolygon({{-0.1, 0.84}, {1.1, 0.84}, {1.1, 1.1}, {-0.1, 1.1}})}},
+                                         false);
+  for (const Camera& c : {test::View(Vec3(3.1, -4.2, 2.6), 72), test::View(Vec3(-5.0, 0.3, 0.4), 72),
+                          test::View(Vec3(4.0, 2.0, -3.0), 72), test::View(Vec3(0.5, -3.0, 3.8), 72)})
+    test::ExpectAgree(s, c, "trimmed sphere");
+}
+
+TEST(TrimScan, ThetaRowsCoverWhatTheRayCasterSees) {
+  for (const Case& k : Cases()) {
+    const std::vector<Surface> s = Trimmed(test::FlatSquare(3), k.loops, k.keepInside);
+    for (const Camera& c : Views()) {
+      const test::RayCaster caster(s, c);
+      auto want = [&](double x, double y) { return caster.Nearest(x, y).has_value(); };
+      long wanted = 0;
+      EXPECT_EQ(Mismatches(Coverage(s, c, {true, 16, 0}), c, want, &wanted), 0) << k.name;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace patchscan
