@@ -23,6 +23,9 @@ namespace patchscan::rib {
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 // ReadArchive nesting deeper than this is taken as an archive that reads itself.
 constexpr int kMaxArchiveDepth = 16;
+// ObjectInstance replays at most this many requests in all: objects instancing objects
+// multiply, and ten of ten of ... sixteen deep would never end.
+constexpr long kMaxReplayedRequests = 1'000'000;
 // RenderMan's default field of view (RenderMan Interface 3.2, "Projection").
 constexpr double kRibDefaultFovDeg = 90.0;
 // The light and shader parameter defaults of the standard shaders (RenderMan Interface
@@ -111,8 +114,20 @@ class RibParser {
   bool WorldBegin(const Request& r);
   bool Begin(const Request& r, Block::Kind kind);
   bool End(const Request& r, Block::Kind kind);
-  bool SkipObject(const Request& r);
-  bool EndObject(const Request& r);
+  // ObjectBegin handle ... ObjectEnd records the requests between (their file with them);
+  // ObjectInstance handle replays them inside an attribute block of their own, under the
+  // transformation and attributes current there (RenderMan Interface 3.2, "Retained
+  // Geometry"). `depth` counts archives and instances within instances.
+  bool ObjectBegin(const Request& r);
+  bool ObjectEnd(const Request& r);
+  bool Record(const Request& r, int depth);
+  bool ObjectInstance(const Request& r, int depth);
+  bool ObjectHandle(const Request& r, std::string* out);
+  // body() in a scope of its own: the attributes restored after it, and the blocks it
+  // opens closed by it (else an error naming `what`).
+  template <class F>
+  bool Scoped(const Request& r, const std::string& what, F&& body);
+  bool Procedural(const Request& r, int depth);
 
   // ---- camera and image ----
   bool Format(const Request& r);
@@ -200,7 +215,15 @@ class RibParser {
   std::unordered_map<std::size_t, std::vector<std::uint32_t>> appearanceIndex_;
   Mat4 cameraFromWorld_ = Mat4::Identity();
   bool sawWorld_ = false, skippingWorld_ = false, skippingFrame_ = false, done_ = false;
-  int objectDepth_ = 0;
+  struct Recorded {
+    std::string file;
+    Request request;
+  };
+  std::unordered_map<std::string, std::vector<Recorded>> objects_;
+  std::optional<std::pair<std::string, std::vector<Recorded>>> recording_;  // handle, requests so far
+  int recordingLine_ = 0;
+  long replayed_ = 0;  // requests replayed by ObjectInstance so far
+  std::string recordingFile_;
 };
 
 }  // namespace patchscan::rib

@@ -29,9 +29,9 @@ const std::set<std::string, std::less<>>& SkippedRequests() {
       "Shutter", "ColorSamples", "RelativeDetail", "TextureCoordinates", "Illuminate",
       "AreaLightSource", "CoordinateSystem", "CoordSysTransform", "ScopedCoordinateSystem",
       "Perspective", "Skew", "Deformation", "SolidBegin", "SolidEnd", "MotionBegin",
-      "MotionEnd", "ObjectInstance", "Polygon", "GeneralPolygon", "PointsPolygons",
+      "MotionEnd", "Polygon", "GeneralPolygon", "PointsPolygons",
       "PointsGeneralPolygons",
-      "HierarchicalSubdivisionMesh", "Points", "Curves", "Blobby", "Procedural", "Version",
+      "HierarchicalSubdivisionMesh", "Points", "Curves", "Blobby", "Version",
       "ErrorHandler", "System", "IfBegin", "IfEnd", "Else", "ElseIf", "Resource",
       "ResourceBegin", "ResourceEnd", "Camera", "DisplayChannel", "ArchiveBegin", "ArchiveEnd",
       "Sphere2", "Attribute2", "Shader", "Pattern", "Bxdf", "Light", "Integrator",
@@ -48,6 +48,8 @@ Mat4 Translation(double x, double y, double z) {
 std::variant<Scene, SourceError> RibParser::Run(std::string_view text, const std::string& name) {
   scene_.source = name;
   if (!ReadText(text, name, 0)) return *error_;
+  if (recording_)
+    return SourceError{recordingFile_, recordingLine_, "ObjectBegin is never closed"};
   if (!done_) {
     for (auto b = blocks_.rbegin(); b != blocks_.rend(); ++b)
       return SourceError{b->file, b->line, std::string(BlockName(b->kind)) + " is never closed"};
@@ -131,6 +133,7 @@ const std::unordered_map<std::string_view, RibParser::Handler>& RibParser::Reque
 
 bool RibParser::Handle(const Request& r, int depth) {
   const std::string& n = r.name;
+  if (recording_) return Record(r, depth);
   // Frames: only the chosen one is read; requests outside frames apply to every frame.
   if (n == "FrameBegin") return FrameBegin(r);
   if (n == "FrameEnd") return FrameEnd(r);
@@ -143,9 +146,10 @@ bool RibParser::Handle(const Request& r, int depth) {
   if (n == "AttributeEnd") return End(r, Block::Kind::Attribute);
   if (n == "TransformBegin") return Begin(r, Block::Kind::Transform);
   if (n == "TransformEnd") return End(r, Block::Kind::Transform);
-  if (n == "ObjectBegin") return Begin(r, Block::Kind::Attribute) && SkipObject(r);
-  if (n == "ObjectEnd") return EndObject(r);
-  if (objectDepth_ > 0) return true;
+  if (n == "ObjectBegin") return ObjectBegin(r);
+  if (n == "ObjectEnd") return Fail(r.line, "ObjectEnd without ObjectBegin");
+  if (n == "ObjectInstance") return ObjectInstance(r, depth);
+  if (n == "Procedural") return Procedural(r, depth);
   // Everything else, by the request table.
   if (const auto h = RequestTable().find(n); h != RequestTable().end()) return (this->*(h->second))(r);
   if (SkippedRequests().count(n) != 0) {
@@ -333,16 +337,95 @@ bool RibParser::End(const Request& r, Block::Kind kind) {
   return true;
 }
 
-bool RibParser::SkipObject(const Request& r) {
-  Warn(r.line, "ObjectBegin", "ObjectBegin/ObjectInstance are not supported here: the object is skipped");
-  ++objectDepth_;
+bool RibParser::ObjectHandle(const Request& r, std::string* out) {
+  // A number (RenderMan 3.2) or a string (3.3 and prman).
+  if (r.args.empty() || r.args[0].Size() != 1)
+    return Fail(r.line, r.name + " expects an object handle (a number or a string)");
+  *out = r.args[0].Numeric() ? ShortestNumber(r.args[0].numbers[0]) : r.args[0].strings[0];
   return true;
 }
 
-bool RibParser::EndObject(const Request& r) {
-  if (objectDepth_ == 0) return Fail(r.line, "ObjectEnd without ObjectBegin");
-  --objectDepth_;
-  return End(r, Block::Kind::Attribute);
+bool RibParser::ObjectBegin(const Request& r) {
+  std::string handle;
+  if (!ObjectHandle(r, &handle)) return false;
+  recording_.emplace(handle, std::vector<Recorded>{});
+  recordingLine_ = r.line;
+  recordingFile_ = file_;
+  return true;
+}
+
+bool RibParser::Record(const Request& r, int depth) {
+  const std::string& n = r.name;
+  if (n == "ObjectEnd") return ObjectEnd(r);
+  if (n == "ReadArchive") return ReadArchive(r, depth);  // its requests are recorded
+  if (n == "ObjectBegin" || n == "FrameBegin" || n == "FrameEnd" || n == "WorldBegin" || n == "WorldEnd")
+    return Fail(r.line, n + " inside the object definition of ObjectBegin at " + recordingFile_ + ":" +
+                            std::to_string(recordingLine_));
+  recording_->second.push_back({file_, r});
+  return true;
+}
+
+bool RibParser::ObjectEnd(const Request& r) {
+  if (!Args(r, 0)) return false;
+  objects_[recording_->first] = std::move(recording_->second);
+  recording_.reset();
+  return true;
+}
+
+template <class F>
+bool RibParser::Scoped(const Request& r, const std::string& what, F&& body) {
+  const Attributes saved = attr_;
+  const std::size_t blocks = blocks_.size();
+  if (!body()) return false;
+  if (blocks_.size() < blocks) return Fail(r.line, r.name + ": " + what + " closes blocks it did not open");
+  if (blocks_.size() > blocks)
+    return Fail(r.line, r.name + ": " + what + " leaves " + std::string(BlockName(blocks_.back().kind)) + " at " +
+                            blocks_.back().file + ":" + std::to_string(blocks_.back().line) + " open");
+  attr_ = saved;
+  return true;
+}
+
+bool RibParser::ObjectInstance(const Request& r, int depth) {
+  std::string handle;
+  if (!InWorld(r) || !ObjectHandle(r, &handle)) return false;
+  const auto object = objects_.find(handle);
+  if (object == objects_.end()) return Fail(r.line, "ObjectInstance: no object " + Shown(handle) + " was defined");
+  if (depth + 1 > kMaxArchiveDepth)
+    return Fail(r.line, "ObjectInstance nested more than " + std::to_string(kMaxArchiveDepth) +
+                            " deep (an object that instances itself?)");
+  replayed_ += static_cast<long>(object->second.size());
+  if (replayed_ > kMaxReplayedRequests)
+    return Fail(r.line, "ObjectInstance: more than " + std::to_string(kMaxReplayedRequests) +
+                            " requests replayed in all (instances of instances of ...)");
+  // A copy: an instance inside may define objects anew.
+  const std::vector<Recorded> requests = object->second;
+  return Scoped(r, "object " + Shown(handle), [&] {
+    const std::string outerFile = file_;
+    for (const Recorded& rec : requests) {
+      file_ = rec.file;
+      if (!Handle(rec.request, depth + 1)) return false;
+      if (done_) break;
+    }
+    file_ = outerFile;
+    return true;
+  });
+}
+
+bool RibParser::Procedural(const Request& r, int depth) {
+  // Procedural "DelayedReadArchive" ["file"] [bound]: the archive read here, in a block of
+  // its own. Other procedurals run programs or load code: skipped.
+  std::string kind;
+  if (!StringArg(r, 0, &kind)) return false;
+  if (kind != "DelayedReadArchive") {
+    Warn(r.line, "Procedural " + kind, "Procedural " + Shown(kind) + " is not supported here: skipped");
+    return true;
+  }
+  if (r.args.size() < 2 || !r.args[1].Textual() || r.args[1].strings.empty())
+    return Fail(r.line, "Procedural \"DelayedReadArchive\" expects the archive's file name in a string array");
+  Request read{"ReadArchive", r.line, {r.args[1]}};
+  read.args[0].kind = Value::Kind::String;
+  read.args[0].strings.resize(1);
+  return Scoped(r, "archive " + Shown(read.args[0].strings[0]), [&] { return ReadArchive(read, depth); });
 }
 
 }  // namespace patchscan::rib

@@ -1,12 +1,17 @@
 #include "patch/text_file.h"
 
+#include <algorithm>
 #include <cerrno>
+#include <climits>
+#include <cstdint>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+
+#include <zlib.h>
 
 namespace patchscan {
 
@@ -28,6 +33,37 @@ std::variant<std::string, SourceError> ReadTextFile(const std::string& path) {
   const bool failed = std::ferror(f) != 0;
   std::fclose(f);
   if (failed) return SourceError{path, 0, "read error"};
+  if (text.size() >= 2 && static_cast<unsigned char>(text[0]) == 0x1f && static_cast<unsigned char>(text[1]) == 0x8b)
+    return Gunzip(text, path);
+  return text;
+}
+
+std::variant<std::string, SourceError> Gunzip(std::string_view data, const std::string& path) {
+  z_stream z{};
+  // 15 + 16: a gzip stream, the largest window.
+  if (inflateInit2(&z, 15 + 16) != Z_OK) return SourceError{path, 0, "cannot start gzip decompression"};
+  z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(data.data()));
+  z.avail_in = static_cast<uInt>(std::min<std::size_t>(data.size(), UINT32_MAX));
+  std::string text;
+  char buf[1 << 16];
+  int status = Z_OK;
+  std::string error;
+  while (status != Z_STREAM_END) {
+    z.next_out = reinterpret_cast<Bytef*>(buf);
+    z.avail_out = sizeof buf;
+    status = inflate(&z, Z_NO_FLUSH);
+    if (status != Z_OK && status != Z_STREAM_END) {
+      error = status == Z_BUF_ERROR ? "the gzip data ends early" : std::string("gzip data is corrupt") + (z.msg ? std::string(": ") + z.msg : "");
+      break;
+    }
+    text.append(buf, sizeof buf - z.avail_out);
+    if (static_cast<long long>(text.size()) > kMaxSceneFileBytes) {
+      error = "decompresses to more than 1 GiB, too large for a scene file";
+      break;
+    }
+  }
+  inflateEnd(&z);
+  if (!error.empty()) return SourceError{path, 0, error};
   return text;
 }
 

@@ -12,7 +12,10 @@ namespace patchscan {
 
 // The whole content of `path`, or the error that prevented reading it (no line number).
 // Refuses files larger than kMaxSceneFileBytes.
+// A gzip-compressed file (by its magic bytes, as `.rib.gz` archives are) is decompressed.
 std::variant<std::string, SourceError> ReadTextFile(const std::string& path);
+// The decompressed contents of gzip data read from `path` (for messages); at most 1 GiB.
+std::variant<std::string, SourceError> Gunzip(std::string_view data, const std::string& path);
 
 // Scene files are text; one of more than 1 GiB is not a scene this program can hold.
 constexpr long long kMaxSceneFileBytes = 1LL << 30;

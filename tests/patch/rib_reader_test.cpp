@@ -2,6 +2,7 @@
 // quadric parameters against the formulas of the RenderMan Interface 3.2 ("Quadrics");
 // malformed scenes answered with file:line; skipped requests warned about once per kind.
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <cmath>
 #include <filesystem>
@@ -118,6 +119,47 @@ TEST(Rib, ReadArchiveReadsRelativeToTheIncludingFile) {
   auto loop = ReadRib((dir / "main.rib").string());
   ASSERT_TRUE(std::holds_alternative<SourceError>(loop));
   EXPECT_NE(std::get<SourceError>(loop).message.find("nested more than 16 deep"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Rib, CompressedArchivesAndDelayedReadArchive) {
+  // A gzip-compressed archive read by ReadArchive and by Procedural "DelayedReadArchive"
+  // (in a block of its own: its Translate and Color stay inside); a corrupt and a
+  // truncated one are errors naming the file.
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_gz_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  auto gzip = [&](const std::string& name, const std::string& text, std::size_t keep = std::string::npos) {
+    const std::string path = (dir / name).string();
+    gzFile f = gzopen(path.c_str(), "wb");
+    gzwrite(f, text.data(), static_cast<unsigned>(text.size()));
+    gzclose(f);
+    if (keep != std::string::npos) std::filesystem::resize_file(path, keep);
+  };
+  gzip("part.rib.gz", "Translate 0 0 2\nColor [0 1 0]\nSphere 1 -1 1 360\n");
+  std::ofstream(dir / "main.rib") << World("ReadArchive \"part.rib.gz\"\nProcedural \"DelayedReadArchive\" [\"part.rib.gz\"] "
+                                           "[-1 1 -1 1 -1 1]\nSphere 0.5 -0.5 0.5 360\nProcedural \"RunProgram\" [\"x\" \"\"] [0 1 0 1 0 1]");
+  auto ok = ReadRib((dir / "main.rib").string());
+  ASSERT_TRUE(std::holds_alternative<Scene>(ok)) << std::get<SourceError>(ok).What();
+  const Scene& s = std::get<Scene>(ok);
+  ASSERT_EQ(s.surfaces.size(), 3u);
+  ExpectNear(Vec3(s.surfaces[0].worldFromObject.translation()), Vec3(0, 0, 2));
+  ExpectNear(Vec3(s.surfaces[1].worldFromObject.translation()), Vec3(0, 0, 4));  // after ReadArchive's Translate
+  ExpectNear(Vec3(s.surfaces[2].worldFromObject.translation()), Vec3(0, 0, 2));  // the procedural's stayed inside
+  EXPECT_EQ(s.appearances[s.appearanceOf[2]].colour, Vec3(0, 1, 0));            // ReadArchive's Color did not
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_NE(s.warnings[0].find("Procedural 'RunProgram' is not supported here: skipped"), std::string::npos);
+  std::ofstream(dir / "bad.rib.gz") << std::string("\x1f\x8b\x08\x00\x00\x00\x00\x00\x00\x03\xff\xff\xff\xff", 14);
+  std::ofstream(dir / "main.rib") << World("ReadArchive \"bad.rib.gz\"");
+  auto bad = ReadRib((dir / "main.rib").string());
+  ASSERT_TRUE(std::holds_alternative<SourceError>(bad));
+  EXPECT_EQ(std::get<SourceError>(bad).What(),
+            (dir / "main.rib").string() + ":2: ReadArchive: " + (dir / "bad.rib.gz").string() + ": gzip data is corrupt: invalid block type");
+  gzip("cut.rib.gz", std::string(5000, '#') + "\nSphere 1 -1 1 360\n", 30);
+  std::ofstream(dir / "main.rib") << World("ReadArchive \"cut.rib.gz\"");
+  auto cut = ReadRib((dir / "main.rib").string());
+  ASSERT_TRUE(std::holds_alternative<SourceError>(cut));
+  EXPECT_EQ(std::get<SourceError>(cut).What(),
+            (dir / "main.rib").string() + ":2: ReadArchive: " + (dir / "cut.rib.gz").string() + ": the gzip data ends early");
   std::filesystem::remove_all(dir);
 }
 
@@ -532,14 +574,38 @@ TEST(Rib, LightSourcesInWorldSpace) {
 
 // ---- what is skipped, and what is refused ----
 
+TEST(Rib, ObjectInstancesReplayTheirObjectUnderTheCurrentState) {
+  // An object of two surfaces (one in a block of its own, coloured and moved there),
+  // defined before the world, and one defined in it by name; instanced under transforms
+  // and colours. The object's own state changes stay inside each instance.
+  const Scene s = Parse(
+      "ObjectBegin 7\nSphere 1 -1 1 360\nAttributeBegin\nColor [0 0 1]\nTranslate 0 0 5\nDisk 0 1 360\n"
+      "AttributeEnd\nObjectEnd\n" +
+      World("ObjectBegin \"pair\"\nObjectInstance 7\nTranslate 10 0 0\nObjectInstance 7\nObjectEnd\n"
+            "Color [1 0 0]\nAttributeBegin\nTranslate 0 3 0\nObjectInstance 7\nAttributeEnd\n"
+            "Translate 0 0 -2\nObjectInstance \"pair\"\nSphere 0.5 -0.5 0.5 360"));
+  ASSERT_EQ(s.surfaces.size(), 2u + 4u + 1u);
+  auto origin = [&](std::size_t k) { return Vec3(s.surfaces[k].worldFromObject.translation()); };
+  ExpectNear(origin(0), Vec3(0, 3, 0));
+  ExpectNear(origin(1), Vec3(0, 3, 5));
+  ExpectNear(origin(2), Vec3(0, 0, -2));
+  ExpectNear(origin(3), Vec3(0, 0, 3));
+  ExpectNear(origin(4), Vec3(10, 0, -2));
+  ExpectNear(origin(5), Vec3(10, 0, 3));
+  ExpectNear(origin(6), Vec3(0, 0, -2));  // the pair's Translate stayed inside it
+  ASSERT_EQ(s.appearanceOf.size(), s.surfaces.size());
+  for (std::size_t k : {0u, 2u, 4u, 6u}) EXPECT_EQ(s.appearances[s.appearanceOf[k]].colour, Vec3(1, 0, 0)) << k;
+  for (std::size_t k : {1u, 3u, 5u}) EXPECT_EQ(s.appearances[s.appearanceOf[k]].colour, Vec3(0, 0, 1)) << k;
+}
+
 TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
   const Scene s = Parse(
       "Option \"searchpath\" \"shader\" [\"@\"]\nHider \"hidden\"\nDeclare \"foo\" \"float\"\n" +
       World("Attribute \"identifier\" \"name\" [\"a\"]\nAttribute \"visibility\" \"int camera\" [1]\n"
             "Displacement \"bumpy\"\nMakeShadow \"a\" \"b\"\nPolygon \"P\" [0 0 0 1 0 0 0 1 0]\n"
             "FooBar 1 2 3\nSphere 1 -1 1 360 \"Cs\" [1 0 0]\n"
-            "ObjectBegin 1\nSphere 5 -5 5 360\nObjectEnd\nObjectInstance 1"));
-  EXPECT_EQ(s.surfaces.size(), 1u);  // the object's sphere is not drawn
+            "Points \"P\" [0 0 0]\nBlobby 0 [] [] []"));
+  EXPECT_EQ(s.surfaces.size(), 1u);
   const std::vector<std::string> want = {
       "t.rib:1: Option is not supported here: skipped",
       "t.rib:2: Hider is not supported here: skipped",
@@ -551,8 +617,8 @@ TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
       "t.rib:9: Polygon is not supported here: skipped",
       "t.rib:10: unknown request 'FooBar': skipped",
       "t.rib:11: Sphere: parameter \"Cs\" is not supported here: ignored",
-      "t.rib:12: ObjectBegin/ObjectInstance are not supported here: the object is skipped",
-      "t.rib:15: ObjectInstance is not supported here: skipped"};
+      "t.rib:12: Points is not supported here: skipped",
+      "t.rib:13: Blobby is not supported here: skipped"};
   EXPECT_EQ(s.warnings, want);
 }
 
@@ -602,6 +668,31 @@ TEST(Rib, MalformedScenesAreAnsweredWithFileAndLine) {
        "t.rib:2: TrimCurve: loop 1, curve 1: control point 2 has weight -1 (weights are positive)"},
       {World("TrimCurve [0.5] [2] [0 0 1 2 3 3] [0] [3] [4] [0.1 0.4 0.1 0.1] [0.1 0.1 0.4 0.1] [1 1 1 1]"),
        "t.rib:2: TrimCurve: ncurves are whole numbers from 1"},
+      {World("ObjectInstance 3"), "t.rib:2: ObjectInstance: no object '3' was defined"},
+      {"ObjectBegin 1\nSphere 1 -1 1 360\n", "t.rib:1: ObjectBegin is never closed"},
+      {"ObjectBegin 1\nWorldBegin\nWorldEnd\nObjectEnd\n",
+       "t.rib:2: WorldBegin inside the object definition of ObjectBegin at t.rib:1"},
+      {"ObjectBegin 1\nObjectBegin 2\nObjectEnd\nObjectEnd\n",
+       "t.rib:2: ObjectBegin inside the object definition of ObjectBegin at t.rib:1"},
+      {World("ObjectBegin 1\nAttributeBegin\nObjectEnd\nObjectInstance 1"),
+       "t.rib:5: ObjectInstance: object '1' leaves AttributeBegin at t.rib:3 open"},
+      {World("ObjectBegin 1\nSphere 1 -1 1 1e9\nObjectEnd\nObjectInstance 1"),
+       "t.rib:3: Sphere: thetamax must be from -360 to 360 degrees"},
+      {World("ObjectBegin 1\nObjectInstance 1\nObjectEnd\nObjectInstance 1"),
+       "t.rib:3: ObjectInstance nested more than 16 deep (an object that instances itself?)"},
+      {World("ObjectEnd"), "t.rib:2: ObjectEnd without ObjectBegin"},
+      {World("ObjectBegin 1\nSphere 1 -1 1 360\nSphere 1 -1 1 360\nSphere 1 -1 1 360\nSphere 1 -1 1 360\nObjectEnd\n"
+             "ObjectBegin 2\nObjectInstance 1\nObjectInstance 1\nObjectInstance 1\nObjectInstance 1\nObjectEnd\n"
+             "ObjectBegin 3\nObjectInstance 2\nObjectInstance 2\nObjectInstance 2\nObjectInstance 2\nObjectEnd\n"
+             "ObjectBegin 4\nObjectInstance 3\nObjectInstance 3\nObjectInstance 3\nObjectInstance 3\nObjectEnd\n"
+             "ObjectBegin 5\nObjectInstance 4\nObjectInstance 4\nObjectInstance 4\nObjectInstance 4\nObjectEnd\n"
+             "ObjectBegin 6\nObjectInstance 5\nObjectInstance 5\nObjectInstance 5\nObjectInstance 5\nObjectEnd\n"
+             "ObjectBegin 7\nObjectInstance 6\nObjectInstance 6\nObjectInstance 6\nObjectInstance 6\nObjectEnd\n"
+             "ObjectBegin 8\nObjectInstance 7\nObjectInstance 7\nObjectInstance 7\nObjectInstance 7\nObjectEnd\n"
+             "ObjectBegin 9\nObjectInstance 8\nObjectInstance 8\nObjectInstance 8\nObjectInstance 8\nObjectEnd\n"
+             "ObjectBegin 10\nObjectInstance 9\nObjectInstance 9\nObjectInstance 9\nObjectInstance 9\nObjectEnd\n"
+             "ObjectInstance 10"),
+       "t.rib:10: ObjectInstance: more than 1000000 requests replayed in all (instances of instances of ...)"},
       {World("Attribute \"trimcurve\" \"sense\" \"sideways\""),
        "t.rib:2: Attribute \"trimcurve\" \"sense\" is \"inside\" or \"outside\", not 'sideways'"},
       {World("NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1 \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1]"),
@@ -658,7 +749,7 @@ TEST(RibFuzz, MutantsAreReadOrRefusedWithALocatedMessage) {
   const std::vector<std::string> tokens = {
       "1e308", "-1e308", "1e-320", "nan", "inf", "-0", "0", "1", "99999999999", "10000000", "[", "]",
       "\"", "\"\"", "[]", "WorldBegin", "WorldEnd", "AttributeBegin", "AttributeEnd", "TransformEnd",
-      "FrameBegin", "FrameEnd", "ObjectBegin", "ObjectEnd", "\"periodic\"", "\"b-spline\"", "\"P\"",
+      "FrameBegin", "FrameEnd", "ObjectBegin", "ObjectEnd", "ObjectInstance 1", "\"periodic\"", "\"b-spline\"", "\"P\"",
       "\"Pw\"", "NuPatch", "TrimCurve", "Sphere", "Torus", "PatchMesh", "Basis", "Rotate", "Scale", "ReadArchive", "\"teapot\"",
       "#", "\n", "\xc3\xa9"};
   test::Mutator mutate(20261123, alphabet, tokens);
