@@ -323,6 +323,16 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
     return kExitOutputError;
   }
   progress.Finish();
+  // An empty image says why it may be empty.
+  if ((*counted)[Counter::SamplesCovered] == 0) {
+    if (!scene.warnings.empty())
+      err << "patchscan: warning: the image is empty: nothing drawn covers a sample, and " << scene.warnings.size()
+          << " kind" << (scene.warnings.size() == 1 ? " of request was" : "s of request were")
+          << " skipped (above): what the scene shows may be among them\n";
+    else
+      err << "patchscan: warning: the image is empty: no surface covers a sample (" << scene.surfaces.size()
+          << " surfaces; is the camera looking at them?)\n";
+  }
   const auto tCommit = Clock::now();
   if (auto committed = writer.Commit(); auto* why = std::get_if<std::string>(&committed)) {
     err << "patchscan: " << *why << '\n';

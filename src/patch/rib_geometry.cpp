@@ -78,19 +78,38 @@ bool RibParser::BasisRequest(const Request& r) {
   return true;
 }
 
-bool RibParser::Points(const Request& r, size_t first, size_t count, bool rationalAllowed) {
+bool RibParser::Points(const Request& r, size_t first, size_t count, bool rationalAllowed, int nu, int nv) {
   std::vector<Param> params;
   if (!Params(r, first, &params)) return false;
   const Value* p = nullptr;
   const Value* pw = nullptr;
+  const Value* pz = nullptr;
   for (const Param& q : params) {
     if (q.name == "P") p = q.value;
     else if (q.name == "Pw" && rationalAllowed) pw = q.value;
     else if (q.name == "Pw") return Fail(q.value->line, r.name + ": \"Pw\" (rational points) is not supported here; give \"P\"");
-    else if (q.name == "Pz") return Fail(q.value->line, r.name + ": \"Pz\" (height fields) is not supported; give \"P\"");
+    else if (q.name == "Pz" && nu > 0) pz = q.value;
+    else if (q.name == "Pz") return Fail(q.value->line, r.name + ": \"Pz\" (height fields) is for Patch and PatchMesh; give \"P\"");
     else IgnoreParam(r, q);
   }
-  if (p && pw) return Fail(pw->line, r.name + ": both \"P\" and \"Pw\": give one");
+  if ((p != nullptr) + (pw != nullptr) + (pz != nullptr) > 1)
+    return Fail((pz ? pz : pw)->line, r.name + ": more than one of \"P\", \"Pw\" and \"Pz\": give one");
+  if (pz) {
+    // A height field (RenderMan Interface 3.2, "Geometric Primitives"): each point's x and
+    // y are the mesh's surface parameters there, on a grid of nu x nv from 0 to 1.
+    if (!pz->Numeric() || pz->numbers.size() != count)
+      return Fail(pz->line, r.name + ": \"Pz\" expects " + std::to_string(count) + " numbers (" + std::to_string(count) +
+                                " points), found " + std::to_string(pz->Size()));
+    pts_.resize(count);
+    hpts_.resize(count);
+    rational_ = false;
+    for (size_t k = 0; k < count; ++k) {
+      const auto i = static_cast<int>(k % static_cast<size_t>(nu)), j = static_cast<int>(k / static_cast<size_t>(nu));
+      pts_[k] = Vec3(nu > 1 ? double(i) / (nu - 1) : 0.0, nv > 1 ? double(j) / (nv - 1) : 0.0, pz->numbers[k]);
+      hpts_[k] = pts_[k].homogeneous();
+    }
+    return true;
+  }
   if (!p && !pw) return Fail(r.line, r.name + (rationalAllowed ? ": no \"P\" or \"Pw\"" : ": no \"P\""));
   const Value* given = p ? p : pw;
   const size_t dims = p ? 3 : 4;
@@ -126,7 +145,8 @@ bool RibParser::PatchType(const Request& r, bool* bicubic) {
 
 bool RibParser::Patch(const Request& r) {
   bool bicubic = false;
-  if (!InWorld(r) || !PatchType(r, &bicubic) || !Points(r, 1, bicubic ? 16 : 4)) return false;
+  if (!InWorld(r) || !PatchType(r, &bicubic) || !Points(r, 1, bicubic ? 16 : 4, true, bicubic ? 4 : 2, bicubic ? 4 : 2))
+    return false;
   if (rational_) {
     AddRationalPatch(r, hpts_, bicubic);
   } else if (bicubic) {
@@ -186,7 +206,7 @@ bool RibParser::PatchMesh(const Request& r) {
   }
   const int nu = n[0], nv = n[1];
   if (static_cast<long long>(nu) * nv > 10'000'000LL) return Fail(r.line, "PatchMesh: more than 10000000 points");
-  if (!Points(r, 5, static_cast<size_t>(nu) * nv)) return false;
+  if (!Points(r, 5, static_cast<size_t>(nu) * nv, true, nu, nv)) return false;
   const int uStep = bicubic ? attr_.uBasis.step : 1, vStep = bicubic ? attr_.vBasis.step : 1;
   int nuPatches = 0, nvPatches = 0;
   if (!MeshCount(r, nu, periodic[0], bicubic, uStep, "u", &nuPatches) ||

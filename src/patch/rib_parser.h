@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <optional>
 #include <set>
@@ -176,8 +177,9 @@ class RibParser {
   bool BasisRequest(const Request& r);
   // The "P" or "Pw" of a patch's parameter list: exactly `count` points into hpts_
   // (homogeneous, w = 1 for "P") and pts_ (divided by w); rational_ when a weight is not 1.
-  // `rationalAllowed` false refuses "Pw".
-  bool Points(const Request& r, size_t first, size_t count, bool rationalAllowed = true);
+  // `rationalAllowed` false refuses "Pw". A patch or mesh of nu x nv points (nu > 0) may
+  // give "Pz", a height field, instead.
+  bool Points(const Request& r, size_t first, size_t count, bool rationalAllowed = true, int nu = 0, int nv = 0);
   bool PatchType(const Request& r, bool* bicubic);
   bool Patch(const Request& r);
   // A patch given by "Pw" with a weight other than 1, as a rational Bézier NurbsPiece.
@@ -207,7 +209,7 @@ class RibParser {
   std::string file_;
   Attributes attr_;
   std::vector<Block> blocks_;
-  std::set<std::string, std::less<>> warned_;
+  std::map<std::string, std::pair<std::size_t, long>, std::less<>> warned_;  // kind: its warning, how often
   std::vector<double> num_;
   std::vector<Vec3> pts_;
   std::vector<Vec4> hpts_;

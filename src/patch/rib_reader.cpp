@@ -57,6 +57,9 @@ std::variant<Scene, SourceError> RibParser::Run(std::string_view text, const std
       return SourceError{name, 0, "no FrameBegin " + std::to_string(options_.frame) + " in the file"};
   }
   if (!sawWorld_) return SourceError{name, 0, "no WorldBegin: a RIB scene needs a world block"};
+  // Each kind is named once, at its first place, with how often it came.
+  for (const auto& [kind, at] : warned_)
+    if (at.second > 1) scene_.warnings[at.first] += " (" + std::to_string(at.second) + " times)";
   return std::move(scene_);
 }
 
@@ -66,8 +69,9 @@ bool RibParser::Fail(int line, std::string message) {
 }
 
 void RibParser::Warn(int line, const std::string& kind, const std::string& what) {
-  if (!warned_.insert(kind).second) return;
-  scene_.warnings.push_back(SourceError{file_, line, what}.What());
+  const auto [it, first] = warned_.try_emplace(kind, scene_.warnings.size(), 0);
+  ++it->second.second;
+  if (first) scene_.warnings.push_back(SourceError{file_, line, what}.What());
 }
 
 bool RibParser::ReadText(std::string_view text, const std::string& name, int depth) {

@@ -413,6 +413,23 @@ TEST(Cli, InterruptStopsTheRenderAndLeavesNoFile) {
   std::filesystem::remove_all(dir);
 }
 
+// An image left empty says so, and names the skipped requests as a possible cause.
+TEST(Cli, AnEmptyImageSaysSo) {
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_empty_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "skipped.rib") << "Format 40 30 1\nWorldBegin\nTranslate 0 0 5\nBlobby 0 [] [] []\nBlobby 0 [] [] []\nWorldEnd\n";
+  std::ofstream(dir / "away.rib") << "Format 40 30 1\nWorldBegin\nTranslate 0 0 -5\nSphere 1 -1 1 360\nWorldEnd\n";
+  Result r = Patchscan("render " + (dir / "skipped.rib").string() + " -o " + (dir / "a.png").string());
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.err.find("skipped.rib:4: Blobby is not supported here: skipped (2 times)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("warning: the image is empty: nothing drawn covers a sample, and 1 kind of request was skipped"),
+            std::string::npos) << r.err;
+  r = Patchscan("render " + (dir / "away.rib").string() + " -o " + (dir / "b.png").string());
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.err.find("warning: the image is empty: no surface covers a sample (1 surfaces"), std::string::npos) << r.err;
+  std::filesystem::remove_all(dir);
+}
+
 // A RIB scene renders in every mode; its Display names the image when -o is not given;
 // --frame chooses a frame; warnings name file:line on stderr.
 TEST(Cli, RibScenesRenderInEveryMode) {

@@ -348,6 +348,28 @@ TEST(Rib, TrimCurveTrimsTheNuPatchesThatFollowInItsBlock) {
   for (std::size_t k = 2; k < s.surfaces.size(); ++k) EXPECT_EQ(TrimOf(s.surfaces[k]), nullptr) << k;
 }
 
+TEST(Rib, HeightFieldsTakeTheirXAndYFromTheParameters) {
+  // "Pz": x and y of point (i, j) of an nu x nv grid are i / (nu - 1) and j / (nv - 1).
+  // A bilinear patch of heights 0 0 0 1 is z = u v; a bicubic Bézier patch of heights
+  // z_ij reproduces x = u and y = v (the Bernstein basis's linear precision); a bilinear
+  // mesh of 3 x 2 heights is two patches.
+  std::ostringstream heights;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) heights << (i == j ? 1 : 0) << ' ';
+  const Scene s = Parse(World("Patch \"bilinear\" \"Pz\" [0 0 0 1]\nPatch \"bicubic\" \"Pz\" [" + heights.str() +
+                              "]\nPatchMesh \"bilinear\" 3 \"nonperiodic\" 2 \"nonperiodic\" \"Pz\" [0 1 2 3 4 5]"));
+  ASSERT_EQ(s.surfaces.size(), 4u);
+  for (const double u : {0.0, 0.3, 1.0})
+    for (const double v : {0.0, 0.7, 1.0}) {
+      ExpectNear(At(s.surfaces[0], u, v), Vec3(u, v, u * v));
+      const Vec3 p = At(s.surfaces[1], u, v);
+      EXPECT_NEAR(p.x(), u, kPosTol);
+      EXPECT_NEAR(p.y(), v, kPosTol);
+    }
+  ExpectNear(At(s.surfaces[2], 1, 1), Vec3(0.5, 1, 4));
+  ExpectNear(At(s.surfaces[3], 1, 1), Vec3(1, 1, 5));
+}
+
 TEST(Rib, RationalPatchesAreRationalBezierPieces) {
   // Weights all 2: the same surface as the points divided by them, in any basis.
   std::vector<Vec4> doubled;
@@ -598,6 +620,11 @@ TEST(Rib, ObjectInstancesReplayTheirObjectUnderTheCurrentState) {
   for (std::size_t k : {1u, 3u, 5u}) EXPECT_EQ(s.appearances[s.appearanceOf[k]].colour, Vec3(0, 0, 1)) << k;
 }
 
+TEST(Rib, SkippedKindsAreCounted) {
+  const Scene s = Parse(World("Blobby 0 [] [] []\nSphere 1 -1 1 360\nBlobby 0 [] [] []\nBlobby 0 [] [] []"));
+  EXPECT_EQ(s.warnings, std::vector<std::string>{"t.rib:2: Blobby is not supported here: skipped (3 times)"});
+}
+
 TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
   const Scene s = Parse(
       "Option \"searchpath\" \"shader\" [\"@\"]\nHider \"hidden\"\nDeclare \"foo\" \"float\"\n" +
@@ -641,9 +668,10 @@ TEST(Rib, MalformedScenesAreAnsweredWithFileAndLine) {
       {World("Patch \"bilinear\" \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1 1 1 0 0]"),
        "t.rib:2: Patch: point 3 of \"Pw\" has weight 0 (weights are positive)"},
       {World("Patch \"bilinear\" \"P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1 1 1 0 1]"),
-       "t.rib:2: Patch: both \"P\" and \"Pw\": give one"},
-      {World("Patch \"bilinear\" \"Pz\" [0 0 0 1]"),
-       "t.rib:2: Patch: \"Pz\" (height fields) is not supported; give \"P\""},
+       "t.rib:2: Patch: more than one of \"P\", \"Pw\" and \"Pz\": give one"},
+      {World("NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1 \"Pz\" [0 0 0 1]"),
+       "t.rib:2: NuPatch: \"Pz\" (height fields) is for Patch and PatchMesh; give \"P\""},
+      {World("Patch \"bilinear\" \"Pz\" [0 0 0]"), "t.rib:2: Patch: \"Pz\" expects 4 numbers (4 points), found 3"},
       {World("SubdivisionMesh \"catmull-clark\" [3] [0 1 2] \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1]"),
        "t.rib:2: SubdivisionMesh: \"Pw\" (rational points) is not supported here; give \"P\""},
       {World("NuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1"),
