@@ -64,7 +64,8 @@ void AddCameraOptions(CLI::App* cmd, CameraOptions* o) {
                   "the distance to the scene's bounding sphere when framed, else 1/1000 of "
                   "the distance to the look-at point; a RIB scene's Clipping)");
   cmd->add_option("--frame", o->frame,
-                  "RIB scenes: the frame to read, by its FrameBegin number (default: the first)");
+                  "RIB scenes: the frame to read, by its FrameBegin number (default: the first; render "
+                  "without -o renders every frame in order, each to its own Display)");
   AddChoiceOption(cmd, "--obj-scheme", &o->objScheme,
                   {{"catmull-clark", SubdivScheme::CatmullClark},
                    {"loop", SubdivScheme::Loop},
@@ -179,7 +180,8 @@ std::variant<ResolvedCamera, std::string> ResolveCamera(const CameraOptions& o,
 }
 
 std::variant<LoadedScene, int> LoadSceneAndCamera(const std::string& file,
-                                                  const CameraOptions& opts, std::ostream& err) {
+                                                  const CameraOptions& opts, std::ostream& err,
+                                                  std::set<std::string>* warned) {
   LoadOptions lo;
   lo.frame = opts.frame;
   lo.objScheme = opts.objScheme;
@@ -193,7 +195,8 @@ std::variant<LoadedScene, int> LoadSceneAndCamera(const std::string& file,
     err << "patchscan: " << *why << '\n';
     return kExitUsage;
   }
-  for (const std::string& w : std::get<Scene>(loaded).warnings) err << "patchscan: warning: " << w << '\n';
+  for (const std::string& w : std::get<Scene>(loaded).warnings)
+    if (!warned || warned->insert(w).second) err << "patchscan: warning: " << w << '\n';
   return LoadedScene{std::move(std::get<Scene>(loaded)), std::get<ResolvedCamera>(resolved)};
 }
 

@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <iosfwd>
 #include <optional>
+#include <set>
 #include <string>
 
 #include "patch/camera.h"
@@ -44,7 +45,8 @@ struct LoadedScene {
   ResolvedCamera view;
 };
 std::variant<LoadedScene, int> LoadSceneAndCamera(const std::string& file,
-                                                  const CameraOptions& opts, std::ostream& err);
+                                                  const CameraOptions& opts, std::ostream& err,
+                                                  std::set<std::string>* warned = nullptr);
 
 // Parses "X,Y,Z" into a vector; nullopt if it is not three finite numbers.
 std::optional<Vec3> ParseVec3(const std::string& text);

@@ -4,14 +4,18 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <filesystem>
 #include <ostream>
+#include <set>
 #include <thread>
 
 #include "cli/exit_codes.h"
 #include "cli/file_output.h"
 #include "cli/render_setup.h"
 #include "cli/stats_report.h"
+#include "patch/rib_reader.h"
 #include "patch/tessellate.h"
 #include "raster/async_row_sink.h"
 #include "raster/image_writer.h"
@@ -220,16 +224,20 @@ class CropSink final : public raster::RowSink {
 
 }  // namespace
 
-int RunRender(const RenderOptions& o, std::ostream& err) {
+// One frame of the scene (the file's first, or --frame), to -o or its Display.
+// `warned`: warnings printed by earlier frames, not printed again.
+static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::string>* warned = nullptr) {
   const auto t0 = Clock::now();
   CatchInterrupts();
   // Step 1: the scene, the camera and what the options ask of them.
-  auto loaded = LoadSceneAndCamera(o.file, o.camera, err);
+  auto loaded = LoadSceneAndCamera(o.file, o.camera, err, warned);
   if (const int* code = std::get_if<int>(&loaded)) return *code;
   const Scene& scene = std::get<LoadedScene>(loaded).scene;
   const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
   const auto tLoaded = Clock::now();
   const std::string output = !o.output.empty() ? o.output : scene.image.displayName;
+  // RenderMan's depth displays: the frame's depth map, whatever the file's extension.
+  const bool depthMap = o.output.empty() && (scene.image.displayType == "zfile" || scene.image.displayType == "shadow");
   if (output.empty()) {
     err << "patchscan: no output image: give -o IMAGE" << (scene.image.cameraFromWorld ? " (the scene has no Display file)" : "") << '\n';
     return kExitUsage;
@@ -271,13 +279,14 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
   if (const int* code = std::get_if<int>(&setup)) return *code;
   BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);
   backEnd.settings.threads = threads;
-  if (const auto why = raster::ImageWriter::CheckFormat(output, o.aov)) {
+  if (const auto why = raster::ImageWriter::CheckFormat(output, o.aov); why && !depthMap) {
     err << "patchscan: " << *why << '\n';
     return kExitUsage;
   }
   raster::ImageWriter::Window placement;
   if (cropNdc) placement = {window.x0, window.y0, camera.width, camera.height};
-  auto opened = raster::ImageWriter::Open(output, outWidth, outHeight, o.aov, threads, placement);
+  auto opened = depthMap ? raster::ImageWriter::OpenDepthMap(output, outWidth, outHeight)
+                         : raster::ImageWriter::Open(output, outWidth, outHeight, o.aov, threads, placement);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';
     return kExitOutputError;
@@ -364,6 +373,31 @@ int RunRender(const RenderOptions& o, std::ostream& err) {
       err << "patchscan: " << *why << " (statistics)\n";
       return kExitOutputError;
     }
+  }
+  return kExitOk;
+}
+
+
+int RunRender(const RenderOptions& o, std::ostream& err) {
+  // A RIB file of several frames renders each, in order, to its own Display; with --frame
+  // or -o, one frame.
+  const std::filesystem::path file(o.file);
+  const bool rib = file.extension() == ".rib" || (file.extension() == ".gz" && file.stem().extension() == ".rib");
+  std::vector<int> frames;
+  if (rib && o.camera.frame < 0)
+    for (const int n : RibFrames(o.file))
+      if (std::find(frames.begin(), frames.end(), n) == frames.end()) frames.push_back(n);
+  if (frames.size() <= 1) return RenderFrame(o, err);
+  if (!o.output.empty()) {
+    err << "patchscan: note: " << o.file << " has " << frames.size() << " frames; -o writes the first (give --frame N "
+        << "for another, or leave out -o to render every frame to its Display)\n";
+    return RenderFrame(o, err);
+  }
+  std::set<std::string> warned;
+  for (const int n : frames) {
+    RenderOptions one = o;
+    one.camera.frame = n;
+    if (const int code = RenderFrame(one, err, &warned); code != kExitOk) return code;
   }
   return kExitOk;
 }

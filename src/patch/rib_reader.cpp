@@ -442,6 +442,20 @@ std::variant<Scene, SourceError> ParseRib(std::string_view text, const std::stri
   return parser.Run(text, name);
 }
 
+std::vector<int> RibFrames(const std::string& path) {
+  std::vector<int> frames;
+  auto text = ReadTextFile(path);
+  if (!std::holds_alternative<std::string>(text)) return frames;
+  rib::Lexer lexer(std::get<std::string>(text), path);
+  rib::Request r;
+  while (lexer.Next(&r))
+    if (r.name == "FrameBegin" && !r.args.empty() && r.args[0].Numeric() && r.args[0].numbers.size() == 1) {
+      const double n = r.args[0].numbers[0];
+      if (n == std::floor(n) && std::abs(n) <= 2e9) frames.push_back(static_cast<int>(n));
+    }
+  return frames;
+}
+
 std::variant<Scene, SourceError> ReadRib(const std::string& path, const LoadOptions& options) {
   auto text = ReadTextFile(path);
   if (auto* e = std::get_if<SourceError>(&text)) return *e;

@@ -24,6 +24,7 @@
 #include <string>
 #include <string_view>
 #include <variant>
+#include <vector>
 
 #include "patch/scene.h"
 
@@ -36,6 +37,10 @@ std::variant<Scene, SourceError> ReadRib(const std::string& path, const LoadOpti
 // Parses RIB text; `name` names it in messages and anchors relative archive paths.
 std::variant<Scene, SourceError> ParseRib(std::string_view text, const std::string& name,
                                           const LoadOptions& options = {});
+
+// The numbers of the frames (FrameBegin) of the .rib file at `path`, in order: empty when
+// it has none or cannot be read (ReadRib says why).
+std::vector<int> RibFrames(const std::string& path);
 
 // The Utah teapot as RenderMan's Geometry "teapot" makes it: 32 bicubic Bézier patches,
 // z up, its base on z = 0 (the same data as surfaces/teapot.bpt).

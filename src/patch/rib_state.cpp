@@ -81,7 +81,10 @@ bool RibParser::Display(const Request& r) {
   std::string name, type;
   if (!StringArg(r, 0, &name) || !StringArg(r, 1, &type)) return false;
   // A name starting with '+' adds a further display: only the first is written.
-  if (type != "framebuffer" && !name.empty() && name[0] != '+') scene_.image.displayName = name;
+  if (type != "framebuffer" && !name.empty() && name[0] != '+') {
+    scene_.image.displayName = name;
+    scene_.image.displayType = type;
+  }
   return true;
 }
 

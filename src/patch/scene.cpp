@@ -15,11 +15,12 @@ Bounds3 Scene::WorldBounds() const {
 }
 
 std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOptions& options) {
-  const std::string ext = std::filesystem::path(path).extension().string();
-  if (ext == ".rib") return ReadRib(path, options);
+  const std::filesystem::path p(path);
+  const std::string ext = p.extension().string();
+  if (ext == ".rib" || (ext == ".gz" && p.stem().extension() == ".rib")) return ReadRib(path, options);
   if (ext == ".obj") return ReadObj(path, ObjOptions{options.objScheme});
   if (ext != ".bpt")
-    return SourceError{path, 0, "unknown scene format '" + ext + "' (known: .bpt, .rib, .obj)"};
+    return SourceError{path, 0, "unknown scene format '" + ext + "' (known: .bpt, .rib, .rib.gz, .obj)"};
   auto read = ReadBpt(path);
   if (auto* e = std::get_if<SourceError>(&read)) return *e;
   Scene scene;

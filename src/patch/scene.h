@@ -52,6 +52,7 @@ struct SceneImage {
   std::optional<double> hither;             // Clipping's near
   std::optional<int> pixelSamples;          // PixelSamples, as the side of a square grid
   std::string displayName;                  // Display's file name ("" when none)
+  std::string displayType;                  // its type: "file", "tiff", ..., "zfile", "shadow"
 };
 
 // A subdivision cage of the scene, for `patchscan info` (its faces are among the scene's

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <system_error>
 
 #include "raster/png_encoder.h"
@@ -23,6 +24,7 @@ struct ImageWriter::Impl {
   int y0 = 0;  // the first row's y in the frame (OpenImageIO takes rows by it)
   bool srgb8 = false;              // JPEG: the row converted to sRGB bytes first
   std::vector<std::uint8_t> bytes;  // that row
+  std::vector<float> depth;         // a depth map's row (OpenDepthMap)
   bool committed = false;
   // Until committed, the temporary file goes, also when Open fails after creating it.
   ~Impl() {
@@ -110,10 +112,37 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
 }
 
+std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::OpenDepthMap(const std::string& path, int width,
+                                                                                  int height) {
+  auto impl = std::make_unique<Impl>();
+  impl->target = path;
+  impl->width = width;
+  impl->channels = 1;
+  impl->depth.resize(static_cast<std::size_t>(width));
+  impl->temp = impl->target.parent_path() / ("." + impl->target.filename().string() + ".partial-" + std::to_string(::getpid()));
+  impl->file = std::fopen(impl->temp.c_str(), "wb");
+  if (!impl->file) return path + ": cannot write: " + std::strerror(errno);
+  std::fclose(impl->file);
+  impl->file = nullptr;
+  impl->out = OIIO::ImageOutput::create("tiff");
+  if (!impl->out) return path + ": cannot create a TIFF writer: " + OIIO::geterror();
+  OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
+  spec.channelnames = {"Z"};
+  spec.z_channel = 0;
+  if (!impl->out->open(impl->temp.string(), spec)) return path + ": cannot write: " + impl->out->geterror();
+  return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
+}
+
 bool ImageWriter::EncodesInParallel() const { return impl_->png != nullptr; }
 
 bool ImageWriter::WriteRow(int y, const float* pixels) {
   if (impl_->png) return impl_->png->WriteRow(pixels, kChannels);
+  if (!impl_->depth.empty()) {  // a depth map: Z alone, no surface as the largest float
+    for (int x = 0; x < impl_->width; ++x)
+      impl_->depth[static_cast<std::size_t>(x)] =
+          std::min(pixels[static_cast<std::size_t>(x) * kChannels + kChannelZ], std::numeric_limits<float>::max());
+    return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, impl_->depth.data());
+  }
   if (impl_->srgb8) {  // JPEG: no alpha, the colour over black as it is (premultiplied)
     for (int x = 0; x < impl_->width; ++x)
       for (int c = 0; c < impl_->channels; ++c)

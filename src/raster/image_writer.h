@@ -33,6 +33,11 @@ class ImageWriter final : public RowSink {
                                                                      bool aovs = false,
                                                                      int threads = 1,
                                                                      Window window = ImageWindow());
+  // A depth map (RenderMan's "zfile" and "shadow" displays): one float channel Z, the eye
+  // distance along the view axis of the nearest surface (the largest float where none),
+  // written as TIFF whatever `path`'s extension.
+  static std::variant<std::unique_ptr<ImageWriter>, std::string> OpenDepthMap(const std::string& path, int width,
+                                                                               int height);
   ~ImageWriter() override;
   // Whether `path` names a format Open takes (with `aovs`, an .exr): the message if not. A
   // refusal here is the user's choice of name; a failure of Open after it is the file system's.

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <algorithm>
+#include <limits>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -413,6 +414,41 @@ TEST(Cli, InterruptStopsTheRenderAndLeavesNoFile) {
   std::filesystem::remove_all(dir);
 }
 
+// A file of several frames renders each to its own Display; a "zfile" or "shadow" Display
+// gets the frame's depth map (TIFF, one float channel, whatever its extension); -o takes
+// the first frame, and says so.
+TEST(Cli, EveryFrameRendersToItsDisplay) {
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_frames_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "f.rib") << "Format 64 48 1\nProjection \"perspective\" \"fov\" 40\n"
+                                  "FrameBegin 1\nDisplay \"depth.z\" \"zfile\" \"z\"\nTranslate 0 0 5\nWorldBegin\n"
+                                  "Sphere 1 -1 1 360\nWorldEnd\nFrameEnd\n"
+                                  "FrameBegin 2\nDisplay \"two.png\" \"file\" \"rgba\"\nTranslate 0 0 5\nWorldBegin\n"
+                                  "Sphere 1 -1 1 360\nWorldEnd\nFrameEnd\n"
+                                  "FrameBegin 3\nDisplay \"map.shd\" \"shadow\" \"z\"\nTranslate 0 0 7\nWorldBegin\n"
+                                  "Sphere 1 -1 1 360\nWorldEnd\nFrameEnd\n";
+  const std::string cd = "cd " + dir.string() + " && " + PATCHSCAN_BINARY;
+  EXPECT_EQ(std::system((cd + " render f.rib 2>err.txt").c_str()), 0) << Slurp(dir / "err.txt");
+  EXPECT_TRUE(std::filesystem::exists(dir / "two.png"));
+  for (const auto& [name, nearest] : {std::pair{"depth.z", 4.0}, std::pair{"map.shd", 6.0}}) {
+    auto in = OIIO::ImageInput::open((dir / name).string());
+    ASSERT_TRUE(in) << name;
+    const OIIO::ImageSpec& spec = in->spec();
+    EXPECT_EQ(spec.nchannels, 1);
+    EXPECT_EQ(spec.format, OIIO::TypeDesc::FLOAT);
+    std::vector<float> z(static_cast<std::size_t>(spec.width * spec.height));
+    ASSERT_TRUE(in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, z.data()));
+    // The sphere's nearest point, 1 before its centre; no surface: the largest float.
+    EXPECT_NEAR(*std::min_element(z.begin(), z.end()), nearest, 1e-2) << name;
+    EXPECT_EQ(*std::max_element(z.begin(), z.end()), std::numeric_limits<float>::max()) << name;
+  }
+  const Result r = Patchscan("render " + (dir / "f.rib").string() + " -o " + (dir / "one.png").string());
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.err.find("has 3 frames; -o writes the first"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "one.png"));
+  std::filesystem::remove_all(dir);
+}
+
 // An image left empty says so, and names the skipped requests as a possible cause.
 TEST(Cli, AnEmptyImageSaysSo) {
   const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_empty_" + std::to_string(::getpid()));
@@ -449,10 +485,13 @@ TEST(Cli, RibScenesRenderInEveryMode) {
                                   "WorldBegin\nSphere 2 -2 2 360\nWorldEnd\nFrameEnd\n";
   // Display names a file relative to the working directory.
   const std::string cd = "cd " + dir.string() + " && " + PATCHSCAN_BINARY;
+  // Every frame, each to its own Display, the warnings of the file once.
   int code = std::system((cd + " render s.rib --mode tess 2>err.txt").c_str());
   EXPECT_EQ(code, 0);
   EXPECT_TRUE(std::filesystem::exists(dir / "shown.png"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "two.png"));
   EXPECT_EQ(Slurp(dir / "err.txt"), "patchscan: warning: " + (std::string("s.rib")) + ":3: Hider is not supported here: skipped\n");
+  std::filesystem::remove(dir / "two.png");
   code = std::system((cd + " render s.rib --frame 2 --mode tess 2>/dev/null").c_str());
   EXPECT_EQ(code, 0);
   EXPECT_TRUE(std::filesystem::exists(dir / "two.png"));
