@@ -274,7 +274,9 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   }
   const auto tSetUp = Clock::now();
 
-  // Step 3: the back end, and the rows' way to the image file.
+  // Step 3: the back end (after the scene's MakeShadow requests: its lights may read what
+  // they make), and the rows' way to the image file.
+  if (const auto code = MakeShadows(scene, err)) return *code;
   auto setup = SetUpBackEnd(o, scene, camera, aa, err);
   if (const int* code = std::get_if<int>(&setup)) return *code;
   BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);
@@ -285,7 +287,7 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   }
   raster::ImageWriter::Window placement;
   if (cropNdc) placement = {window.x0, window.y0, camera.width, camera.height};
-  auto opened = depthMap ? raster::ImageWriter::OpenDepthMap(output, outWidth, outHeight)
+  auto opened = depthMap ? raster::ImageWriter::OpenDepthMap(output, outWidth, outHeight, LightCamera(camera))
                          : raster::ImageWriter::Open(output, outWidth, outHeight, o.aov, threads, placement);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';

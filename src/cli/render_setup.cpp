@@ -126,6 +126,28 @@ std::variant<std::unique_ptr<BackEndSetup>, int> SetUpBackEnd(const RenderOption
   const Vec3 forward = ViewForward(camera), right = ViewRight(camera);
   s.lights = scene.lights.empty() ? raster::DefaultLightRig(forward, right.cross(forward), right)
                                   : SceneLights(scene.lights);
+  // The lights' shadow maps, each read once (SceneLights keeps the scene's light order,
+  // less the ambient lights).
+  std::size_t next = 0;
+  for (const SceneLight& l : scene.lights) {
+    if (l.kind == SceneLight::Kind::Ambient) continue;
+    raster::Light& out = s.lights.lights[next++];
+    for (const std::string& name : l.shadowNames) {
+      auto& map = setup->shadowMaps[name];
+      if (!map) {
+        auto loaded = raster::ShadowMap::Load(name);
+        if (auto* why = std::get_if<std::string>(&loaded)) {
+          err << "patchscan: " << l.file << ':' << l.line << ": LightSource: " << *why << '\n';
+          return kExitInputError;
+        }
+        map = std::move(std::get<std::unique_ptr<raster::ShadowMap>>(loaded));
+      }
+      out.shadows.push_back(map.get());
+    }
+    out.shadowBias = l.shadowBias;
+    out.shadowBlur = l.shadowBlur;
+    out.shadowSamples = l.shadowSamples;
+  }
   // The scene's own materials, each texture opened only when a visible sample needs it.
   for (const Appearance& a : scene.appearances) {
     raster::Material m = SceneMaterial(a, s.material);
@@ -143,6 +165,33 @@ std::variant<std::unique_ptr<BackEndSetup>, int> SetUpBackEnd(const RenderOption
   }
   s.materialOf = scene.appearanceOf;
   return setup;
+}
+
+raster::ShadowCamera LightCamera(const Camera& camera) {
+  raster::ShadowCamera c;
+  const Vec3 eye = EyePoint(camera), forward = ViewForward(camera), right = ViewRight(camera);
+  const Vec3 up = right.cross(forward);
+  c.worldToCamera.block<1, 3>(0, 0) = right.transpose();
+  c.worldToCamera.block<1, 3>(1, 0) = up.transpose();
+  c.worldToCamera.row(2) = ViewDepthRow(camera).transpose();  // z: the depth the map holds
+  c.worldToCamera.block<2, 1>(0, 3) = -c.worldToCamera.block<2, 3>(0, 0) * eye;
+  // Pixels (x right, y down) to RenderMan's screen space (x, y in [-1, 1], y up).
+  Mat4 toScreen = Mat4::Identity();
+  toScreen(0, 0) = 2.0 / camera.width;
+  toScreen(0, 3) = -1.0;
+  toScreen(1, 1) = -2.0 / camera.height;
+  toScreen(1, 3) = 1.0;
+  c.worldToScreen = toScreen * ScreenFromWorld(camera);
+  return c;
+}
+
+std::optional<int> MakeShadows(const Scene& scene, std::ostream& err) {
+  for (const SceneMakeShadow& m : scene.makeShadows)
+    if (const auto why = raster::MakeShadowTexture(m.input, m.output)) {
+      err << "patchscan: " << m.file << ':' << m.line << ": MakeShadow: " << *why << '\n';
+      return kExitInputError;
+    }
+  return std::nullopt;
 }
 
 volatile std::sig_atomic_t gInterrupted = 0;

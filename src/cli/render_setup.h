@@ -7,6 +7,7 @@
 #include <iosfwd>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 
@@ -14,6 +15,7 @@
 #include "patch/camera.h"
 #include "patch/scene.h"
 #include "raster/scanline_renderer.h"
+#include "raster/shadow_map.h"
 #include "raster/texture.h"
 
 namespace patchscan::cli {
@@ -23,6 +25,7 @@ struct BackEndSetup {
   raster::RenderSettings settings;
   std::unique_ptr<raster::ImageTexture> texture;  // --texture FILE
   std::map<std::string, std::unique_ptr<raster::ImageTexture>> sceneTextures;
+  std::map<std::string, std::unique_ptr<raster::ShadowMap>> shadowMaps;  // by file name
   // The first texture that could not be read, if any ("" when none failed).
   std::string TextureError() const;
   // What became of the textures, for --stats: "none", "never needed", "opened, N lookups".
@@ -33,6 +36,13 @@ struct BackEndSetup {
 // scene texture, prints the message to `err` and returns the exit code.
 std::variant<std::unique_ptr<BackEndSetup>, int> SetUpBackEnd(const RenderOptions& o, const Scene& scene,
                                                               const Camera& camera, int aa, std::ostream& err);
+
+// The matrices of `camera` as a light's camera, for the depth maps it renders.
+raster::ShadowCamera LightCamera(const Camera& camera);
+
+// The scene's MakeShadow requests, in order; on failure prints the message (file:line)
+// and returns the exit code.
+std::optional<int> MakeShadows(const Scene& scene, std::ostream& err);
 
 // Set by SIGINT and SIGTERM once CatchInterrupts has run: the render stops at the next row.
 extern volatile std::sig_atomic_t gInterrupted;

@@ -169,6 +169,7 @@ class RibParser {
   // ---- appearance ----
   bool SurfaceShader(const Request& r);
   bool LightSource(const Request& r);
+  bool MakeShadow(const Request& r);
 
   // ---- geometry ----
   bool InWorld(const Request& r);

@@ -24,7 +24,7 @@ const std::set<std::string, std::less<>>& SkippedRequests() {
       "Option", "Hider", "Declare", "Displacement", "Atmosphere", "Interior",
       "Exterior", "Imager", "Exposure", "Quantize", "PixelFilter", "PixelVariance",
       "ShadingRate", "ShadingInterpolation", "Matte", "Bound", "Detail", "DetailRange",
-      "GeometricApproximation", "MakeTexture", "MakeShadow", "MakeLatLongEnvironment",
+      "GeometricApproximation", "MakeTexture", "MakeLatLongEnvironment",
       "MakeCubeFaceEnvironment", "MakeBump", "FrameAspectRatio", "DepthOfField",
       "Shutter", "ColorSamples", "RelativeDetail", "TextureCoordinates", "Illuminate",
       "AreaLightSource", "CoordinateSystem", "CoordSysTransform", "ScopedCoordinateSystem",
@@ -115,6 +115,7 @@ const std::unordered_map<std::string_view, RibParser::Handler>& RibParser::Reque
       {"Opacity", &RibParser::Opacity},
       {"Surface", &RibParser::SurfaceShader},
       {"LightSource", &RibParser::LightSource},
+      {"MakeShadow", &RibParser::MakeShadow},
       // Geometry.
       {"Basis", &RibParser::BasisRequest},
       {"Patch", &RibParser::Patch},

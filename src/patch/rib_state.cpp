@@ -1,5 +1,7 @@
 // The RIB requests of the camera and image, the transformations and the appearance.
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "patch/camera.h"
@@ -202,11 +204,14 @@ bool RibParser::LightSource(const Request& r) {
   if (!Params(r, 2, &params)) return false;
   SceneLight l;
   l.line = r.line;
+  l.file = file_;
   using K = SceneLight::Kind;
+  // The standard lights, and the shadowing ones of RenderMan's light library.
+  const bool shadowing = name == "shadowspot" || name == "shadowdistant" || name == "shadowpoint";
   if (name == "ambientlight") l.kind = K::Ambient;
-  else if (name == "distantlight") l.kind = K::Distant;
-  else if (name == "pointlight") l.kind = K::Point;
-  else if (name == "spotlight") l.kind = K::Spot;
+  else if (name == "distantlight" || name == "shadowdistant") l.kind = K::Distant;
+  else if (name == "pointlight" || name == "shadowpoint") l.kind = K::Point;
+  else if (name == "spotlight" || name == "shadowspot") l.kind = K::Spot;
   else {
     Warn(r.line, "light " + name, "LightSource: unknown light shader " + Shown(name) + ": skipped");
     return true;
@@ -224,7 +229,20 @@ bool RibParser::LightSource(const Request& r) {
     else if (p.name == "coneangle" && l.kind == K::Spot) ok = ParamNumbers(r, p, 1, &l.coneAngle);
     else if (p.name == "conedeltaangle" && l.kind == K::Spot) ok = ParamNumbers(r, p, 1, &l.coneDelta);
     else if (p.name == "beamdistribution" && l.kind == K::Spot) ok = ParamNumbers(r, p, 1, &l.beamDistribution);
-    else IgnoreParam(r, p);
+    else if (shadowing && (p.name == "shadowname" || (name == "shadowpoint" && p.name.size() == 4 && p.name[0] == 's' &&
+                                                       p.name[1] == 'f'))) {
+      // shadowpoint: sfpx sfnx sfpy sfny sfpz sfnz, the six faces of a cube about it.
+      std::string map;
+      ok = ParamString(r, p, &map);
+      if (ok && !map.empty()) l.shadowNames.push_back(map);
+    } else if (shadowing && p.name == "bias") ok = ParamNumbers(r, p, 1, &l.shadowBias);
+    else if (shadowing && p.name == "blur") ok = ParamNumbers(r, p, 1, &l.shadowBlur);
+    else if (shadowing && p.name == "samples") {
+      double samples = 16;
+      ok = ParamNumbers(r, p, 1, &samples);
+      // Total samples, as the shaders take them: a square grid of about as many.
+      l.shadowSamples = std::clamp(static_cast<int>(std::lround(std::sqrt(std::max(samples, 1.0)))), 1, 16);
+    } else IgnoreParam(r, p);
     if (!ok) return false;
   }
   if ((l.kind == K::Distant || l.kind == K::Spot) && l.from == l.to)
@@ -234,7 +252,18 @@ bool RibParser::LightSource(const Request& r) {
   // world space there).
   l.from = (attr_.transform * l.from.homogeneous()).head<3>();
   l.to = (attr_.transform * l.to.homogeneous()).head<3>();
+  if (!(l.shadowBias >= 0.0) || !(l.shadowBlur >= 0.0) || !std::isfinite(l.shadowBias) || !std::isfinite(l.shadowBlur))
+    return Fail(r.line, "LightSource: \"bias\" and \"blur\" are not negative");
   scene_.lights.push_back(l);
+  return true;
+}
+
+bool RibParser::MakeShadow(const Request& r) {
+  // MakeShadow picturename texturename: run before the frame renders (a depth map of an
+  // earlier frame becomes a shadow texture).
+  std::string in, out;
+  if (!StringArg(r, 0, &in) || !StringArg(r, 1, &out)) return false;
+  scene_.makeShadows.push_back({in, out, file_, r.line});
   return true;
 }
 

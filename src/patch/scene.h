@@ -38,6 +38,20 @@ struct SceneLight {
   Vec3 from = Vec3(0, 0, 0), to = Vec3(0, 0, 1);  // world space
   double coneAngle = 0.0, coneDelta = 0.0;        // spot: radians
   double beamDistribution = 2.0;                   // spot: cosine exponent
+  // Shadow maps (shadowspot, shadowdistant: one; shadowpoint: its six faces), looked up
+  // with the depth bias (world units), the blur (a fraction of the map's width) and
+  // samples x samples points; "" where not given.
+  std::vector<std::string> shadowNames;
+  double shadowBias = 0.05, shadowBlur = 0.0;
+  int shadowSamples = 4;
+  std::string file;  // where the light was declared, for messages
+  int line = 0;
+};
+
+// MakeShadow: a shadow texture made of a depth map before the frame is rendered.
+struct SceneMakeShadow {
+  std::string input, output;
+  std::string file;
   int line = 0;
 };
 
@@ -74,6 +88,7 @@ struct Scene {
   std::vector<SceneLight> lights;        // empty: the renderer's default lights
   SceneImage image;
   std::vector<std::string> warnings;     // statements read and skipped, file:line: what
+  std::vector<SceneMakeShadow> makeShadows;  // in the order read, to run before rendering
   std::vector<SceneCage> cages;
 
   // A conservative world-space box of the whole scene.

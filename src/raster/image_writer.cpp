@@ -113,7 +113,7 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
 }
 
 std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::OpenDepthMap(const std::string& path, int width,
-                                                                                  int height) {
+                                                                                  int height, const ShadowCamera& camera) {
   auto impl = std::make_unique<Impl>();
   impl->target = path;
   impl->width = width;
@@ -129,6 +129,13 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::OpenDepthMa
   OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
   spec.channelnames = {"Z"};
   spec.z_channel = 0;
+  // As RenderMan keeps them, for row vectors: the transposes.
+  for (const auto& [name, m] : {std::pair{"worldtocamera", &camera.worldToCamera}, std::pair{"worldtoscreen", &camera.worldToScreen}}) {
+    float rows[16];
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j) rows[4 * i + j] = static_cast<float>((*m)(j, i));
+    spec.attribute(name, OIIO::TypeMatrix, rows);
+  }
   if (!impl->out->open(impl->temp.string(), spec)) return path + ": cannot write: " + impl->out->geterror();
   return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
 }

@@ -9,6 +9,7 @@
 #include <variant>
 
 #include "raster/scanline_renderer.h"
+#include "raster/shadow_map.h"
 
 namespace patchscan::raster {
 
@@ -36,8 +37,9 @@ class ImageWriter final : public RowSink {
   // A depth map (RenderMan's "zfile" and "shadow" displays): one float channel Z, the eye
   // distance along the view axis of the nearest surface (the largest float where none),
   // written as TIFF whatever `path`'s extension.
+  // The light camera's matrices go with it (raster/shadow_map.h), so that it is a shadow map.
   static std::variant<std::unique_ptr<ImageWriter>, std::string> OpenDepthMap(const std::string& path, int width,
-                                                                               int height);
+                                                                               int height, const ShadowCamera& camera);
   ~ImageWriter() override;
   // Whether `path` names a format Open takes (with `aovs`, an .exr): the message if not. A
   // refusal here is the user's choice of name; a failure of Open after it is the file system's.

@@ -63,6 +63,13 @@ bool LightAt(const Light& light, const Vec3& p, Vec3* l, Rgb* cl) {
   return true;
 }
 
+// The share of the light that the light's shadow maps let through to p.
+double Unshadowed(const Light& light, const Vec3& p) {
+  for (const ShadowMap* map : light.shadows)
+    if (map->Holds(p)) return map->Visibility(p, light.shadowBias, light.shadowBlur, light.shadowSamples);
+  return 1.0;
+}
+
 }  // namespace
 
 Rgb Shade(const Vec3& p, const Vec3& n, const Rgb& base, const Vec3& eye, const Material& m,
@@ -84,6 +91,11 @@ Rgb Shade(const Vec3& p, const Vec3& n, const Rgb& base, const Vec3& eye, const 
     if (!LightAt(light, p, &l, &cl)) continue;
     const double ndotl = nn.dot(l);
     if (ndotl <= 0.0) continue;
+    if (!light.shadows.empty()) {
+      const double lit = Unshadowed(light, p);
+      if (lit <= 0.0) continue;
+      cl *= lit;
+    }
     diffuse += ndotl * cl;
     if (renderMan) {
       const Vec3 h = (l + v).normalized();

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "raster/mesh.h"
+#include "raster/shadow_map.h"
 #include "raster/texture.h"
 
 namespace patchscan::raster {
@@ -29,6 +30,11 @@ struct Light {
   // half-angle and of that less its soft edge, and the cosine exponent of the beam.
   Vec3 axis = Vec3(0, 0, 1);
   double cosOutside = 0.0, cosInside = 0.0, beamDistribution = 2.0;
+  // Shadows (RenderMan's shadowspot, shadowdistant, shadowpoint): the maps, not owned; a
+  // point is looked up in the first whose view holds it (a point light's six faces).
+  std::vector<const ShadowMap*> shadows;
+  double shadowBias = 0.0, shadowBlur = 0.0;
+  int shadowSamples = 1;
 };
 
 struct Material {

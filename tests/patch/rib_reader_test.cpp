@@ -629,7 +629,7 @@ TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
   const Scene s = Parse(
       "Option \"searchpath\" \"shader\" [\"@\"]\nHider \"hidden\"\nDeclare \"foo\" \"float\"\n" +
       World("Attribute \"identifier\" \"name\" [\"a\"]\nAttribute \"visibility\" \"int camera\" [1]\n"
-            "Displacement \"bumpy\"\nMakeShadow \"a\" \"b\"\nPolygon \"P\" [0 0 0 1 0 0 0 1 0]\n"
+            "Displacement \"bumpy\"\nMakeTexture \"a\" \"b\"\nPolygon \"P\" [0 0 0 1 0 0 0 1 0]\n"
             "FooBar 1 2 3\nSphere 1 -1 1 360 \"Cs\" [1 0 0]\n"
             "Points \"P\" [0 0 0]\nBlobby 0 [] [] []"));
   EXPECT_EQ(s.surfaces.size(), 1u);
@@ -640,7 +640,7 @@ TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
       "t.rib:5: Attribute 'identifier' is not supported here: skipped",
       "t.rib:6: Attribute 'visibility' is not supported here: skipped",
       "t.rib:7: Displacement is not supported here: skipped",
-      "t.rib:8: MakeShadow is not supported here: skipped",
+      "t.rib:8: MakeTexture is not supported here: skipped",
       "t.rib:9: Polygon is not supported here: skipped",
       "t.rib:10: unknown request 'FooBar': skipped",
       "t.rib:11: Sphere: parameter \"Cs\" is not supported here: ignored",

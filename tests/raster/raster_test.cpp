@@ -12,6 +12,7 @@
 #include "raster/image_writer.h"
 #include "raster/srgb.h"
 #include "raster/scanline_renderer.h"
+#include "raster/shadow_map.h"
 #include "raster/triangle_setup.h"
 
 #include <unistd.h>
@@ -700,6 +701,32 @@ TEST(ImageWriter, AllOrNothing) {
   auto bad = ImageWriter::Open((dir / "out.xyz").string(), 8, 4);
   EXPECT_NE(std::get<std::string>(bad).find("unknown image format '.xyz'"), std::string::npos);
   std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace patchscan::raster
+
+namespace patchscan::raster {
+namespace {
+
+// A 2 x 2 depth map seen through a camera whose screen is world (x, y) and whose depth is
+// world z: three texels far (5), the lower right near (1).
+TEST(ShadowMap, PercentageCloserFiltering) {
+  ShadowCamera c;
+  c.worldToScreen = Mat4::Identity();
+  c.worldToScreen(2, 2) = 0.0;  // screen depth unused
+  const ShadowMap map(2, 2, {5, 5, 5, 1}, c);
+  constexpr double kBias = 0.01;
+  EXPECT_EQ(map.Visibility(Vec3(-0.5, 0.5, 3.0), kBias, 0.0, 1), 1.0);  // upper left: in front of 5
+  EXPECT_EQ(map.Visibility(Vec3(0.5, -0.5, 3.0), kBias, 0.0, 1), 0.0);  // lower right: behind 1
+  EXPECT_EQ(map.Visibility(Vec3(0.5, -0.5, 1.0), kBias, 0.0, 1), 1.0);  // on the occluder itself: the bias
+  // Blurred over the whole map with 2 x 2 samples: one texel of four shadows.
+  EXPECT_EQ(map.Visibility(Vec3(0.0, 0.0, 3.0), kBias, 1.0, 2), 0.75);
+  // Outside the map, or behind the light: lit.
+  EXPECT_EQ(map.Visibility(Vec3(3.0, 0.0, 3.0), kBias, 0.0, 1), 1.0);
+  EXPECT_EQ(map.Visibility(Vec3(0.5, -0.5, -3.0), kBias, 0.0, 1), 1.0);
+  EXPECT_TRUE(map.Holds(Vec3(0.5, -0.5, 3.0)));
+  EXPECT_FALSE(map.Holds(Vec3(1.5, -0.5, 3.0)));
 }
 
 }  // namespace

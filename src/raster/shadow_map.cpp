@@ -1,0 +1,88 @@
+#include "raster/shadow_map.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+
+namespace patchscan::raster {
+namespace {
+
+// OpenImageIO keeps matrices as RenderMan does, for row vectors: the transpose of ours.
+bool ReadMatrix(const OIIO::ImageSpec& spec, const char* name, Mat4* out) {
+  const OIIO::ParamValue* p = spec.find_attribute(name, OIIO::TypeMatrix);
+  if (!p) return false;
+  const float* m = static_cast<const float*>(p->data());
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) (*out)(j, i) = m[4 * i + j];
+  return true;
+}
+
+}  // namespace
+
+std::variant<std::unique_ptr<ShadowMap>, std::string> ShadowMap::Load(const std::string& path) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) return path + ": cannot read the shadow map: " + OIIO::geterror();
+  const OIIO::ImageSpec spec = in->spec();
+  ShadowCamera camera;
+  if (!ReadMatrix(spec, "worldtocamera", &camera.worldToCamera) || !ReadMatrix(spec, "worldtoscreen", &camera.worldToScreen))
+    return path + ": not a shadow map (no worldtocamera and worldtoscreen matrices)";
+  if (spec.width <= 0 || spec.height <= 0 || static_cast<long long>(spec.width) * spec.height > (1LL << 28))
+    return path + ": a shadow map of " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " texels is not supported";
+  std::vector<float> depth(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height));
+  if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, depth.data()))
+    return path + ": cannot read the shadow map: " + in->geterror();
+  return std::make_unique<ShadowMap>(spec.width, spec.height, std::move(depth), camera);
+}
+
+std::optional<std::string> MakeShadowTexture(const std::string& input, const std::string& output) {
+  OIIO::ImageBuf in(input);
+  if (!in.read(0, 0, true, OIIO::TypeDesc::FLOAT)) return input + ": cannot read the depth map: " + in.geterror();
+  Mat4 unused;
+  if (!ReadMatrix(in.spec(), "worldtocamera", &unused) || !ReadMatrix(in.spec(), "worldtoscreen", &unused))
+    return input + ": not a depth map (no worldtocamera and worldtoscreen matrices)";
+  OIIO::ImageSpec config;
+  config.attribute("maketx:fileformatname", "tiff");
+  if (!OIIO::ImageBufAlgo::make_texture(OIIO::ImageBufAlgo::MakeTxShadow, in, output, config))
+    return output + ": cannot make the shadow texture: " + OIIO::geterror();
+  return std::nullopt;
+}
+
+ShadowMap::ShadowMap(int width, int height, std::vector<float> depth, const ShadowCamera& camera)
+    : width_(width), height_(height), depth_(std::move(depth)), camera_(camera) {}
+
+bool ShadowMap::Holds(const Vec3& p) const {
+  const Vec4 s = camera_.worldToScreen * p.homogeneous();
+  if (!(s.w() > 0.0) || !((camera_.worldToCamera * p.homogeneous()).z() > 0.0)) return false;
+  return std::abs(s.x() / s.w()) <= 1.0 && std::abs(s.y() / s.w()) <= 1.0;
+}
+
+double ShadowMap::Visibility(const Vec3& p, double bias, double blur, int samples) const {
+  const Vec4 s = camera_.worldToScreen * p.homogeneous();
+  const double z = (camera_.worldToCamera * p.homogeneous()).z();
+  if (!(s.w() > 0.0) || !(z > 0.0)) return 1.0;
+  // Texel coordinates (continuous, texel centres at half-integers), y down.
+  const double tx = (s.x() / s.w() + 1.0) * 0.5 * width_, ty = (1.0 - s.y() / s.w()) * 0.5 * height_;
+  const double half = 0.5 * std::max(blur * width_, 1.0);
+  const int n = std::max(samples, 1);
+  int lit = 0, total = 0;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      // A regular grid over the window (deterministic: the same pixels every render).
+      const double x = tx - half + (i + 0.5) * (2.0 * half / n), y = ty - half + (j + 0.5) * (2.0 * half / n);
+      const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
+      ++total;
+      if (ix < 0 || iy < 0 || ix >= width_ || iy >= height_) {
+        ++lit;
+        continue;
+      }
+      lit += z - bias <= depth_[static_cast<std::size_t>(iy) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(ix)];
+    }
+  return static_cast<double>(lit) / total;
+}
+
+}  // namespace patchscan::raster
