@@ -81,8 +81,11 @@ void Lights(std::ostream& out, const std::vector<SceneLight>& lights) {
   int handle = 1;
   for (const SceneLight& l : lights) {
     using K = SceneLight::Kind;
-    const char* name = l.kind == K::Ambient ? "ambientlight" : l.kind == K::Distant ? "distantlight"
-                       : l.kind == K::Point ? "pointlight" : "spotlight";
+    const bool shadows = !l.shadowNames.empty();
+    const char* name = l.kind == K::Ambient   ? "ambientlight"
+                       : l.kind == K::Distant ? (shadows ? "shadowdistant" : "distantlight")
+                       : l.kind == K::Point   ? (shadows ? "shadowpoint" : "pointlight")
+                                              : (shadows ? "shadowspot" : "spotlight");
     out << "LightSource \"" << name << "\" " << handle++ << " \"intensity\" [1] \"lightcolor\" ";
     Triple(out, l.colour);
     if (l.kind != K::Ambient) {
@@ -96,6 +99,14 @@ void Lights(std::ostream& out, const std::vector<SceneLight>& lights) {
     if (l.kind == K::Spot)
       out << " \"coneangle\" [" << l.coneAngle << "] \"conedeltaangle\" [" << l.coneDelta << "] \"beamdistribution\" ["
           << l.beamDistribution << ']';
+    if (shadows) {
+      // A point light's six maps by their faces' names, another light's one map.
+      static const char* faces[] = {"sfpx", "sfnx", "sfpy", "sfny", "sfpz", "sfnz"};
+      for (std::size_t k = 0; k < l.shadowNames.size() && k < 6; ++k)
+        out << " \"" << (l.kind == K::Point ? faces[k] : "shadowname") << "\" [\"" << l.shadowNames[k] << "\"]";
+      out << " \"bias\" [" << l.shadowBias << "] \"blur\" [" << l.shadowBlur << "] \"samples\" ["
+          << l.shadowSamples * l.shadowSamples << ']';
+    }
     out << '\n';
   }
 }
