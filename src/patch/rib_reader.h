@@ -1,24 +1,29 @@
-// Reader for RenderMan Interface Bytestream scenes (.rib): the subset of the RenderMan
-// Interface Specification 3.2 that describes parametric surfaces, their camera, lights and
-// materials. Supported requests:
-//   structure   FrameBegin/End (one frame is read: the first, or LoadOptions::frame),
-//               WorldBegin/End, AttributeBegin/End, TransformBegin/End, ReadArchive
-//               (paths relative to the including file)
-//   camera      Format, Projection "perspective" ("fov"), ScreenWindow, Clipping,
-//               PixelSamples, Display, and the transformations before WorldBegin (the
-//               world-to-camera transformation, camera space left-handed)
+// Reader for RenderMan Interface Bytestream scenes (.rib, and gzip-compressed .rib.gz): the
+// subset of the RenderMan Interface Specification 3.2 that describes parametric surfaces,
+// their camera, lights and materials. Supported requests:
+//   structure   FrameBegin/End (one frame is read: the first, or LoadOptions::frame;
+//               RibFrames lists them), WorldBegin/End, AttributeBegin/End,
+//               TransformBegin/End, ReadArchive (paths relative to the including file),
+//               Procedural "DelayedReadArchive", ObjectBegin/End and ObjectInstance
+//   camera      Format, Projection "perspective" ("fov") and "orthographic", ScreenWindow,
+//               CropWindow, Clipping, PixelSamples, Display (and its type), and the
+//               transformations before WorldBegin (the world-to-camera transformation,
+//               camera space left-handed)
 //   transforms  Identity, Transform, ConcatTransform, Translate, Rotate, Scale,
 //               Orientation, ReverseOrientation, Sides
 //   geometry    Basis (by name or by matrix, with step), Patch "bilinear"/"bicubic" and
-//               PatchMesh (periodic and nonperiodic) with "P", Sphere, Cylinder, Cone,
-//               Paraboloid, Hyperboloid, Disk, Torus, Geometry "teapot"
+//               PatchMesh (periodic and nonperiodic) with "P", "Pw" or "Pz", NuPatch with
+//               "P" or "Pw", TrimCurve and Attribute "trimcurve" "sense", SubdivisionMesh,
+//               Sphere, Cylinder, Cone, Paraboloid, Hyperboloid, Disk, Torus,
+//               Geometry "teapot"
 //   appearance  Color, Opacity, Surface "constant"/"matte"/"plastic"/"metal"/
 //               "paintedplastic", LightSource "ambientlight"/"distantlight"/
-//               "pointlight"/"spotlight"
-// Every other request is read and skipped with one warning per kind naming file:line.
-// Malformed input (unbalanced blocks, wrong argument counts or array lengths, unknown
-// bases, truncated files, bad numbers) is an error naming file:line. Inside WorldBegin a
-// Transform sets the object-to-world transformation.
+//               "pointlight"/"spotlight" and "shadowspot"/"shadowdistant"/"shadowpoint",
+//               MakeShadow
+// Every other request is read and skipped with one warning per kind naming file:line and
+// counting how often it came. Malformed input (unbalanced blocks, wrong argument counts or
+// array lengths, unknown bases, truncated files, bad numbers) is an error naming
+// file:line. Inside WorldBegin a Transform sets the object-to-world transformation.
 #pragma once
 
 #include <string>
