@@ -74,12 +74,13 @@ double ShadowMap::Visibility(const Vec3& p, double bias, double blur, int sample
     for (int i = 0; i < n; ++i) {
       // A regular grid over the window (deterministic: the same pixels every render).
       const double x = tx - half + (i + 0.5) * (2.0 * half / n), y = ty - half + (j + 0.5) * (2.0 * half / n);
-      const int ix = static_cast<int>(std::floor(x)), iy = static_cast<int>(std::floor(y));
       ++total;
-      if (ix < 0 || iy < 0 || ix >= width_ || iy >= height_) {
+      // Outside the map (compared before the conversion to int, which a far point would overflow).
+      if (!(x >= 0.0 && y >= 0.0 && x < width_ && y < height_)) {
         ++lit;
         continue;
       }
+      const int ix = static_cast<int>(x), iy = static_cast<int>(y);
       lit += z - bias <= depth_[static_cast<std::size_t>(iy) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(ix)];
     }
   return static_cast<double>(lit) / total;

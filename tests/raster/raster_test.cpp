@@ -724,6 +724,7 @@ TEST(ShadowMap, PercentageCloserFiltering) {
   EXPECT_EQ(map.Visibility(Vec3(0.0, 0.0, 3.0), kBias, 1.0, 2), 0.75);
   // Outside the map, or behind the light: lit.
   EXPECT_EQ(map.Visibility(Vec3(3.0, 0.0, 3.0), kBias, 0.0, 1), 1.0);
+  EXPECT_EQ(map.Visibility(Vec3(1e300, -1e300, 3.0), kBias, 0.0, 1), 1.0);  // no int overflow
   EXPECT_EQ(map.Visibility(Vec3(0.5, -0.5, -3.0), kBias, 0.0, 1), 1.0);
   EXPECT_TRUE(map.Holds(Vec3(0.5, -0.5, 3.0)));
   EXPECT_FALSE(map.Holds(Vec3(1.5, -0.5, 3.0)));
