@@ -101,6 +101,18 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
         << n.holes << " holes; " << n.surfaces << " surfaces\n";
   }
 
+  // Polygons: the requests, their corners and the triangles they became.
+  if (!scene.polygons.empty()) {
+    std::size_t corners = 0, triangles = 0;
+    for (const ScenePolygons& p : scene.polygons) {
+      corners += p.mesh.vertices.size();
+      triangles += p.mesh.triangles.size();
+    }
+    out << "polygons: " << scene.polygons.size() << (scene.polygons.size() == 1 ? " request, " : " requests, ")
+        << corners << " corners, " << triangles << " triangles (surface ids " << scene.surfaces.size() + 1 << " to "
+        << scene.Ids() << ")\n";
+  }
+
   // Trimmed NURBS pieces, with their trim loops and segments (one set per TrimCurve).
   std::set<const TrimLoops*> trims;
   std::size_t trimmed = 0;

@@ -21,6 +21,7 @@
 #include "raster/image_writer.h"
 #include "xscan/exact_scan.h"
 #include "xscan/partitioned_scan.h"
+#include "xscan/polygon_feed.h"
 #include "xscan/overlay.h"
 #include "xscan/tess_feed.h"
 
@@ -71,7 +72,9 @@ std::optional<raster::TriangleMesh> TessellatedMesh(const RenderOptions& o, cons
                               [] { return gInterrupted != 0; });
   if (!tess) return std::nullopt;
   WeldBoundaryVertices(&*tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
-  return ToRasterMesh(*tess, camera);
+  raster::TriangleMesh mesh = ToRasterMesh(*tess, camera);
+  AppendPolygonTriangles(scene.polygons, camera, static_cast<std::uint32_t>(scene.surfaces.size()), &mesh);
+  return mesh;
 }
 
 }  // namespace
@@ -265,9 +268,15 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   // Step 2: the front end: the direct scan, or the tessellated mesh.
   const int threads = o.threads > 0 ? o.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   std::unique_ptr<PartitionedScan> scan;
+  std::unique_ptr<PolygonFeed> polygons;  // a direct render's polygons, with its rows
   std::optional<raster::TriangleMesh> mesh;
   if (Direct(o.mode)) {
     scan = DirectScan(o, scene, camera, aa, threads);
+    if (!scene.polygons.empty()) {
+      raster::TriangleMesh triangles;
+      AppendPolygonTriangles(scene.polygons, camera, static_cast<std::uint32_t>(scene.surfaces.size()), &triangles);
+      polygons = std::make_unique<PolygonFeed>(*scan, std::move(triangles));
+    }
   } else if (!(mesh = TessellatedMesh(o, scene, camera, threads))) {
     err << "patchscan: interrupted; no image written\n";
     return kExitInterrupted;
@@ -317,7 +326,8 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   // Step 4: render the rows, streaming each to the image; then commit it.
   const bool showProgress = !o.quiet && (o.progress || isatty(STDERR_FILENO) != 0);
   ProgressSink progress(*out, camera.height, err, showProgress);
-  auto counted = scan ? raster::RenderFragments(*scan, backEnd.settings, progress)
+  raster::FragmentSource* source = polygons ? static_cast<raster::FragmentSource*>(polygons.get()) : scan.get();
+  auto counted = scan ? raster::RenderFragments(*source, backEnd.settings, progress)
                       : raster::RenderMesh(*mesh, backEnd.settings, progress);
   if (counted && overlay && !overlay->Finish()) counted.reset();
   if (counted && async && !async->Finish()) counted.reset();
@@ -341,7 +351,7 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
           << " kind" << (scene.warnings.size() == 1 ? " of request was" : "s of request were")
           << " skipped (above): what the scene shows may be among them\n";
     else
-      err << "patchscan: warning: the image is empty: no surface covers a sample (" << scene.surfaces.size()
+      err << "patchscan: warning: the image is empty: no surface covers a sample (" << scene.Ids()
           << " surfaces; is the camera looking at them?)\n";
   }
   const auto tCommit = Clock::now();

@@ -21,6 +21,10 @@ void RibParser::AddSurface(const Request& r, Shape shape) {
   scene_.surfaces.push_back(std::move(s));
   scene_.sourceLines.push_back(r.line);
   scene_.sourceFiles.push_back(file_);
+  scene_.appearanceOf.push_back(AppearanceIndex());
+}
+
+std::uint32_t RibParser::AppearanceIndex() {
   Appearance a = attr_.appearance;
   // RenderMan Interface 3.2, "Orientation": the normal is flipped where the orientation
   // differs from the handedness of the current coordinate system (left-handed unless
@@ -29,15 +33,11 @@ void RibParser::AddSurface(const Request& r, Shape shape) {
   a.reversed = attr_.insideOrientation != mirrored;
   // Distinct appearances, found by hash: a scene may give each of its surfaces its own.
   std::vector<std::uint32_t>& same = appearanceIndex_[HashOf(a)];
-  std::uint32_t index = 0;
   for (const std::uint32_t k : same)
-    if (scene_.appearances[k] == a) index = k + 1;
-  if (index == 0) {
-    same.push_back(static_cast<std::uint32_t>(scene_.appearances.size()));
-    scene_.appearances.push_back(a);
-    index = static_cast<std::uint32_t>(scene_.appearances.size());
-  }
-  scene_.appearanceOf.push_back(index - 1);
+    if (scene_.appearances[k] == a) return k;
+  same.push_back(static_cast<std::uint32_t>(scene_.appearances.size()));
+  scene_.appearances.push_back(a);
+  return same.back();
 }
 
 std::size_t RibParser::HashOf(const Appearance& a) {

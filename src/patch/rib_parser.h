@@ -27,6 +27,9 @@ constexpr int kMaxArchiveDepth = 16;
 // ObjectInstance replays at most this many requests in all: objects instancing objects
 // multiply, and ten of ten of ... sixteen deep would never end.
 constexpr long kMaxReplayedRequests = 1'000'000;
+// The largest count or index a polygon request may give: far beyond any scene, and small
+// enough that sums of counts cannot overflow.
+constexpr long kMaxPolygonCount = 1'000'000'000;
 // RenderMan's default field of view (RenderMan Interface 3.2, "Projection").
 constexpr double kRibDefaultFovDeg = 90.0;
 // The light and shader parameter defaults of the standard shaders (RenderMan Interface
@@ -101,6 +104,7 @@ class RibParser {
   struct Param {
     std::string name;
     const Value* value;
+    std::string declared;  // the name as written, with its inline declaration if any
   };
   bool Params(const Request& r, size_t first, std::vector<Param>* out);
   bool ParamNumbers(const Request& r, const Param& p, size_t count, double* out);
@@ -174,6 +178,8 @@ class RibParser {
   // ---- geometry ----
   bool InWorld(const Request& r);
   void AddSurface(const Request& r, Shape shape);
+  // The index into the scene's appearances of the current appearance (added if new).
+  std::uint32_t AppearanceIndex();
   static std::size_t HashOf(const Appearance& a);
   bool BasisRequest(const Request& r);
   // The "P" or "Pw" of a patch's parameter list: exactly `count` points into hpts_
@@ -201,6 +207,23 @@ class RibParser {
   // interpolateboundary) into `mesh`; unknown tags are warned about and ignored.
   bool SubdivTags(const Value& tags, const Value& nargs, const Value& ints, const Value& floats,
                   SubdivMesh* mesh);
+  // Polygon, GeneralPolygon, PointsPolygons, PointsGeneralPolygons (RenderMan Interface
+  // 3.2, "Polygons"; rib_polygons.cpp): faces of loops of indices into "P", the first loop
+  // the outline and the others holes, with "N", "Cs" and "st" of any storage class.
+  bool Polygon(const Request& r);
+  bool GeneralPolygon(const Request& r);
+  bool PointsPolygons(const Request& r);
+  bool PointsGeneralPolygons(const Request& r);
+  struct PolygonFaces {
+    std::vector<std::size_t> loopsOfFace;  // per face, its loops
+    std::vector<std::size_t> pointsOfLoop;   // per loop, its points
+    std::vector<std::uint32_t> indices;      // per corner, into "P"; empty: 0, 1, 2, ...
+  };
+  // The faces' parameter list from argument `first` on: points, primitive variables,
+  // triangulation, appended to the scene as one ScenePolygons.
+  bool AddPolygons(const Request& r, std::size_t first, const PolygonFaces& faces);
+  // An array argument of whole numbers from `lo` to `hi`.
+  bool Counts(const Request& r, std::size_t k, const char* what, long lo, long hi, std::vector<std::size_t>* out);
   bool Quadric(const Request& r);
   bool Geometry(const Request& r);
 
@@ -216,6 +239,7 @@ class RibParser {
   std::vector<Vec4> hpts_;
   bool rational_ = false;
   std::unordered_map<std::size_t, std::vector<std::uint32_t>> appearanceIndex_;
+  std::vector<std::uint32_t> polygonAppearance_;  // per ScenePolygons
   Mat4 cameraFromWorld_ = Mat4::Identity();
   bool sawWorld_ = false, skippingWorld_ = false, skippingFrame_ = false, done_ = false;
   struct Recorded {

@@ -29,8 +29,7 @@ const std::set<std::string, std::less<>>& SkippedRequests() {
       "Shutter", "ColorSamples", "RelativeDetail", "TextureCoordinates", "Illuminate",
       "AreaLightSource", "CoordinateSystem", "CoordSysTransform", "ScopedCoordinateSystem",
       "Perspective", "Skew", "Deformation", "SolidBegin", "SolidEnd", "MotionBegin",
-      "MotionEnd", "Polygon", "GeneralPolygon", "PointsPolygons",
-      "PointsGeneralPolygons",
+      "MotionEnd",
       "HierarchicalSubdivisionMesh", "Points", "Curves", "Blobby", "Version",
       "ErrorHandler", "System", "IfBegin", "IfEnd", "Else", "ElseIf", "Resource",
       "ResourceBegin", "ResourceEnd", "Camera", "DisplayChannel", "ArchiveBegin", "ArchiveEnd",
@@ -57,6 +56,8 @@ std::variant<Scene, SourceError> RibParser::Run(std::string_view text, const std
       return SourceError{name, 0, "no FrameBegin " + std::to_string(options_.frame) + " in the file"};
   }
   if (!sawWorld_) return SourceError{name, 0, "no WorldBegin: a RIB scene needs a world block"};
+  // Polygons take the surface ids after the surfaces'.
+  scene_.appearanceOf.insert(scene_.appearanceOf.end(), polygonAppearance_.begin(), polygonAppearance_.end());
   // Each kind is named once, at its first place, with how often it came.
   for (const auto& [kind, at] : warned_)
     if (at.second > 1) scene_.warnings[at.first] += " (" + std::to_string(at.second) + " times)";
@@ -122,6 +123,10 @@ const std::unordered_map<std::string_view, RibParser::Handler>& RibParser::Reque
       {"PatchMesh", &RibParser::PatchMesh},
       {"SubdivisionMesh", &RibParser::SubdivisionMesh},
       {"NuPatch", &RibParser::NuPatch},
+      {"Polygon", &RibParser::Polygon},
+      {"GeneralPolygon", &RibParser::GeneralPolygon},
+      {"PointsPolygons", &RibParser::PointsPolygons},
+      {"PointsGeneralPolygons", &RibParser::PointsGeneralPolygons},
       {"TrimCurve", &RibParser::TrimCurve},
       {"Attribute", &RibParser::AttributeRequest},
       {"Sphere", &RibParser::Quadric},
@@ -215,7 +220,7 @@ bool RibParser::Params(const Request& r, size_t first, std::vector<Param>* out) 
     while (!word.empty() && IsSpace(word.back())) word.remove_suffix(1);
     const size_t space = word.find_last_of(" \t");
     if (space != std::string_view::npos) word.remove_prefix(space + 1);
-    out->push_back({std::string(word), &r.args[k + 1]});
+    out->push_back({std::string(word), &r.args[k + 1], name.strings[0]});
   }
   return true;
 }

@@ -15,7 +15,9 @@
 //               PatchMesh (periodic and nonperiodic) with "P", "Pw" or "Pz", NuPatch with
 //               "P" or "Pw", TrimCurve and Attribute "trimcurve" "sense", SubdivisionMesh,
 //               Sphere, Cylinder, Cone, Paraboloid, Hyperboloid, Disk, Torus,
-//               Geometry "teapot"
+//               Geometry "teapot"; Polygon, GeneralPolygon, PointsPolygons and
+//               PointsGeneralPolygons with "P" or "Pw", "N", "Cs" and "st" of any storage
+//               class (rib_polygons.cpp), triangulated into the scene's polygons
 //   appearance  Color, Opacity, Surface "constant"/"matte"/"plastic"/"metal"/
 //               "paintedplastic", LightSource "ambientlight"/"distantlight"/
 //               "pointlight"/"spotlight" and "shadowspot"/"shadowdistant"/"shadowpoint",

@@ -195,6 +195,34 @@ void SubdivisionMesh(std::ostream& out, const SubdivMesh& m) {
   out << " ]\n";
 }
 
+// A polygon mesh as PointsPolygons of its triangles in world space, with the vertices
+// they use (renumbered in order) and their "N", "Cs" and "st" per point, so that it reads
+// back as the same triangles with the same attributes.
+void PolygonTriangles(std::ostream& out, const PolygonMesh& m) {
+  std::vector<std::int64_t> number(m.vertices.size(), -1);
+  std::vector<std::uint32_t> used;
+  for (const auto& t : m.triangles)
+    for (const std::uint32_t v : t)
+      if (number[v] < 0) {
+        number[v] = static_cast<std::int64_t>(used.size());
+        used.push_back(v);
+      }
+  out << "PointsPolygons [";
+  for (std::size_t k = 0; k < m.triangles.size(); ++k) out << (k ? " 3" : "3");
+  out << "]\n  [";
+  for (std::size_t k = 0; k < m.triangles.size(); ++k)
+    for (int c = 0; c < 3; ++c) out << (k || c ? " " : "") << number[m.triangles[k][c]];
+  out << "]\n  \"P\" [";
+  for (const std::uint32_t v : used) Point(out, m.vertices[v].position);
+  out << " ]\n  \"vertex normal N\" [";
+  for (const std::uint32_t v : used) Point(out, m.vertices[v].normal);
+  out << " ]\n  \"vertex color Cs\" [";
+  for (const std::uint32_t v : used) Point(out, m.vertices[v].colour);
+  out << " ]\n  \"vertex float[2] st\" [";
+  for (const std::uint32_t v : used) out << ' ' << m.vertices[v].st.x() << ' ' << m.vertices[v].st.y();
+  out << " ]\n";
+}
+
 }  // namespace
 
 std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Camera& camera,
@@ -282,6 +310,13 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
                            ") has no RIB form here: patches, NURBS, quadrics and subdivision meshes are written"};
     }
     if (placed || dressed) out << "AttributeEnd\n";
+  }
+  // Step 4: the polygons, in world space.
+  for (std::size_t k = 0; k < scene.polygons.size(); ++k) {
+    out << "AttributeBegin\n";
+    if (!scene.appearanceOf.empty()) Attributes(out, scene.appearances[scene.appearanceOf[scene.surfaces.size() + k]]);
+    PolygonTriangles(out, scene.polygons[k].mesh);
+    out << "AttributeEnd\n";
   }
   out << "WorldEnd\n";
   return out.str();

@@ -11,6 +11,8 @@ namespace patchscan {
 Bounds3 Scene::WorldBounds() const {
   Bounds3 b;
   for (const Surface& s : surfaces) b.Extend(patchscan::WorldBounds(s));
+  for (const ScenePolygons& p : polygons)
+    for (const PolygonVertex& v : p.mesh.vertices) b.Extend(v.position);
   return b;
 }
 

@@ -9,6 +9,7 @@
 #include <variant>
 #include <vector>
 
+#include "patch/polygon.h"
 #include "patch/source_error.h"
 #include "patch/surface.h"
 
@@ -78,6 +79,14 @@ struct SceneCage {
   SubdivCounts counts;
 };
 
+// The polygons of one request (Polygon, GeneralPolygon, PointsPolygons,
+// PointsGeneralPolygons), triangulated, in world space.
+struct ScenePolygons {
+  PolygonMesh mesh;
+  std::string file;
+  int line = 0;
+};
+
 struct Scene {
   std::string source;             // the file it was read from
   std::vector<Surface> surfaces;
@@ -90,6 +99,12 @@ struct Scene {
   std::vector<std::string> warnings;     // statements read and skipped, file:line: what
   std::vector<SceneMakeShadow> makeShadows;  // in the order read, to run before rendering
   std::vector<SceneCage> cages;
+  // Polygons come after the surfaces in the surface ids: polygons[k] is surface id
+  // surfaces.size() + k, and appearanceOf (when not empty) covers them after the surfaces.
+  std::vector<ScenePolygons> polygons;
+
+  // How many surface ids the scene has: its surfaces, then its polygon meshes.
+  std::size_t Ids() const { return surfaces.size() + polygons.size(); }
 
   // A conservative world-space box of the whole scene.
   Bounds3 WorldBounds() const;

@@ -18,6 +18,7 @@ struct Fragment {
   Vec2 uv;
   Vec2 duvdx, duvdy;   // change of uv per pixel in screen x and y (texture footprint)
   std::uint32_t surfaceId = 0;
+  Vec3 colour = Vec3::Ones();  // multiplies the surface's colour (a polygon's "Cs")
 };
 
 // The sample columns of one sample row: x = x0 + i dx, i in [0, n).

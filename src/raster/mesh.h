@@ -19,6 +19,7 @@ struct RasterVertex {
   Vec3 normal;    // world space, not necessarily unit
   Vec2 uv;
   double depth = 0.0;  // orthographic renders: distance along the view axis (W is 1)
+  Vec3 colour = Vec3::Ones();  // multiplies the surface's colour (a polygon's "Cs")
 };
 
 struct RasterTriangle {

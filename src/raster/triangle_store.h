@@ -70,7 +70,8 @@ inline Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, std::atomic
   const Material& m = s.MaterialOf(a.surfaceId);
   const auto base = SurfaceColour(m, a.uv, a.duvdx, a.duvdy);
   if (!base) *failed = true;
-  return Shade(a.position, a.normal, base.value_or(Rgb::Zero()), s.EyeFor(a.position), m, s.lights);
+  return Shade(a.position, a.normal, base.value_or(Rgb::Zero()).cwiseProduct(a.colour), s.EyeFor(a.position), m,
+               s.lights);
 }
 
 // Whether a point with normal n (any length) at p shows the front of material m to the eye.
@@ -139,6 +140,7 @@ class TriangleStore {
         f.position = at.v[k].position;
         f.normal = at.v[k].normal;
         f.uv = at.v[k].uv;
+        f.colour = at.v[k].colour;
         f.duvdx = f.duvdy = Vec2::Zero();
         f.surfaceId = surfaceId;
         at.vertexColour[k] = ShadeFragment(f, s_, &failed_);
@@ -277,6 +279,12 @@ class TriangleStore {
                    ? Vec3((v1.position - v0.position).cross(v2.position - v0.position))
                    : Vec3(a.b[0] * v0.normal + a.b[1] * v1.normal + a.b[2] * v2.normal);
     f.surfaceId = at.surfaceId;
+    // Vertex colours (a polygon's "Cs") interpolated where they differ: equal ones are
+    // taken as they are, so that a colour of 1 stays exactly 1.
+    if (v0.colour == v1.colour && v1.colour == v2.colour)
+      f.colour = v0.colour;
+    else
+      f.colour = a.b[0] * v0.colour + a.b[1] * v1.colour + a.b[2] * v2.colour;
     return a;
   }
 

@@ -620,6 +620,84 @@ TEST(Rib, ObjectInstancesReplayTheirObjectUnderTheCurrentState) {
   for (std::size_t k : {1u, 3u, 5u}) EXPECT_EQ(s.appearances[s.appearanceOf[k]].colour, Vec3(0, 0, 1)) << k;
 }
 
+// ---- polygons ----
+
+// The vertices of one polygon mesh, by position.
+const PolygonVertex* VertexAt(const ScenePolygons& p, const Vec3& at) {
+  for (const PolygonVertex& v : p.mesh.vertices)
+    if ((v.position - at).norm() < kPosTol) return &v;
+  return nullptr;
+}
+
+TEST(Rib, PolygonsOfEveryRequestAreTriangulatedInWorldSpace) {
+  const Scene s = Parse(World(
+      "Translate 10 0 0\n"
+      "Polygon \"P\" [0 0 0  2 0 0  2 1 0  0 1 0] \"Cs\" [1 0 0  0 1 0  0 0 1  1 1 1]\n"
+      "GeneralPolygon [4 3] \"P\" [0 0 0  4 0 0  4 4 0  0 4 0  1 1 0  1 2 0  2 1 0]\n"
+      "PointsPolygons [3 3] [0 1 2  0 2 3] \"P\" [0 0 1  1 0 1  1 1 1  0 1 1] \"uniform color Cs\" [1 0 0  0 0 1]\n"
+      "PointsGeneralPolygons [2] [4 3] [0 1 2 3 4 5 6] \"P\" [0 0 0  4 0 0  4 4 0  0 4 0  1 1 0  1 2 0  2 1 0] "
+      "\"st\" [0 0  1 0  1 1  0 1  0.25 0.25  0.25 0.5  0.5 0.25]"));
+  ASSERT_EQ(s.polygons.size(), 4u);
+  EXPECT_TRUE(s.surfaces.empty());
+  // One appearance id per request, after the surfaces'.
+  EXPECT_EQ(s.appearanceOf.size(), 4u);
+  EXPECT_EQ(s.Ids(), 4u);
+  EXPECT_EQ(s.polygons[0].line, 3);
+  EXPECT_EQ(s.polygons[0].file, "t.rib");
+  // A quad is two triangles; a square with a triangular hole 4 + 3 + 2 - 2 = 7.
+  EXPECT_EQ(s.polygons[0].mesh.triangles.size(), 2u);
+  EXPECT_EQ(s.polygons[1].mesh.triangles.size(), 7u);
+  EXPECT_EQ(s.polygons[2].mesh.triangles.size(), 2u);
+  EXPECT_EQ(s.polygons[3].mesh.triangles.size(), 7u);
+  // Positions in world space; "Cs" per point; the polygon's own normal, unit.
+  const PolygonVertex* v = VertexAt(s.polygons[0], Vec3(12, 1, 0));
+  ASSERT_NE(v, nullptr);
+  EXPECT_EQ(v->colour, Vec3(0, 0, 1));
+  EXPECT_NEAR(std::abs(v->normal.z()), 1.0, 1e-15);
+  // "uniform color Cs": per face, so the shared point 0 has a colour per face.
+  int red = 0, blue = 0;
+  for (const PolygonVertex& c : s.polygons[2].mesh.vertices) {
+    red += c.colour == Vec3(1, 0, 0);
+    blue += c.colour == Vec3(0, 0, 1);
+  }
+  EXPECT_EQ(red, 3);
+  EXPECT_EQ(blue, 3);
+  // "st" per point, and every triangle index in range.
+  v = VertexAt(s.polygons[3], Vec3(11, 2, 0));
+  ASSERT_NE(v, nullptr);
+  EXPECT_EQ(v->st, Vec2(0.25, 0.5));
+  for (const ScenePolygons& p : s.polygons)
+    for (const auto& t : p.mesh.triangles)
+      for (const std::uint32_t k : t) EXPECT_LT(k, p.mesh.vertices.size());
+  // The world box holds the polygons.
+  const Bounds3 b = s.WorldBounds();
+  EXPECT_EQ(b.lo, Vec3(10, 0, 0));
+  EXPECT_EQ(b.hi, Vec3(14, 4, 1));
+}
+
+TEST(Rib, PolygonNormalsFollowTheTransformAndFaceVaryingColours) {
+  // A scale that is not uniform: normals transform by the inverse transpose.
+  const Scene s = Parse(World(
+      "Scale 2 1 1\n"
+      "PointsPolygons [3] [0 1 2] \"P\" [0 0 0  1 0 0  0 1 0] \"N\" [1 0 1  1 0 1  1 0 1] "
+      "\"facevarying color Cs\" [1 0 0  0 1 0  0 0 1]"));
+  ASSERT_EQ(s.polygons.size(), 1u);
+  for (const PolygonVertex& v : s.polygons[0].mesh.vertices)
+    EXPECT_LT((v.normal - Vec3(0.5, 0, 1).normalized()).norm(), 1e-15);
+  const PolygonVertex* v = VertexAt(s.polygons[0], Vec3(2, 0, 0));
+  ASSERT_NE(v, nullptr);
+  EXPECT_EQ(v->colour, Vec3(0, 1, 0));
+}
+
+TEST(Rib, PolygonsInObjectsAndWithoutArea) {
+  const Scene s = Parse(World("ObjectBegin 1\nPolygon \"P\" [0 0 0 1 0 0 0 1 0]\nObjectEnd\n"
+                              "ObjectInstance 1\nTranslate 5 0 0\nObjectInstance 1\n"
+                              "Polygon \"P\" [0 0 0 1 0 0 2 0 0]"));
+  // The instances are two meshes; the polygon without area shows nothing and is dropped.
+  ASSERT_EQ(s.polygons.size(), 2u);
+  EXPECT_NE(VertexAt(s.polygons[1], Vec3(6, 0, 0)), nullptr);
+}
+
 TEST(Rib, SkippedKindsAreCounted) {
   const Scene s = Parse(World("Blobby 0 [] [] []\nSphere 1 -1 1 360\nBlobby 0 [] [] []\nBlobby 0 [] [] []"));
   EXPECT_EQ(s.warnings, std::vector<std::string>{"t.rib:2: Blobby is not supported here: skipped (3 times)"});
@@ -629,10 +707,11 @@ TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
   const Scene s = Parse(
       "Option \"searchpath\" \"shader\" [\"@\"]\nHider \"hidden\"\nDeclare \"foo\" \"float\"\n" +
       World("Attribute \"identifier\" \"name\" [\"a\"]\nAttribute \"visibility\" \"int camera\" [1]\n"
-            "Displacement \"bumpy\"\nMakeTexture \"a\" \"b\"\nPolygon \"P\" [0 0 0 1 0 0 0 1 0]\n"
+            "Displacement \"bumpy\"\nMakeTexture \"a\" \"b\"\nPolygon \"P\" [0 0 0 1 0 0 0 1 0] \"Os\" [1 1 1]\n"
             "FooBar 1 2 3\nSphere 1 -1 1 360 \"Cs\" [1 0 0]\n"
             "Points \"P\" [0 0 0]\nBlobby 0 [] [] []"));
   EXPECT_EQ(s.surfaces.size(), 1u);
+  EXPECT_EQ(s.polygons.size(), 1u);
   const std::vector<std::string> want = {
       "t.rib:1: Option is not supported here: skipped",
       "t.rib:2: Hider is not supported here: skipped",
@@ -641,7 +720,7 @@ TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
       "t.rib:6: Attribute 'visibility' is not supported here: skipped",
       "t.rib:7: Displacement is not supported here: skipped",
       "t.rib:8: MakeTexture is not supported here: skipped",
-      "t.rib:9: Polygon is not supported here: skipped",
+      "t.rib:9: Polygon: parameter \"Os\" is not supported here: ignored",
       "t.rib:10: unknown request 'FooBar': skipped",
       "t.rib:11: Sphere: parameter \"Cs\" is not supported here: ignored",
       "t.rib:12: Points is not supported here: skipped",
@@ -754,6 +833,24 @@ TEST(Rib, MalformedScenesAreAnsweredWithFileAndLine) {
       {"FrameBegin 1.5\nWorldBegin\nWorldEnd\nFrameEnd\n", "t.rib:1: FrameBegin: the frame number must be a whole number"},
       {"WorldBegin\nWorldBegin\n", "t.rib:2: WorldBegin inside WorldBegin at line 1"},
       {"ReadArchive \"no-such-file.rib\"\n", "t.rib:1: ReadArchive: no-such-file.rib: cannot open: No such file or directory"},
+      {World("Polygon \"P\" [0 0 0 1 0 0]"), "t.rib:2: Polygon: a polygon has at least 3 points"},
+      {World("Polygon \"P\" [0 0 0 1 0 0 0 1 0 1]"), "t.rib:2: Polygon: \"P\" expects 9 numbers (3 points), found 10"},
+      {World("Polygon \"N\" [0 0 1]"), "t.rib:2: Polygon: no \"P\""},
+      {World("GeneralPolygon [4 2] \"P\" [0 0 0]"),
+       "t.rib:2: GeneralPolygon: loop sizes are whole numbers from 3 to 1000000000, found '2.000000'"},
+      {World("PointsPolygons [3 3] [0 1 2] \"P\" [0 0 0 1 0 0 0 1 0]"),
+       "t.rib:2: PointsPolygons: the loop sizes add up to 6, but 3 vertex indices are given"},
+      {World("PointsPolygons [3] [0 1 5] \"P\" [0 0 0 1 0 0 0 1 0]"),
+       "t.rib:2: PointsPolygons: \"P\" expects 18 numbers (6 points), found 9"},
+      {World("PointsPolygons [3] [0 1 2] \"P\" [0 0 0 1 0 0 0 1 0] \"Cs\" [1 0]"),
+       "t.rib:2: PointsPolygons: \"Cs\" expects 3 numbers per point (9), per corner (9), per face (3) or 3 in all, found 2"},
+      {World("PointsPolygons [3] [0 1 2] \"P\" [0 0 0 1 0 0 0 1 0] \"facevarying float st\" [1 0]"),
+       "t.rib:2: PointsPolygons: \"st\" expects 2 numbers per point (6), per corner (6), per face (2) or 2 in all, found 2"},
+      {World("PointsGeneralPolygons [2] [3] [0 1 2] \"P\" [0 0 0 1 0 0 0 1 0]"),
+       "t.rib:2: PointsGeneralPolygons: the loop counts add up to more than the 1 loop sizes given"},
+      {World("PointsPolygons [3] \"P\" [0 0 0 1 0 0 0 1 0]"),
+       "t.rib:2: PointsPolygons: expected vertex indices (an array of whole numbers) as argument 2"},
+      {World("Polygon \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 0]"), "t.rib:2: Polygon: \"Pw\" weights must be positive"},
   };
   for (const auto& [text, want] : cases) EXPECT_EQ(Error(text), want) << text;
 }
@@ -778,7 +875,7 @@ TEST(RibFuzz, MutantsAreReadOrRefusedWithALocatedMessage) {
       "1e308", "-1e308", "1e-320", "nan", "inf", "-0", "0", "1", "99999999999", "10000000", "[", "]",
       "\"", "\"\"", "[]", "WorldBegin", "WorldEnd", "AttributeBegin", "AttributeEnd", "TransformEnd",
       "FrameBegin", "FrameEnd", "ObjectBegin", "ObjectEnd", "ObjectInstance 1", "\"periodic\"", "\"b-spline\"", "\"P\"",
-      "\"Pw\"", "NuPatch", "TrimCurve", "Sphere", "Torus", "PatchMesh", "Basis", "Rotate", "Scale", "ReadArchive", "\"teapot\"",
+      "\"Pw\"", "NuPatch", "TrimCurve", "Polygon", "PointsGeneralPolygons", "\"Cs\"", "\"facevarying float st\"", "Sphere", "Torus", "PatchMesh", "Basis", "Rotate", "Scale", "ReadArchive", "\"teapot\"",
       "#", "\n", "\xc3\xa9"};
   test::Mutator mutate(20261123, alphabet, tokens);
   long accepted = 0, refused = 0;
@@ -798,11 +895,16 @@ TEST(RibFuzz, MutantsAreReadOrRefusedWithALocatedMessage) {
     ++accepted;
     const Scene& s = std::get<Scene>(r);
     ASSERT_EQ(s.surfaces.size(), s.sourceLines.size());
-    ASSERT_EQ(s.surfaces.size(), s.appearanceOf.size());
+    ASSERT_EQ(s.Ids(), s.appearanceOf.size());
+    for (std::size_t i = 0; i < s.Ids(); ++i) ASSERT_LT(s.appearanceOf[i], s.appearances.size());
     for (std::size_t i = 0; i < s.surfaces.size(); ++i) {
-      ASSERT_LT(s.appearanceOf[i], s.appearances.size());
       ASSERT_GE(s.sourceLines[i], 1);
       ASSERT_LE(s.sourceLines[i], lines);
+    }
+    for (const ScenePolygons& p : s.polygons) {
+      ASSERT_LE(p.line, lines);
+      for (const auto& t : p.mesh.triangles)
+        for (const std::uint32_t v : t) ASSERT_LT(v, p.mesh.vertices.size());
     }
   }
   RecordProperty("mutants", std::to_string(budget));

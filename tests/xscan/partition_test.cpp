@@ -14,24 +14,13 @@
 #include "raster/scanline_renderer.h"
 #include "xscan/exact_scan.h"
 #include "xscan/partitioned_scan.h"
+#include "xscan/polygon_feed.h"
 #include "xscan/render_settings.h"
 
 namespace patchscan {
 namespace {
 
-// Keeps every channel of every row.
-class KeepRows final : public raster::RowSink {
- public:
-  explicit KeepRows(int width) : width_(width) {}
-  bool WriteRow(int, const float* pixels) override {
-    rows.insert(rows.end(), pixels, pixels + static_cast<std::size_t>(width_) * raster::kChannels);
-    return true;
-  }
-  std::vector<float> rows;
-
- private:
-  int width_;
-};
+using test::KeepRows;
 
 struct SceneCase {
   std::string name;
@@ -43,7 +32,8 @@ struct SceneCase {
 std::vector<SceneCase> Scenes() {
   std::vector<SceneCase> out;
   for (const char* file : {"teapot.bpt", "teacup.bpt", "teaspoon.bpt", "sphere.bpt", "quadrics.rib",
-                           "patchmesh.rib", "teapot_lit.rib", "cages.rib", "cube_tags.obj", "nurbs.rib", "trimmed.rib"}) {
+                           "patchmesh.rib", "teapot_lit.rib", "cages.rib", "cube_tags.obj", "nurbs.rib", "trimmed.rib",
+                           "polygons.rib"}) {
     auto loaded = LoadScene(std::string(PATCHSCAN_SURFACES_DIR) + "/" + file);
     EXPECT_TRUE(std::holds_alternative<Scene>(loaded)) << file;
     if (!std::holds_alternative<Scene>(loaded)) continue;
@@ -88,13 +78,18 @@ TEST_P(SameImageForAnyNumberOfWorkers, InEveryScene) {
     o.thetaSteps = m.thetaSteps;
     o.slabRows = m.slabRows;
     const raster::RenderSettings s = SettingsFor(c.camera, m.aa);
+    // The scene's polygons join every render's rows the same way.
+    raster::TriangleMesh polygons;
+    AppendPolygonTriangles(c.scene.polygons, c.camera, static_cast<std::uint32_t>(c.scene.surfaces.size()), &polygons);
     ExactScan alone(c.scene.surfaces, c.camera, o);
+    PolygonFeed aloneFed(alone, polygons);
     KeepRows want(c.camera.width);
-    ASSERT_TRUE(raster::RenderFragments(alone, s, want)) << c.name << ", " << m.name;
+    ASSERT_TRUE(raster::RenderFragments(aloneFed, s, want)) << c.name << ", " << m.name;
     for (const auto& [workers, threads] : {std::pair{1, 1}, {2, 2}, {3, 2}, {7, 2}, {7, 7}}) {
       PartitionedScan parts(c.scene.surfaces, c.camera, o, workers, threads);
+      PolygonFeed partsFed(parts, polygons);
       KeepRows got(c.camera.width);
-      ASSERT_TRUE(raster::RenderFragments(parts, s, got)) << c.name << ", " << m.name;
+      ASSERT_TRUE(raster::RenderFragments(partsFed, s, got)) << c.name << ", " << m.name;
       ASSERT_EQ(got.rows.size(), want.rows.size());
       std::size_t differ = 0, first = 0;
       for (std::size_t k = 0; k < want.rows.size(); ++k)
@@ -115,7 +110,7 @@ TEST_P(SameImageForAnyNumberOfWorkers, InEveryScene) {
       ++compared;
     }
   }
-  EXPECT_EQ(compared, 12 * 5);  // scenes, worker counts
+  EXPECT_EQ(compared, 13 * 5);  // scenes, worker counts
 }
 
 INSTANTIATE_TEST_SUITE_P(Partition, SameImageForAnyNumberOfWorkers, ::testing::Range<std::size_t>(0, std::size(kModes)),

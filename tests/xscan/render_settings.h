@@ -2,6 +2,8 @@
 // sets them (default material and lights), for the tests that render through the library.
 #pragma once
 
+#include <vector>
+
 #include "patch/camera.h"
 #include "raster/scanline_renderer.h"
 
@@ -18,5 +20,23 @@ inline raster::RenderSettings SettingsFor(const Camera& camera, int aa) {
   s.orthographic = camera.orthographic;
   return s;
 }
+
+// Keeps every channel of every row a render writes.
+class KeepRows final : public raster::RowSink {
+ public:
+  explicit KeepRows(int width) : width_(width) {}
+  bool WriteRow(int, const float* pixels) override {
+    rows.insert(rows.end(), pixels, pixels + static_cast<std::size_t>(width_) * raster::kChannels);
+    return true;
+  }
+  // Channel c of pixel (x, y).
+  float At(int x, int y, int c) const {
+    return rows[(static_cast<std::size_t>(y) * width_ + x) * raster::kChannels + c];
+  }
+  std::vector<float> rows;
+
+ private:
+  int width_;
+};
 
 }  // namespace patchscan::test

@@ -1,0 +1,43 @@
+// Feeds a scene's polygons to the back end: their triangles in homogeneous screen space,
+// handed over with the rows of a direct render (as a θ slab's are) or appended to a
+// tessellated mesh. Polygons are planar: their triangles are exact in every mode.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "patch/camera.h"
+#include "patch/scene.h"
+#include "raster/fragment.h"
+#include "raster/mesh.h"
+
+namespace patchscan {
+
+// The triangles of `polygons` for `camera` appended to `out`, polygons[k]'s with surface
+// id firstId + k.
+void AppendPolygonTriangles(std::span<const ScenePolygons> polygons, const Camera& camera, std::uint32_t firstId,
+                            raster::TriangleMesh* out);
+
+// A direct render's source with polygons: each row is the inner source's, then the
+// triangles whose top is above the next row, in the order of their tops (then as given),
+// so the row's fragments and triangles reach the back end in an order that depends on
+// the scene alone, whatever the inner source's number of workers.
+class PolygonFeed final : public raster::FragmentSource {
+ public:
+  // `inner` must outlive the feed.
+  PolygonFeed(raster::FragmentSource& inner, raster::TriangleMesh triangles);
+
+  void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) override;
+  bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
+
+ private:
+  raster::FragmentSource& inner_;
+  raster::TriangleMesh mesh_;
+  std::vector<double> top_;           // per triangle of order_, its highest screen y
+  std::vector<std::uint32_t> order_;  // triangles by top
+  std::size_t next_ = 0;
+  double dy_ = 1.0;
+};
+
+}  // namespace patchscan
