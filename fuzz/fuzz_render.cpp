@@ -1,7 +1,8 @@
 // libFuzzer target: a RIB scene that reads is rendered at 16x12 in every mode (exact, θ
 // per row and in slabs, tessellated), framed from its bounds; every render finishes and
 // every channel of every pixel is finite (depth +inf where nothing is seen). Scenes of
-// more than kMaxSurfaces surfaces are cut to their first ones, to keep each run short.
+// more than kMaxSurfaces surfaces (or polygon requests) are cut to their first ones, to
+// keep each run short.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -13,6 +14,7 @@
 #include "patch/rib_reader.h"
 #include "raster/scanline_renderer.h"
 #include "xscan/exact_scan.h"
+#include "xscan/polygon_feed.h"
 #include "xscan/render_settings.h"
 #include "xscan/tess_feed.h"
 
@@ -45,29 +47,36 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   auto read = ParseRib(text, "/nonexistent-fuzz-dir/fuzz.rib");
   auto* scene = std::get_if<Scene>(&read);
-  if (!scene || scene->surfaces.empty()) return 0;
+  if (!scene || scene->Ids() == 0) return 0;
   if (scene->surfaces.size() > kMaxSurfaces)
     scene->surfaces.erase(scene->surfaces.begin() + static_cast<std::ptrdiff_t>(kMaxSurfaces), scene->surfaces.end());
-  Bounds3 box;
-  for (const Surface& s : scene->surfaces) box.Extend(WorldBounds(s));
+  if (scene->polygons.size() > kMaxSurfaces)
+    scene->polygons.erase(scene->polygons.begin() + static_cast<std::ptrdiff_t>(kMaxSurfaces), scene->polygons.end());
+  const Bounds3 box = scene->WorldBounds();
   if (!box.lo.allFinite() || !box.hi.allFinite()) return 0;
   Camera camera;
   camera.width = 16;
   camera.height = 12;
   camera = FrameBounds(box, camera, DefaultViewDirection(Vec3(0, 0, 1)));
   if (ValidateCamera(camera)) return 0;
+  scene->FaceCamera(camera);
   const raster::RenderSettings settings = test::SettingsFor(camera, 2);
+  raster::TriangleMesh polygons;
+  AppendPolygonTriangles(scene->polygons, camera, static_cast<std::uint32_t>(scene->surfaces.size()), &polygons);
   for (const auto& [theta, slabs] : {std::pair{0, 0}, {16, 0}, {16, 2}}) {
     ExactScanOptions o;
     o.thetaSteps = theta;
     o.slabRows = slabs;
     ExactScan scan(scene->surfaces, camera, o);
+    PolygonFeed fed(scan, polygons);
     CheckRows rows(camera.width);
-    fuzz::Require(raster::RenderFragments(scan, settings, rows).has_value());
+    fuzz::Require(raster::RenderFragments(fed, settings, rows).has_value());
   }
   auto mesh = TessellateScene(scene->surfaces, camera, TessSettings{}, 1, [] { return false; });
   fuzz::Require(mesh.has_value());
   CheckRows rows(camera.width);
-  fuzz::Require(raster::RenderMesh(ToRasterMesh(*mesh, camera), settings, rows).has_value());
+  raster::TriangleMesh triangles = ToRasterMesh(*mesh, camera);
+  AppendPolygonTriangles(scene->polygons, camera, static_cast<std::uint32_t>(scene->surfaces.size()), &triangles);
+  fuzz::Require(raster::RenderMesh(triangles, settings, rows).has_value());
   return 0;
 }

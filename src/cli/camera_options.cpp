@@ -197,7 +197,9 @@ std::variant<LoadedScene, int> LoadSceneAndCamera(const std::string& file,
   }
   for (const std::string& w : std::get<Scene>(loaded).warnings)
     if (!warned || warned->insert(w).second) err << "patchscan: warning: " << w << '\n';
-  return LoadedScene{std::move(std::get<Scene>(loaded)), std::get<ResolvedCamera>(resolved)};
+  Scene& scene = std::get<Scene>(loaded);
+  scene.FaceCamera(std::get<ResolvedCamera>(resolved).camera);
+  return LoadedScene{std::move(scene), std::get<ResolvedCamera>(resolved)};
 }
 
 }  // namespace patchscan::cli

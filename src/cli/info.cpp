@@ -1,5 +1,6 @@
 #include "cli/info.h"
 
+#include <algorithm>
 #include <bit>
 #include <iomanip>
 #include <ostream>
@@ -100,6 +101,11 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
         << " extraordinary vertices; tags: " << n.creaseEdges << " crease edges, " << n.corners << " corners, "
         << n.holes << " holes; " << n.surfaces << " surfaces\n";
   }
+
+  // Curves: their segments, each a ribbon facing the camera.
+  if (const auto ribbons = std::count_if(scene.surfaces.begin(), scene.surfaces.end(),
+                                         [](const Surface& s) { return std::holds_alternative<CurveRibbon>(s.shape); }))
+    out << "curve segments: " << ribbons << " (ribbons facing the camera)\n";
 
   // Polygons: the requests, their corners and the triangles they became.
   if (!scene.polygons.empty()) {

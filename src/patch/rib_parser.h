@@ -224,6 +224,9 @@ class RibParser {
   bool AddPolygons(const Request& r, std::size_t first, const PolygonFaces& faces);
   // An array argument of whole numbers from `lo` to `hi`.
   bool Counts(const Request& r, std::size_t k, const char* what, long lo, long hi, std::vector<std::size_t>* out);
+  // Curves type nvertices wrap (RenderMan Interface 3.2; rib_curves.cpp): each segment a
+  // CurveRibbon in world space, in the current v basis and step.
+  bool Curves(const Request& r);
   bool Quadric(const Request& r);
   bool Geometry(const Request& r);
 

@@ -17,7 +17,9 @@
 //               Sphere, Cylinder, Cone, Paraboloid, Hyperboloid, Disk, Torus,
 //               Geometry "teapot"; Polygon, GeneralPolygon, PointsPolygons and
 //               PointsGeneralPolygons with "P" or "Pw", "N", "Cs" and "st" of any storage
-//               class (rib_polygons.cpp), triangulated into the scene's polygons
+//               class (rib_polygons.cpp), triangulated into the scene's polygons;
+//               Curves "linear"/"cubic", periodic or not, with "width" or "constantwidth"
+//               (rib_curves.cpp): ribbons facing the camera, a surface per segment
 //   appearance  Color, Opacity, Surface "constant"/"matte"/"plastic"/"metal"/
 //               "paintedplastic", LightSource "ambientlight"/"distantlight"/
 //               "pointlight"/"spotlight" and "shadowspot"/"shadowdistant"/"shadowpoint",

@@ -16,6 +16,15 @@ Bounds3 Scene::WorldBounds() const {
   return b;
 }
 
+void Scene::FaceCamera(const Camera& camera) {
+  const Vec3 eye = EyePoint(camera), forward = ViewForward(camera);
+  for (Surface& s : surfaces)
+    if (auto* ribbon = std::get_if<CurveRibbon>(&s.shape)) {
+      if (camera.orthographic) ribbon->FaceAxis(forward);
+      else ribbon->FaceEye(eye);
+    }
+}
+
 std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOptions& options) {
   const std::filesystem::path p(path);
   const std::string ext = p.extension().string();

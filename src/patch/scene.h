@@ -9,6 +9,7 @@
 #include <variant>
 #include <vector>
 
+#include "patch/camera.h"
 #include "patch/polygon.h"
 #include "patch/source_error.h"
 #include "patch/surface.h"
@@ -108,6 +109,9 @@ struct Scene {
 
   // A conservative world-space box of the whole scene.
   Bounds3 WorldBounds() const;
+  // Turns every curve's ribbons (patch/curves.h) to face the camera's eye (or, for an
+  // orthographic camera, its view axis). Before this they face along +z.
+  void FaceCamera(const Camera& camera);
 };
 
 struct LoadOptions {

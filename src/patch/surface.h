@@ -10,6 +10,7 @@
 #include <variant>
 
 #include "patch/bicubic.h"
+#include "patch/curves.h"
 #include "patch/nurbs.h"
 #include "patch/quadrics.h"
 #include "patch/subdiv.h"
@@ -18,7 +19,7 @@
 namespace patchscan {
 
 using Shape = std::variant<BicubicPatch, BilinearPatch, Sphere, Cylinder, Cone, Paraboloid,
-                           Hyperboloid, Disk, Torus, Saddle, MonkeySaddle, SubdivFace, NurbsPiece>;
+                           Hyperboloid, Disk, Torus, Saddle, MonkeySaddle, SubdivFace, NurbsPiece, CurveRibbon>;
 
 using Affine3 = Eigen::Affine3d;
 

@@ -254,7 +254,8 @@ std::array<int, 6> RatesOf(const Surface& s, const Mat4& screenFromWorld, RateOf
   // hyperboloid's, 1.4 px off at 0.4 asked). Patches and subdivision faces keep rates
   // from the edge alone, which their neighbours share.
   const bool ownEdges = !std::holds_alternative<BicubicPatch>(s.shape) && !std::holds_alternative<BilinearPatch>(s.shape) &&
-                        !std::holds_alternative<SubdivFace>(s.shape) && !std::holds_alternative<NurbsPiece>(s.shape);
+                        !std::holds_alternative<SubdivFace>(s.shape) && !std::holds_alternative<NurbsPiece>(s.shape) &&
+                        !std::holds_alternative<CurveRibbon>(s.shape);
   for (int e = 0; e < 4; ++e)
     if (collapsed[e] || (ownEdges && rates[e] == 1)) rates[e] = rates[e % 2 == 0 ? 4 : 5];  // 0 and 2 run along u
   // Where the edges differ from the inner rates, Bfr stitches the edges to an inner grid,

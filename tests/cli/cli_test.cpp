@@ -520,7 +520,7 @@ TEST(Cli, RibScenesRenderInEveryMode) {
   std::filesystem::create_directories(dir);
   for (const char* mode : {"exact", "theta", "tess"})
     for (const char* scene : {"quadrics.rib", "teapot_lit.rib", "patchmesh.rib", "cages.rib", "cube_tags.obj", "nurbs.rib", "trimmed.rib",
-                              "polygons.rib"}) {
+                              "polygons.rib", "curves.rib"}) {
       const std::string out = (dir / (std::string(mode) + "_" + scene + ".png")).string();
       const Result r = Patchscan("render " PATCHSCAN_SURFACES_DIR "/" + std::string(scene) + " -o " + out +
                                  " --size 96x72 --aa 2 --mode " + mode);
@@ -582,7 +582,8 @@ TEST(Cli, ConvertWritesARibThatRendersTheSameImage) {
   // renders from another directory). Same bytes, in each mode, at the scene's own size.
   // Subdivision cages are written as the SubdivisionMesh they were read as, an .obj's too;
   // NURBS as the NuPatch of each Bézier piece.
-  for (const char* scene : {"quadrics.rib", "teapot_lit.rib", "cages.rib", "cube_tags.obj", "nurbs.rib", "trimmed.rib", "polygons.rib"}) {
+  for (const char* scene : {"quadrics.rib", "teapot_lit.rib", "cages.rib", "cube_tags.obj", "nurbs.rib", "trimmed.rib", "polygons.rib",
+                            "curves.rib"}) {
     const std::string source = std::string(PATCHSCAN_SURFACES_DIR) + "/" + scene;
     const std::string copy = (dir / (std::string("copy_") + scene + ".rib")).string();
     ASSERT_EQ(Patchscan("convert " + source + " -o " + copy + " --size 160x120").code, 0) << scene;

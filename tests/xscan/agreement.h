@@ -65,6 +65,28 @@ inline Camera View(const Vec3& eye, int size = 96, const Vec3& up = Vec3(0, 0, 1
   return c;
 }
 
+// An orthographic camera (RenderMan's Projection "orthographic") looking along the
+// direction from `from` to the origin, `halfHeight` world units from the centre of the
+// image to its top edge.
+inline Camera Orthographic(const Vec3& from, double halfHeight, int size = 128, const Vec3& up = Vec3(0, 0, 1)) {
+  const Camera persp = View(from, size, up);
+  Camera c;
+  c.width = c.height = size;
+  // Camera space: x = right, y = up on the image, z = forward; the camera plane 10 units
+  // back from the origin along the view axis.
+  const Vec3 forward = (-from).normalized(), right = ViewRight(persp), upImage = right.cross(forward);
+  Mat4 m = Mat4::Identity();
+  m.block<1, 3>(0, 0) = right.transpose();
+  m.block<1, 3>(1, 0) = upImage.transpose();
+  m.block<1, 3>(2, 0) = forward.transpose();
+  m(2, 3) = 10.0;
+  c.cameraFromWorld = m;
+  c.orthographic = true;
+  c.screenWindow = Vec4(-halfHeight, halfHeight, -halfHeight, halfHeight);
+  c.hither = 0.1;
+  return c;
+}
+
 struct Agreement {
   long samples = 0, covered = 0, nearEdge = 0, mismatches = 0;
   double worstDepthRel = 0.0;
