@@ -496,6 +496,35 @@ TEST(Cli, ShadowMapsCastShadows) {
   std::filesystem::remove_all(dir);
 }
 
+// surfaces/still_life.rib, a scene as production exports it: two frames that read one
+// world from an archive (polygons, instanced NURBS vases, the teapot, a subdivision cube,
+// a torus, curves), a shadow map made between them. Every frame renders, with no warning
+// (nothing in it is skipped), in every mode and at any number of threads alike.
+TEST(Cli, AProductionSceneRendersEveryFrame) {
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_still_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string cd = "cd " + dir.string() + " && " + PATCHSCAN_BINARY;
+  const std::string scene = PATCHSCAN_SURFACES_DIR "/still_life.rib";
+  ASSERT_EQ(std::system((cd + " render " + scene + " --size 240x135 --aa 2 2>err.txt").c_str()), 0) << Slurp(dir / "err.txt");
+  EXPECT_EQ(Slurp(dir / "err.txt"), "");
+  EXPECT_TRUE(std::filesystem::exists(dir / "key.z"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "key.shd"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "still_life.png"));
+  for (const char* mode : {"exact", "theta", "tess"}) {
+    std::string first;
+    for (const char* threads : {"1", "2", "3"}) {
+      const std::string out = (dir / (std::string(mode) + threads + ".png")).string();
+      ASSERT_EQ(std::system((cd + " render " + scene + " --frame 2 --size 240x135 --aa 2 --mode " + mode + " --threads " +
+                             threads + " -o " + out + " 2>err.txt").c_str()),
+                0)
+          << Slurp(dir / "err.txt");
+      if (first.empty()) first = Slurp(out);
+      else EXPECT_EQ(Slurp(out), first) << mode << " at " << threads << " threads";
+    }
+  }
+  std::filesystem::remove_all(dir);
+}
+
 // An image left empty says so, and names the skipped requests as a possible cause.
 TEST(Cli, AnEmptyImageSaysSo) {
   const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_empty_" + std::to_string(::getpid()));

@@ -33,7 +33,7 @@ std::vector<SceneCase> Scenes() {
   std::vector<SceneCase> out;
   for (const char* file : {"teapot.bpt", "teacup.bpt", "teaspoon.bpt", "sphere.bpt", "quadrics.rib",
                            "patchmesh.rib", "teapot_lit.rib", "cages.rib", "cube_tags.obj", "nurbs.rib", "trimmed.rib",
-                           "polygons.rib", "curves.rib"}) {
+                           "polygons.rib", "curves.rib", "still_life.rib"}) {
     auto loaded = LoadScene(std::string(PATCHSCAN_SURFACES_DIR) + "/" + file);
     EXPECT_TRUE(std::holds_alternative<Scene>(loaded)) << file;
     if (!std::holds_alternative<Scene>(loaded)) continue;
@@ -111,7 +111,7 @@ TEST_P(SameImageForAnyNumberOfWorkers, InEveryScene) {
       ++compared;
     }
   }
-  EXPECT_EQ(compared, 14 * 5);  // scenes, worker counts
+  EXPECT_EQ(compared, 15 * 5);  // scenes, worker counts
 }
 
 INSTANTIATE_TEST_SUITE_P(Partition, SameImageForAnyNumberOfWorkers, ::testing::Range<std::size_t>(0, std::size(kModes)),
