@@ -51,16 +51,10 @@ std::string ModeConflict(const RenderOptions& o) {
 
 // The direct modes' front end: Blinn's Y scan with the exact or the θ-sampled X scan, its
 // surfaces dealt out to `threads` workers (one when tracing: the overlay is not shared).
-std::unique_ptr<PartitionedScan> DirectScan(const RenderOptions& o, const Scene& scene, const Camera& camera, int aa,
-                                            int threads) {
-  ExactScanOptions xo;
-  xo.extrapolate = !o.noExtrapolate;
-  if (o.mode == RenderMode::Theta) {
-    xo.thetaSteps = o.thetaSteps;
-    // Sample rows are 1 / (aa - 1) pixels apart (aa 1: one per pixel).
-    const double spacing = aa == 1 ? 1.0 : 1.0 / (aa - 1);
-    xo.slabRows = o.yStep > 0.0 ? std::max(1, static_cast<int>(std::lround(o.yStep / spacing))) : 0;
-  }
+std::unique_ptr<DirectScanSource> DirectScan(const RenderOptions& o, const Scene& scene, const Camera& camera, int aa,
+                                             int threads) {
+  const ExactScanOptions xo = ScanOptionsFor(o, aa);
+  if (o.makeDirectScan) return o.makeDirectScan(o, scene, camera, xo, threads);
   const int workers = o.overlay == Overlay::None ? threads : 1;
   return std::make_unique<PartitionedScan>(scene.surfaces, camera, xo, workers, threads);
 }
@@ -78,6 +72,18 @@ std::optional<raster::TriangleMesh> TessellatedMesh(const RenderOptions& o, cons
 }
 
 }  // namespace
+
+ExactScanOptions ScanOptionsFor(const RenderOptions& o, int aa) {
+  ExactScanOptions xo;
+  xo.extrapolate = !o.noExtrapolate;
+  if (o.mode == RenderMode::Theta) {
+    xo.thetaSteps = o.thetaSteps;
+    // Sample rows are 1 / (aa - 1) pixels apart (aa 1: one per pixel).
+    const double spacing = aa == 1 ? 1.0 : 1.0 / (aa - 1);
+    xo.slabRows = o.yStep > 0.0 ? std::max(1, static_cast<int>(std::lround(o.yStep / spacing))) : 0;
+  }
+  return xo;
+}
 
 CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   CLI::App* cmd = app->add_subcommand(
@@ -267,7 +273,7 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
 
   // Step 2: the front end: the direct scan, or the tessellated mesh.
   const int threads = o.threads > 0 ? o.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  std::unique_ptr<PartitionedScan> scan;
+  std::unique_ptr<DirectScanSource> scan;
   std::unique_ptr<PolygonFeed> polygons;  // a direct render's polygons, with its rows
   std::optional<raster::TriangleMesh> mesh;
   if (Direct(o.mode)) {
@@ -368,9 +374,10 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   report.counters = *counted;
   if (scan) {
     report.counters.Merge(scan->Stats());
-    const PartitionedScan::Timing times = scan->Times();
+    const DirectScanSource::Timing times = scan->Times();
     report.workerSeconds = times.workerSeconds;
     report.compositeSeconds = times.compositeSeconds;
+    report.processes = scan->Processes();
   }
   report.load = Seconds(t0, tLoaded);
   report.setUp = Seconds(tLoaded, tSetUp);

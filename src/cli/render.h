@@ -3,13 +3,16 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
+#include <memory>
 #include <optional>
 #include <string>
 
 #include "cli/camera_options.h"
 #include "cli/choice_option.h"
 #include "raster/scanline_renderer.h"
+#include "xscan/partitioned_scan.h"
 #include "xscan/tess_feed.h"
 
 namespace patchscan::cli {
@@ -56,7 +59,15 @@ struct RenderOptions {
   bool progress = false, quiet = false;
   std::string statsJson;
   CameraOptions camera;
+  // The direct modes' front end for a frame: by default a PartitionedScan of every surface
+  // on `threads` workers; patchscan-mpi gives one shared between its processes.
+  std::function<std::unique_ptr<DirectScanSource>(const RenderOptions&, const Scene&, const Camera&,
+                                                  const ExactScanOptions&, int threads)>
+      makeDirectScan;
 };
+
+// The scan options of a direct render at `aa` (θ steps and the slab height in sample rows).
+ExactScanOptions ScanOptionsFor(const RenderOptions& o, int aa);
 
 CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* opts);
 

@@ -45,6 +45,9 @@ void PrintReport(const RenderReport& r, std::ostream& out) {
     out << "; compositor " << r.compositeSeconds << " s (" << (r.render > 0 ? 100.0 * r.compositeSeconds / r.render : 0.0)
         << " % of the render)\n";
   }
+  for (const DirectScanSource::Process& p : r.processes)
+    out << "process " << p.rank << ": scanning " << p.seconds << " s, sent " << p.bytesSent << " bytes, received "
+        << p.bytesReceived << " bytes, peak memory " << p.peakKiB << " KiB\n";
   out << "time: load " << r.load << " s, " << (Direct(r.mode) ? "set up " : "tessellate ") << r.setUp
       << " s, render " << r.render << " s (of which writing the image " << r.output << " s)\npeak memory: "
       << r.peakKiB << " KiB\ntexture: " << r.texture << '\n';
@@ -58,7 +61,18 @@ std::string ReportJson(const RenderReport& r) {
   js << ", \"seconds_load\": " << r.load << ", \"seconds_tessellate\": " << r.setUp << ", \"seconds_render\": "
      << r.render << ", \"seconds_output\": " << r.output << ", \"seconds_workers\": [";
   for (std::size_t k = 0; k < r.workerSeconds.size(); ++k) js << (k ? ", " : "") << r.workerSeconds[k];
-  js << "], \"seconds_composite\": " << r.compositeSeconds << ", \"peak_rss_kib\": " << r.peakKiB << "}\n";
+  js << "], \"seconds_composite\": " << r.compositeSeconds << ", \"peak_rss_kib\": " << r.peakKiB;
+  if (!r.processes.empty()) {
+    js << ", \"processes\": [";
+    for (std::size_t k = 0; k < r.processes.size(); ++k) {
+      const DirectScanSource::Process& p = r.processes[k];
+      js << (k ? ", " : "") << "{\"rank\": " << p.rank << ", \"seconds_scanning\": " << p.seconds
+         << ", \"bytes_sent\": " << p.bytesSent << ", \"bytes_received\": " << p.bytesReceived
+         << ", \"peak_rss_kib\": " << p.peakKiB << '}';
+    }
+    js << ']';
+  }
+  js << "}\n";
   return js.str();
 }
 

@@ -24,6 +24,8 @@ struct RenderReport {
   std::vector<double> workerSeconds;
   double compositeSeconds = 0.0;
   std::string texture;  // what became of the texture: "none", "opened, N lookups", ...
+  // patchscan-mpi: each process's seconds, traffic and peak memory.
+  std::vector<DirectScanSource::Process> processes;
 };
 
 // The human-readable report (--stats), one group of counters after another.

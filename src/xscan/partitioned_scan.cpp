@@ -184,12 +184,19 @@ struct PartitionedScan::Arena {
 };
 
 PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
-                                 int workers, int threads) {
+                                 int workers, int threads)
+    : PartitionedScan(surfaces, camera, options, workers, threads, ScanOrder(surfaces, camera)) {
+  shared_ = false;
+}
+
+PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
+                                 int workers, int threads, std::vector<ScanEntry> share) {
+  shared_ = true;
   const std::vector<ScanEntry> order = ScanOrder(surfaces, camera);
   rank_.assign(surfaces.size(), 0);
   for (std::size_t k = 0; k < order.size(); ++k) rank_[order[k].index] = static_cast<std::uint32_t>(k);
-  for (std::vector<ScanEntry>& share : PartitionSurfaces(order, camera, workers))
-    workers_.push_back(std::make_unique<Worker>(surfaces, camera, options, std::move(share), rank_));
+  for (std::vector<ScanEntry>& part : PartitionSurfaces(share, camera, workers))
+    workers_.push_back(std::make_unique<Worker>(surfaces, camera, options, std::move(part), rank_));
   // More threads than the machine has cores would only queue (and oneTBB warns): the
   // arena is capped there; the partition, and so the image, follows `workers` alone.
   threads = std::min(threads, tbb::info::default_concurrency());
@@ -283,25 +290,35 @@ bool PartitionedScan::ScanRow(double y, const raster::SampleColumns& columns, ra
 }
 
 bool PartitionedScan::Composite(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  ExactScan& first = workers_.front()->scan;
-  if (workers_.size() == 1) {  // alone: no compositing
+  if (workers_.size() == 1 && !shared_) {  // alone: no compositing
     const double t0 = Now();
-    const bool ok = first.ScanRow(y, columns, out);
+    const bool ok = workers_.front()->scan.ScanRow(y, columns, out);
     workers_.front()->seconds += Now() - t0;
     return ok;
   }
+  bool vote = true;
+  PrepareRow(y, columns, &vote);
+  return FinishRow(vote, y, columns, out);
+}
+
+bool PartitionedScan::PrepareRow(double y, const raster::SampleColumns& columns, bool* vote) {
   // Step 1: a θ slab interval beginning here is a slab only if every worker's surfaces
   // allow it; the workers vote, then all take the verdict.
-  const bool interval = first.SlabMode() && first.BeginsInterval(y, columns);
+  ExactScan& first = workers_.front()->scan;
+  interval_ = first.SlabMode() && first.BeginsInterval(y, columns);
   ForEachWorker([&](Worker& w) {
     w.buffer.Clear();
-    if (interval) w.slab = w.scan.PrepareInterval(y, columns, w.buffer);
+    if (interval_) w.slab = w.scan.PrepareInterval(y, columns, w.buffer);
   });
-  bool slab = true;
-  for (const auto& w : workers_) slab = slab && w->slab;
+  *vote = true;
+  for (const auto& w : workers_) *vote = *vote && w->slab;
+  return interval_;
+}
+
+bool PartitionedScan::FinishRow(bool slab, double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   // Step 2: every worker's row, into its own buffer.
   ForEachWorker([&](Worker& w) {
-    if (interval) w.scan.FinishInterval(slab, columns, w.buffer);
+    if (interval_) w.scan.FinishInterval(slab, columns, w.buffer);
     w.ok = w.scan.ScanRow(y, columns, w.buffer);
   });
   // Step 3: composite, in scan order.

@@ -28,12 +28,41 @@ namespace patchscan {
 std::vector<std::vector<ScanEntry>> PartitionSurfaces(const std::vector<ScanEntry>& order, const Camera& camera,
                                                       int workers);
 
-class PartitionedScan final : public raster::FragmentSource {
+// What a direct render's front end gives the program besides the rows: its counts, its
+// times, and (with one process) the trackers drawn on an overlay. PartitionedScan is one;
+// a scan shared between processes (src/mpi) is another.
+class DirectScanSource : public raster::FragmentSource {
+ public:
+  // Each scanning worker's wall seconds, and the compositor's merging their rows.
+  struct Timing {
+    std::vector<double> workerSeconds;
+    double compositeSeconds = 0.0;
+  };
+  // One process of a scan shared between processes: its rank, its seconds scanning, the
+  // bytes it sent and received, its peak resident memory.
+  struct Process {
+    int rank = 0;
+    double seconds = 0.0;
+    std::int64_t bytesSent = 0, bytesReceived = 0;
+    long peakKiB = 0;
+  };
+  virtual Counters Stats() const = 0;
+  virtual Timing Times() const = 0;
+  virtual std::vector<Process> Processes() const { return {}; }
+  virtual void SetTrace(TraceSink* trace) = 0;
+};
+
+class PartitionedScan final : public DirectScanSource {
  public:
   // `workers` scans (at least 1) run on up to `threads` threads (1: all in the caller's).
   // `surfaces` must outlive the scan.
   PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options, int workers,
                   int threads);
+  // One process's part of a scan shared by several (patchscan-mpi): its workers scan
+  // `share`, part of ScanOrder(surfaces, camera), and the ranks of the whole order are
+  // kept (RankOf) so that the processes' rows merge in scan order.
+  PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options, int workers,
+                  int threads, std::vector<ScanEntry> share);
   ~PartitionedScan() override;
 
   // With more than one thread, rows are scanned and composited ahead of the back end (up
@@ -41,18 +70,25 @@ class PartitionedScan final : public raster::FragmentSource {
   void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) override;
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 
+  // A row in two phases, for scans shared between processes: PrepareRow returns whether
+  // sample row y begins a θ slab interval, and if so sets *vote to whether this scan's
+  // surfaces allow a slab; FinishRow, given the verdict of every scan's votes (ignored when
+  // no interval begins), scans the row and hands it to `out` in scan order. ScanRow is
+  // both, with this scan's own vote.
+  bool PrepareRow(double y, const raster::SampleColumns& columns, bool* vote);
+  bool FinishRow(bool slab, double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // The place of surface `id` in the scan order of all surfaces.
+  std::uint32_t RankOf(std::uint32_t id) const { return rank_[id]; }
+  const std::vector<std::uint32_t>& Ranks() const { return rank_; }
+
   // With one worker: its tracker marks on `trace` (a trace is not shared between threads).
-  void SetTrace(TraceSink* trace);
+  void SetTrace(TraceSink* trace) override;
 
   // Every worker's counts added up (MaxActiveSurfaces: the most any one worker had).
-  Counters Stats() const;
+  Counters Stats() const override;
   // Wall seconds each worker spent scanning its share, and the compositor merging the
   // workers' rows (with one worker: none).
-  struct Timing {
-    std::vector<double> workerSeconds;
-    double compositeSeconds = 0.0;
-  };
-  Timing Times() const;
+  Timing Times() const override;
   int Workers() const { return static_cast<int>(workers_.size()); }
 
  private:
@@ -73,6 +109,8 @@ class PartitionedScan final : public raster::FragmentSource {
   std::vector<std::size_t> next_;  // merge scratch
   double compositeSeconds_ = 0.0;
   bool tracing_ = false;           // no scan-ahead: the trace is drawn row by row
+  bool shared_ = false;            // a part of a scan shared with other processes
+  bool interval_ = false;          // PrepareRow's answer, for FinishRow
 };
 
 }  // namespace patchscan
