@@ -54,7 +54,7 @@ std::string ModeConflict(const RenderOptions& o) {
 std::unique_ptr<DirectScanSource> DirectScan(const RenderOptions& o, const Scene& scene, const Camera& camera, int aa,
                                              int threads) {
   const ExactScanOptions xo = ScanOptionsFor(o, aa);
-  if (o.makeDirectScan) return o.makeDirectScan(o, scene, camera, xo, threads);
+  if (o.makeDirectScan) return o.makeDirectScan(o, scene, camera, xo, aa, threads);
   const int workers = o.overlay == Overlay::None ? threads : 1;
   return std::make_unique<PartitionedScan>(scene.surfaces, camera, xo, workers, threads);
 }
@@ -278,7 +278,7 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   std::optional<raster::TriangleMesh> mesh;
   if (Direct(o.mode)) {
     scan = DirectScan(o, scene, camera, aa, threads);
-    if (!scene.polygons.empty()) {
+    if (!scene.polygons.empty() && !scan->FeedsPolygons()) {
       raster::TriangleMesh triangles;
       AppendPolygonTriangles(scene.polygons, camera, static_cast<std::uint32_t>(scene.surfaces.size()), &triangles);
       polygons = std::make_unique<PolygonFeed>(*scan, std::move(triangles));
@@ -332,8 +332,15 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   // Step 4: render the rows, streaming each to the image; then commit it.
   const bool showProgress = !o.quiet && (o.progress || isatty(STDERR_FILENO) != 0);
   ProgressSink progress(*out, camera.height, err, showProgress);
+  // A render shared between processes renders its own rows and brings the others' in.
+  raster::RowSink* rows = &progress;
+  std::unique_ptr<raster::RowSink> assembled;
+  if (scan) {
+    backEnd.settings.ownsRow = scan->OwnedRows();
+    if ((assembled = scan->AssembleRows(progress))) rows = assembled.get();
+  }
   raster::FragmentSource* source = polygons ? static_cast<raster::FragmentSource*>(polygons.get()) : scan.get();
-  auto counted = scan ? raster::RenderFragments(*source, backEnd.settings, progress)
+  auto counted = scan ? raster::RenderFragments(*source, backEnd.settings, *rows)
                       : raster::RenderMesh(*mesh, backEnd.settings, progress);
   if (counted && overlay && !overlay->Finish()) counted.reset();
   if (counted && async && !async->Finish()) counted.reset();

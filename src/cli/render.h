@@ -62,7 +62,7 @@ struct RenderOptions {
   // The direct modes' front end for a frame: by default a PartitionedScan of every surface
   // on `threads` workers; patchscan-mpi gives one shared between its processes.
   std::function<std::unique_ptr<DirectScanSource>(const RenderOptions&, const Scene&, const Camera&,
-                                                  const ExactScanOptions&, int threads)>
+                                                  const ExactScanOptions&, int aa, int threads)>
       makeDirectScan;
 };
 

@@ -60,8 +60,8 @@ int main(int argc, char** argv) {
   if (parsed) {
     if (rank == 0) {
       options.makeDirectScan = [](const cli::RenderOptions& o, const Scene& scene, const Camera& camera,
-                                  const ExactScanOptions& xo, int threads) {
-        return mpi::MakeSharedScan(MPI_COMM_WORLD, o.camera.frame, scene, camera, xo, threads);
+                                  const ExactScanOptions& xo, int aa, int threads) {
+        return mpi::MakeSharedScan(MPI_COMM_WORLD, o, scene, camera, xo, aa, threads);
       };
       try {
         code = cli::RunRender(options, std::cerr);

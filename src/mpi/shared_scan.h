@@ -1,24 +1,29 @@
 // patchscan-mpi: Molnar's object partition and z-composition (paper 002) across MPI
-// processes. Every process reads the scene; its surfaces, in scan order, are dealt out to
-// the processes as PartitionSurfaces deals them to workers; each process scans its share
-// row by row on its own threads (a PartitionedScan of that share) and sends each row to
-// process 0, whose back end takes every process's rows merged in the scan order of all
-// surfaces: the same fragments in the same order as one process scanning everything, so
-// the image is the same, bit for bit, for any number of processes.
+// processes, composited by direct send (as IceT does it). Every process reads the scene;
+// its surfaces, in scan order, are dealt out to the processes as PartitionSurfaces deals
+// them to workers, and each process scans its share row by row on its own threads (a
+// PartitionedScan of that share). The pixel rows are dealt out too, in bands of kBandRows
+// round robin: each process renders the bands it owns, and every process sends each owner
+// what its surfaces put on the owner's sample rows (the fragments, and the triangles that
+// reach them, carried to the owner's next row when handed over on another's). An owner
+// merges the processes' rows in the scan order of all surfaces (triangles by the row they
+// were handed over on, then that order): the same fragments and triangles in the same
+// order as one process scanning everything, so every pixel is the same, bit for bit, for
+// any number of processes. Process 0 writes the image, taking each band's rows from its
+// owner as they come: no process holds a frame.
 //
-// The protocol, between process 0 and each other process (messages from one process to
-// another arrive in the order sent):
-//   0 -> k  kGo       a frame begins: its number, scan options and rows
-//   k -> 0  kRow      a row's fragments and triangles, each with its surface's scan rank
-//   k -> 0  kVote     at a θ slab interval: whether k's surfaces allow a slab
-//   0 -> k  kVerdict  every process's vote, taken together
-//   0 -> k  kCredit   rows 0 has merged: k stays at most kRowsInFlight rows ahead
-//   0 -> k  kStop     stop the frame now (an error, an interruption)
-//   k -> 0  kError    k failed (the reason); then kDone
-//   k -> 0  kDone     k's frame is over: its counts, seconds, traffic and memory
-//   0 -> k  kFinish   the program is over: the exit code every process returns
-// Process 0 drains every process's messages to its kDone before it returns from a frame,
-// so nothing waits forever, whatever fails where.
+// Messages (between two processes they arrive in the order sent):
+//   0 -> k  kGo      a frame begins: its number, scan options, rows
+//   j -> k  kRow     what j's surfaces put on one of k's sample rows
+//   k -> 0  kVote    at a θ slab interval: whether k's surfaces allow a slab
+//   0 -> k  kVerdict every process's vote, taken together
+//   k -> 0  kPixels  one of k's finished pixel rows
+//   k -> 0  kDone    k's frame is over: whether it failed (why), its counts, seconds,
+//                    traffic and memory
+//   0 -> k  kFinish  the program is over: the exit code every process returns
+// A process that fails (or is interrupted) goes on with the frame's messages, sending
+// empty rows, so that no process waits forever; process 0 then fails the frame: no image,
+// the same exit code on every process.
 #pragma once
 
 #include <mpi.h>
@@ -30,17 +35,22 @@
 
 namespace patchscan::mpi {
 
-// Rows a process may send ahead of what process 0 has merged: memory on process 0 stays
-// O(width x processes x kRowsInFlight).
-constexpr int kRowsInFlight = 32;
+// Pixel rows of a band: bands are dealt out to the processes round robin, so each renders
+// a share of every part of the image (a scene's busy parts are shared too). Small bands
+// share the load evenly; each band's first sample row is also its neighbour's last (with
+// aa > 1), and triangles reaching across a band go to each owner.
+constexpr int kBandRows = 8;
 
-// Process 0's front end: its own share's scan and the other processes' rows, merged.
-// Made by RenderOptions::makeDirectScan for each frame of a direct render.
-std::unique_ptr<DirectScanSource> MakeSharedScan(MPI_Comm comm, int frame, const Scene& scene, const Camera& camera,
-                                                 const ExactScanOptions& options, int threads);
+// Process 0's front end for a frame of a direct render (RenderOptions::makeDirectScan): its
+// share's scan, the rows it owns merged from every process, the others' finished rows
+// brought in to the image (DirectScanSource::AssembleRows).
+std::unique_ptr<DirectScanSource> MakeSharedScan(MPI_Comm comm, const cli::RenderOptions& options, const Scene& scene,
+                                                 const Camera& camera, const ExactScanOptions& scanOptions, int aa,
+                                                 int threads);
 
-// The other processes: scan the frames process 0 asks for, until it says the program is
-// over; returns the exit code it sends. `options` is the same command line process 0 has.
+// The other processes: scan and render their parts of the frames process 0 asks for, until
+// it says the program is over; returns the exit code it sends. `options` is the command
+// line process 0 has.
 int ServeFrames(MPI_Comm comm, const cli::RenderOptions& options);
 
 // Process 0, when the program is over: every other process returns `code`.

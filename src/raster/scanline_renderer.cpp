@@ -219,11 +219,16 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
   std::unique_ptr<tbb::task_arena> arena;
   if (s.threads > 1) arena = std::make_unique<tbb::task_arena>(std::min(s.threads, tbb::info::default_concurrency()));
   std::mutex merge;
+  bool previous = false;  // the pixel row above was rendered: its last sample row is this one's first
   for (int py = 0; py < s.height; ++py) {
+    if (s.ownsRow && !s.ownsRow(py)) {
+      previous = false;
+      continue;
+    }
     const int j0 = lat.FirstOfPixel(py);
     geo.BeginPixelRow(j0);
     for (int r = 0; r < s.aa; ++r) {
-      if (r == 0 && py > 0 && s.aa > 1) {
+      if (r == 0 && previous && s.aa > 1) {
         std::swap(rows[0], rows[s.aa - 1]);  // the shared edge row, already resolved
         geo.SwapRows(0, s.aa - 1);
         continue;
@@ -363,6 +368,7 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
       shadePixels(0, s.width, stats);
     }
     if (geo.Failed() || !sink.WriteRow(py, pixels.data())) return std::nullopt;
+    previous = true;
   }
   return stats;
 }

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -41,6 +42,10 @@ struct RenderSettings {
   // vertices (W = 1), and fragments' w is that depth.
   bool orthographic = false;
   Vec3 forward = Vec3(0, 0, 1);
+  // A render shared between processes (patchscan-mpi): only the pixel rows this owns are
+  // rendered and handed to the sink, and only their sample rows asked of the source
+  // (empty: every row).
+  std::function<bool(int pixelRow)> ownsRow;
   Material material;  // of every surface, unless materialOf is given
   // Per surface id, an index into materials (a scene's own materials); empty: `material`.
   std::vector<Material> materials;

@@ -12,11 +12,13 @@
 // each interval. Memory: each worker holds one row of fragments.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
 
 #include "core/counters.h"
+#include "raster/scanline_renderer.h"
 #include "xscan/exact_scan.h"
 
 namespace patchscan {
@@ -50,6 +52,14 @@ class DirectScanSource : public raster::FragmentSource {
   virtual Timing Times() const = 0;
   virtual std::vector<Process> Processes() const { return {}; }
   virtual void SetTrace(TraceSink* trace) = 0;
+  // A render shared between processes renders some pixel rows here (the back end's
+  // RenderSettings::ownsRow; empty: all), and its finished rows reach `next` through the
+  // sink this returns, which brings the other processes' rows in (null: straight to `next`).
+  virtual std::function<bool(int)> OwnedRows() const { return {}; }
+  virtual std::unique_ptr<raster::RowSink> AssembleRows(raster::RowSink& /*next*/) { return nullptr; }
+  // Whether the source hands the scene's polygons over itself (else the program wraps it
+  // in a PolygonFeed).
+  virtual bool FeedsPolygons() const { return false; }
 };
 
 class PartitionedScan final : public DirectScanSource {

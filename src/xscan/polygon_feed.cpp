@@ -23,8 +23,7 @@ void AppendPolygonTriangles(std::span<const ScenePolygons> polygons, const Camer
   }
 }
 
-PolygonFeed::PolygonFeed(raster::FragmentSource& inner, raster::TriangleMesh triangles)
-    : inner_(inner), mesh_(std::move(triangles)) {
+PolygonQueue::PolygonQueue(raster::TriangleMesh triangles) : mesh_(std::move(triangles)) {
   const std::size_t n = mesh_.triangles.size();
   std::vector<double> top(n);
   for (std::size_t k = 0; k < n; ++k) {
@@ -49,14 +48,21 @@ void PolygonFeed::BeginRows(const raster::SampleColumns& columns, double y0, dou
   inner_.BeginRows(columns, y0, dy, nRows);
 }
 
-bool PolygonFeed::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  if (!inner_.ScanRow(y, columns, out)) return false;
+void PolygonQueue::HandOver(double y, double dy, raster::FragmentRow& out) {
   // A triangle whose top lies above the next row has no sample above this one: it is
   // handed over now (paper 000 §3.3's y-sorted list, met row by row).
-  for (; next_ < order_.size() && top_[next_] < y + dy_; ++next_) {
+  for (; next_ < order_.size() && top_[next_] < y + dy; ++next_) {
     const raster::RasterTriangle& t = mesh_.triangles[order_[next_]];
     out.AddTriangle(mesh_.vertices[t.v[0]], mesh_.vertices[t.v[1]], mesh_.vertices[t.v[2]], t.surfaceId);
   }
+}
+
+PolygonFeed::PolygonFeed(raster::FragmentSource& inner, raster::TriangleMesh triangles)
+    : inner_(inner), queue_(std::move(triangles)) {}
+
+bool PolygonFeed::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  if (!inner_.ScanRow(y, columns, out)) return false;
+  queue_.HandOver(y, dy_, out);
   return true;
 }
 

@@ -19,10 +19,25 @@ namespace patchscan {
 void AppendPolygonTriangles(std::span<const ScenePolygons> polygons, const Camera& camera, std::uint32_t firstId,
                             raster::TriangleMesh* out);
 
+// Polygon triangles handed over row by row: at sample row y, those whose top is above the
+// next row (y + dy), in the order of their tops (then as given).
+class PolygonQueue {
+ public:
+  explicit PolygonQueue(raster::TriangleMesh triangles);
+  // Hands over the triangles due at sample row y, the rows being dy apart.
+  void HandOver(double y, double dy, raster::FragmentRow& out);
+
+ private:
+  raster::TriangleMesh mesh_;
+  std::vector<double> top_;           // per triangle of order_, its highest screen y
+  std::vector<std::uint32_t> order_;  // triangles by top
+  std::size_t next_ = 0;
+};
+
 // A direct render's source with polygons: each row is the inner source's, then the
-// triangles whose top is above the next row, in the order of their tops (then as given),
-// so the row's fragments and triangles reach the back end in an order that depends on
-// the scene alone, whatever the inner source's number of workers.
+// polygons' triangles due there (PolygonQueue), so the row's fragments and triangles reach
+// the back end in an order that depends on the scene alone, whatever the inner source's
+// number of workers.
 class PolygonFeed final : public raster::FragmentSource {
  public:
   // `inner` must outlive the feed.
@@ -33,10 +48,7 @@ class PolygonFeed final : public raster::FragmentSource {
 
  private:
   raster::FragmentSource& inner_;
-  raster::TriangleMesh mesh_;
-  std::vector<double> top_;           // per triangle of order_, its highest screen y
-  std::vector<std::uint32_t> order_;  // triangles by top
-  std::size_t next_ = 0;
+  PolygonQueue queue_;
   double dy_ = 1.0;
 };
 
