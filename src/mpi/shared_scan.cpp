@@ -11,6 +11,7 @@
 #include <ostream>
 #include <stdexcept>
 #include <streambuf>
+#include <thread>
 #include <vector>
 
 #include "cli/camera_options.h"
@@ -660,7 +661,7 @@ void ServeFrame(MPI_Comm comm, const cli::RenderOptions& o, const std::vector<do
   options.thetaSteps = static_cast<int>(go[2]);
   options.slabRows = static_cast<int>(go[3]);
   const int aa = static_cast<int>(go[10]);
-  const int threads = o.threads > 0 ? o.threads : 1;
+  const int threads = o.threads > 0 ? o.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   auto loaded = cli::LoadSceneAndCamera(o.file, cameraOptions, quiet);
   // A scene this process cannot read: it still takes its part in the frame's messages.
   Scene empty;
