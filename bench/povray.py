@@ -36,12 +36,12 @@ def write_scene(bpt, path, eye, look_at, up, fov_deg, width, height, steps):
             f.write("\n pigment { color rgb 0.8 } }\n")
 
 
-def render(scene, out_png, width, height, aa):
-    """Renders single-threaded; returns wall seconds, or None when povray is missing."""
+def render(scene, out_png, width, height, aa, threads=1):
+    """Renders on `threads` threads (+WT); returns wall seconds, or None when povray is missing."""
     if not shutil.which("povray"):
         return None
     cmd = ["povray", f"+I{scene}", f"+O{out_png}", f"+W{width}", f"+H{height}", "+FN", "+UA",
-           "-D", "+WT1", "-GA"]
+           "-D", f"+WT{threads}", "-GA"]
     # Antialiasing: method 1 with threshold 0 supersamples every pixel, depth aa.
     cmd += [f"+A0.0", "+AM1", f"+R{aa}"] if aa > 1 else ["-A"]
     t0 = time.perf_counter()
