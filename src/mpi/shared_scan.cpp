@@ -44,7 +44,6 @@ struct Layout {
   double y0 = 0.0, dy = 1.0;    // sample row j lies at y0 + j dy
   int Owner(int p) const { return (p / kBandRows) % size; }
   int FirstSample(int p) const { return aa == 1 ? p : p * (aa - 1); }
-  int LastSample(int p) const { return aa == 1 ? p : (p + 1) * (aa - 1); }
   // The first pixel row that uses sample row j (with aa > 1 a row on a pixel edge is the
   // last of the pixel row above and the first of the one below).
   int FirstPixelOf(int j) const {

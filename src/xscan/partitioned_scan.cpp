@@ -185,17 +185,18 @@ struct PartitionedScan::Arena {
 
 PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
                                  int workers, int threads)
-    : PartitionedScan(surfaces, camera, options, workers, threads, ScanOrder(surfaces, camera)) {
-  shared_ = false;
-}
+    : PartitionedScan(surfaces, camera, options, workers, threads, ScanOrder(surfaces, camera), std::nullopt) {}
 
 PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
-                                 int workers, int threads, std::vector<ScanEntry> share) {
-  shared_ = true;
-  const std::vector<ScanEntry> order = ScanOrder(surfaces, camera);
+                                 int workers, int threads, std::vector<ScanEntry> share)
+    : PartitionedScan(surfaces, camera, options, workers, threads, ScanOrder(surfaces, camera), std::move(share)) {}
+
+PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
+                                 int workers, int threads, const std::vector<ScanEntry>& order,
+                                 std::optional<std::vector<ScanEntry>> share) {
   rank_.assign(surfaces.size(), 0);
   for (std::size_t k = 0; k < order.size(); ++k) rank_[order[k].index] = static_cast<std::uint32_t>(k);
-  for (std::vector<ScanEntry>& part : PartitionSurfaces(share, camera, workers))
+  for (std::vector<ScanEntry>& part : PartitionSurfaces(share ? *share : order, camera, workers))
     workers_.push_back(std::make_unique<Worker>(surfaces, camera, options, std::move(part), rank_));
   // More threads than the machine has cores would only queue (and oneTBB warns): the
   // arena is capped there; the partition, and so the image, follows `workers` alone.
@@ -290,7 +291,7 @@ bool PartitionedScan::ScanRow(double y, const raster::SampleColumns& columns, ra
 }
 
 bool PartitionedScan::Composite(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  if (workers_.size() == 1 && !shared_) {  // alone: no compositing
+  if (workers_.size() == 1) {  // alone: no compositing
     const double t0 = Now();
     const bool ok = workers_.front()->scan.ScanRow(y, columns, out);
     workers_.front()->seconds += Now() - t0;

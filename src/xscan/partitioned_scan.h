@@ -14,6 +14,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -105,6 +106,9 @@ class PartitionedScan final : public DirectScanSource {
   struct Worker;
   struct Arena;
   // Runs f(worker) for every worker, in parallel when there are threads.
+  // The scan order of all surfaces is `order`; the workers scan `share` (all: order).
+  PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options, int workers,
+                  int threads, const std::vector<ScanEntry>& order, std::optional<std::vector<ScanEntry>> share);
   template <class F>
   void ForEachWorker(F&& f);
 
@@ -119,7 +123,6 @@ class PartitionedScan final : public DirectScanSource {
   std::vector<std::size_t> next_;  // merge scratch
   double compositeSeconds_ = 0.0;
   bool tracing_ = false;           // no scan-ahead: the trace is drawn row by row
-  bool shared_ = false;            // a part of a scan shared with other processes
   bool interval_ = false;          // PrepareRow's answer, for FinishRow
 };
 
