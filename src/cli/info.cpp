@@ -99,7 +99,8 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
     out << "subdivision cage: " << c.file << ':' << c.line << ", " << scheme << ", " << n.faces << " faces, "
         << n.vertices << " vertices, " << n.irregularFaces << " irregular faces, " << n.extraordinaryVertices
         << " extraordinary vertices; tags: " << n.creaseEdges << " crease edges, " << n.corners << " corners, "
-        << n.holes << " holes; " << n.surfaces << " surfaces\n";
+        << n.holes << " holes; " << n.surfaces << " surfaces" << (n.textureCoords ? ", texture coordinates \"st\"" : "")
+        << "; prepared on demand (" << n.boundedAtLoad << " faces bounded by Bfr at load)\n";
   }
 
   // Curves: their segments, each a ribbon facing the camera.

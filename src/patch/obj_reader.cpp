@@ -79,10 +79,14 @@ class ObjParser {
       scene_.warnings.push_back(name_ + ":" + std::to_string(seen.first) + ": '" + kind + "' is not read here: " +
                                 std::to_string(seen.second) + (seen.second == 1 ? " statement" : " statements") +
                                 " skipped");
-    if (texCoords_ > 0)
-      scene_.warnings.push_back(name_ + ":" + std::to_string(firstTexCoordLine_) +
-                                ": texture coordinates (vt) are not applied to subdivision cages yet: textures use each "
-                                "face's own (u, v)");
+    // Texture coordinates apply when every face gives them.
+    if (!mesh_.stIndices.empty() && mesh_.stIndices.size() != mesh_.faceVertices.size()) {
+      scene_.warnings.push_back(name_ + ":" + std::to_string(firstFaceWithoutTexCoords_) +
+                                ": this face gives no texture coordinates (v/vt) and others do: they are not applied, "
+                                "textures use each face's own (u, v)");
+      mesh_.stIndices.clear();
+    }
+    if (mesh_.stIndices.empty()) mesh_.st.clear();
     for (const auto& [face, line] : holes_) {
       if (face >= static_cast<int>(mesh_.faceSizes.size()))
         return SourceError{name_, line, "tag \"hole\": face " + std::to_string(face) + " is out of range (" +
@@ -162,10 +166,11 @@ class ObjParser {
         Fail(line, vt ? "'vt' takes u [v [w]]" : "'vn' takes x y z");
         return;
       }
-      double x = 0.0;
+      double x[3] = {0.0, 0.0, 0.0};
       for (std::size_t i = 1; i < w.size(); ++i)
-        if (!Number(w[i], line, &x)) return;
-      if (vt && texCoords_++ == 0) firstTexCoordLine_ = line;
+        if (!Number(w[i], line, &x[i - 1])) return;
+      // OBJ's v runs up the image, RenderMan's t down it.
+      if (vt) mesh_.st.emplace_back(x[0], 1.0 - x[1]);
       if (!vt) ++normals_;
     } else if (k == "f") {
       Face(w, line);
@@ -190,17 +195,20 @@ class ObjParser {
       return;
     }
     const std::size_t start = mesh_.faceVertices.size();
+    std::vector<int> faceStIndices;
     for (int i = 1; i <= n; ++i) {
       // v, v/vt, v//vn or v/vt/vn
       const std::string_view ref = w[static_cast<std::size_t>(i)];
       const std::size_t s1 = ref.find('/');
-      int v = 0, unused = 0;
+      int v = 0, vt = 0, unused = 0;
       if (!Index(ref.substr(0, s1), mesh_.points.size(), "vertex", "vertices", line, &v)) return;
+      bool hasVt = false;
       if (s1 != std::string_view::npos) {
         const std::string_view rest = ref.substr(s1 + 1);
         const std::size_t s2 = rest.find('/');
         const std::string_view t = rest.substr(0, s2);
-        if (!t.empty() && !Index(t, texCoords_, "texture coordinate", "texture coordinates", line, &unused)) return;
+        if (!t.empty() && !Index(t, mesh_.st.size(), "texture coordinate", "texture coordinates", line, &vt)) return;
+        hasVt = !t.empty();
         if (s2 != std::string_view::npos && !Index(rest.substr(s2 + 1), normals_, "normal", "normals", line, &unused)) return;
         if (t.empty() && s2 == std::string_view::npos) {
           Fail(line, "a face vertex " + Shown(ref) + " is v, v/vt, v//vn or v/vt/vn");
@@ -213,7 +221,15 @@ class ObjParser {
           return;
         }
       mesh_.faceVertices.push_back(v);
+      if (hasVt) faceStIndices.push_back(vt);
     }
+    // A face's texture coordinates are all given or none.
+    if (!faceStIndices.empty() && static_cast<int>(faceStIndices.size()) != n) {
+      Fail(line, "a face gives texture coordinates (v/vt) at some of its vertices only");
+      return;
+    }
+    if (faceStIndices.empty() && firstFaceWithoutTexCoords_ == 0) firstFaceWithoutTexCoords_ = line;
+    mesh_.stIndices.insert(mesh_.stIndices.end(), faceStIndices.begin(), faceStIndices.end());
     mesh_.faceSizes.push_back(n);
     faceLines_.push_back(line);
   }
@@ -308,6 +324,14 @@ class ObjParser {
         return;
       }
       mesh_.interpolateBoundary = mode;
+    } else if (name == "facevaryinginterpolateboundary") {
+      // OpenSubdiv's numbers, as its shape files use them: 0 smooth, 1 corners kept, 2 and
+      // 3 more corners kept, 4 boundaries linear, 5 bilinear everywhere.
+      if (ints.size() != 1 || ints[0] > 5 || !floats.empty() || !strings.empty()) {
+        Fail(line, "tag \"facevaryinginterpolateboundary\" takes one of 0 to 5");
+        return;
+      }
+      mesh_.faceVaryingRule = static_cast<FaceVaryingRule>(ints[0]);
     } else {
       auto [it, inserted] = skipped_.try_emplace("t " + std::string(name.substr(0, kKindChars)), line, 0);
       ++it->second.second;
@@ -319,8 +343,8 @@ class ObjParser {
   SubdivMesh mesh_;
   std::vector<int> faceLines_;
   std::vector<std::pair<int, int>> holes_;  // face, line
-  std::size_t texCoords_ = 0, normals_ = 0;
-  int firstTexCoordLine_ = 0;
+  std::size_t normals_ = 0;
+  int firstFaceWithoutTexCoords_ = 0;
   std::map<std::string, std::pair<int, int>> skipped_;  // kind: first line, count
   std::optional<SourceError> error_;
   Scene scene_;

@@ -4,9 +4,12 @@
 #include "patch/rib_reader.h"
 #include "patch/text_file.h"
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
+#include <map>
 #include <optional>
+#include <tuple>
 #include <stdexcept>
 
 namespace patchscan::rib {
@@ -78,7 +81,8 @@ bool RibParser::BasisRequest(const Request& r) {
   return true;
 }
 
-bool RibParser::Points(const Request& r, size_t first, size_t count, bool rationalAllowed, int nu, int nv) {
+bool RibParser::Points(const Request& r, size_t first, size_t count, bool rationalAllowed, int nu, int nv,
+                       std::initializer_list<std::string_view> readElsewhere) {
   std::vector<Param> params;
   if (!Params(r, first, &params)) return false;
   const Value* p = nullptr;
@@ -90,7 +94,7 @@ bool RibParser::Points(const Request& r, size_t first, size_t count, bool ration
     else if (q.name == "Pw") return Fail(q.value->line, r.name + ": \"Pw\" (rational points) is not supported here; give \"P\"");
     else if (q.name == "Pz" && nu > 0) pz = q.value;
     else if (q.name == "Pz") return Fail(q.value->line, r.name + ": \"Pz\" (height fields) is for Patch and PatchMesh; give \"P\"");
-    else IgnoreParam(r, q);
+    else if (std::find(readElsewhere.begin(), readElsewhere.end(), q.name) == readElsewhere.end()) IgnoreParam(r, q);
   }
   if ((p != nullptr) + (pw != nullptr) + (pz != nullptr) > 1)
     return Fail((pz ? pz : pw)->line, r.name + ": more than one of \"P\", \"Pw\" and \"Pz\": give one");
@@ -280,9 +284,64 @@ bool RibParser::SubdivTags(const Value& tags, const Value& nargs, const Value& i
       if (iv.size() > 1 || (iv.size() == 1 && (iv[0] < 0 || iv[0] > 2)))
         return Fail(tags.line, "SubdivisionMesh: \"interpolateboundary\" takes nothing, or 0, 1 or 2");
       mesh->interpolateBoundary = iv.empty() ? 1 : iv[0];
+    } else if (tag == "facevaryinginterpolateboundary") {
+      // RenderMan's numbers: 0 bilinear on each face (the old rule), 1 smooth with the
+      // corners of the texture map kept (the default), 2 smooth, 3 the map's boundaries linear.
+      constexpr FaceVaryingRule kRule[] = {FaceVaryingRule::All, FaceVaryingRule::CornersOnly, FaceVaryingRule::Smooth,
+                                           FaceVaryingRule::Boundaries};
+      if (iv.size() > 1 || (iv.size() == 1 && (iv[0] < 0 || iv[0] > 3)))
+        return Fail(tags.line, "SubdivisionMesh: \"facevaryinginterpolateboundary\" takes nothing, or 0, 1, 2 or 3");
+      const bool propagate = mesh->faceVaryingRule == FaceVaryingRule::CornersPlus1;
+      mesh->faceVaryingRule = kRule[iv.empty() ? 1 : iv[0]];
+      if (propagate && mesh->faceVaryingRule == FaceVaryingRule::CornersOnly) mesh->faceVaryingRule = FaceVaryingRule::CornersPlus1;
+    } else if (tag == "facevaryingpropagatecorners") {
+      // 1: the corners kept where three or more regions of the map meet, too.
+      if (iv.size() != 1 || (iv[0] != 0 && iv[0] != 1))
+        return Fail(tags.line, "SubdivisionMesh: \"facevaryingpropagatecorners\" takes 0 or 1");
+      if (iv[0] == 1 && mesh->faceVaryingRule == FaceVaryingRule::CornersOnly) mesh->faceVaryingRule = FaceVaryingRule::CornersPlus1;
     } else {
       Warn(tags.line, "SubdivisionMesh tag " + tag, "SubdivisionMesh: tag " + Shown(tag) + " is not supported here: ignored");
     }
+  }
+  return true;
+}
+
+bool RibParser::SubdivTextureCoords(const Request& r, std::size_t first, SubdivMesh* mesh) {
+  std::vector<Param> params;
+  if (!Params(r, first, &params)) return false;
+  for (const Param& q : params) {
+    if (q.name != "st") continue;
+    if (!q.value->Numeric()) return Fail(q.value->line, "SubdivisionMesh: \"st\" expects numbers");
+    const std::size_t size = q.value->numbers.size(), points = mesh->points.size(), corners = mesh->faceVertices.size();
+    // The declared class, else by count: per point as RenderMan predeclares "st" (varying),
+    // per corner face-varying.
+    const std::string_view declared = DeclaredClass(q.declared);
+    if (declared == "vertex" || declared == "varying" || (declared.empty() && size == 2 * points && size != 2 * corners)) {
+      if (size != 2 * points)
+        return Fail(q.value->line, "SubdivisionMesh: \"st\" expects 2 numbers per point (" + std::to_string(2 * points) +
+                                       "), found " + std::to_string(size));
+      mesh->stClass = declared == "vertex" ? StClass::Vertex : StClass::Varying;
+      for (std::size_t k = 0; k < points; ++k) mesh->st.emplace_back(q.value->numbers[2 * k], q.value->numbers[2 * k + 1]);
+    } else if (declared == "facevarying" || declared == "facevertex" || declared.empty()) {
+      if (size != 2 * corners)
+        return Fail(q.value->line, "SubdivisionMesh: \"st\" expects 2 numbers per face corner (" + std::to_string(2 * corners) +
+                                       ")" + (declared.empty() ? " or per point (" + std::to_string(2 * points) + ")" : "") +
+                                       ", found " + std::to_string(size));
+      // The corners of one vertex with equal values share one (RenderMan gives no indices:
+      // the texture map is cut only where the values differ).
+      mesh->stClass = StClass::FaceVarying;
+      std::map<std::tuple<int, double, double>, int> index;
+      for (std::size_t k = 0; k < corners; ++k) {
+        const Vec2 t(q.value->numbers[2 * k], q.value->numbers[2 * k + 1]);
+        const auto [it, inserted] = index.try_emplace({mesh->faceVertices[k], t.x(), t.y()}, static_cast<int>(mesh->st.size()));
+        if (inserted) mesh->st.push_back(t);
+        mesh->stIndices.push_back(it->second);
+      }
+    } else {
+      return Fail(q.value->line, "SubdivisionMesh: \"st\" is vertex, varying, facevarying or facevertex, not " + std::string(declared));
+    }
+    for (const Vec2& t : mesh->st)
+      if (!t.allFinite()) return Fail(q.value->line, "SubdivisionMesh: \"st\" values must be finite");
   }
   return true;
 }
@@ -325,8 +384,9 @@ bool RibParser::SubdivisionMesh(const Request& r) {
     if (!SubdivTags(r.args[3], r.args[4], r.args[5], r.args[6], &mesh)) return false;
     first = 7;
   }
-  if (!Points(r, first, static_cast<std::size_t>(maxIndex + 1), false)) return false;
+  if (!Points(r, first, static_cast<std::size_t>(maxIndex + 1), false, 0, 0, {"st"})) return false;
   mesh.points = pts_;
+  if (!SubdivTextureCoords(r, first, &mesh)) return false;
   std::vector<SubdivFace> faces;
   SceneCage cage{file_, r.line, mesh.scheme, {}};
   try {

@@ -8,8 +8,10 @@
 #include <map>
 #include <numbers>
 #include <optional>
+#include <initializer_list>
 #include <set>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 #include <variant>
 #include <vector>
@@ -61,6 +63,21 @@ const char* BlockName(Block::Kind k);
 // what a parametric surface looks like here.
 const std::set<std::string, std::less<>>& SkippedRequests();
 Mat4 Translation(double x, double y, double z);
+
+// The storage class an inline declaration names ("constant", "uniform", "varying",
+// "vertex", "facevarying" or "facevertex": its last such word), or "" when it names none.
+inline std::string_view DeclaredClass(std::string_view declared) {
+  std::string_view found;
+  std::size_t at = 0;
+  while (at < declared.size()) {
+    const std::size_t end = std::min(declared.find_first_of(" \t\n\r", at), declared.size());
+    const std::string_view word = declared.substr(at, end - at);
+    for (const std::string_view c : {"constant", "uniform", "varying", "vertex", "facevarying", "facevertex"})
+      if (word == c) found = word;
+    at = end + 1;
+  }
+  return found;
+}
 
 class RibParser {
  public:
@@ -186,7 +203,10 @@ class RibParser {
   // (homogeneous, w = 1 for "P") and pts_ (divided by w); rational_ when a weight is not 1.
   // `rationalAllowed` false refuses "Pw". A patch or mesh of nu x nv points (nu > 0) may
   // give "Pz", a height field, instead.
-  bool Points(const Request& r, size_t first, size_t count, bool rationalAllowed = true, int nu = 0, int nv = 0);
+  // "P" (or "Pw", "Pz") of `count` points into pts_ and hpts_; other parameters are ignored
+  // with a warning, but for those named in readElsewhere.
+  bool Points(const Request& r, size_t first, size_t count, bool rationalAllowed = true, int nu = 0, int nv = 0,
+              std::initializer_list<std::string_view> readElsewhere = {});
   bool PatchType(const Request& r, bool* bicubic);
   bool Patch(const Request& r);
   // A patch given by "Pw" with a weight other than 1, as a rational Bézier NurbsPiece.
@@ -205,6 +225,8 @@ class RibParser {
   bool AttributeRequest(const Request& r);
   // SubdivisionMesh's tags (RenderMan Interface 3.2 and prman: crease, corner, hole,
   // interpolateboundary) into `mesh`; unknown tags are warned about and ignored.
+  // "st" of a SubdivisionMesh, by its class (declared, else by its count) into mesh.
+  bool SubdivTextureCoords(const Request& r, std::size_t first, SubdivMesh* mesh);
   bool SubdivTags(const Value& tags, const Value& nargs, const Value& ints, const Value& floats,
                   SubdivMesh* mesh);
   // Polygon, GeneralPolygon, PointsPolygons, PointsGeneralPolygons (RenderMan Interface

@@ -18,18 +18,12 @@ enum class Storage { Constant, Uniform, Vertex, FaceVarying };
 
 // The storage class an inline declaration names, if any.
 std::optional<Storage> DeclaredStorage(std::string_view declared) {
-  std::optional<Storage> found;
-  std::size_t at = 0;
-  while (at < declared.size()) {
-    const std::size_t end = std::min(declared.find_first_of(" \t\n\r", at), declared.size());
-    const std::string_view word = declared.substr(at, end - at);
-    if (word == "constant") found = Storage::Constant;
-    else if (word == "uniform") found = Storage::Uniform;
-    else if (word == "vertex" || word == "varying") found = Storage::Vertex;
-    else if (word == "facevarying" || word == "facevertex") found = Storage::FaceVarying;
-    at = end + 1;
-  }
-  return found;
+  const std::string_view c = DeclaredClass(declared);
+  if (c == "constant") return Storage::Constant;
+  if (c == "uniform") return Storage::Uniform;
+  if (c == "vertex" || c == "varying") return Storage::Vertex;
+  if (c == "facevarying" || c == "facevertex") return Storage::FaceVarying;
+  return std::nullopt;
 }
 
 // A primitive variable of `width` numbers per value, once its storage is known.

@@ -182,6 +182,23 @@ void SubdivisionMesh(std::ostream& out, const SubdivMesh& m) {
   tags.push_back("\"interpolateboundary\"");
   nargs.insert(nargs.end(), {1, 0});
   ints.push_back(m.interpolateBoundary);
+  const bool faceVarying = !m.st.empty() && m.stClass == StClass::FaceVarying;
+  if (faceVarying) {
+    // RenderMan's numbers (patch/rib_geometry.cpp); CornersPlus1 is its propagated corners.
+    // CornersPlus2 (an .obj's 3) has no RenderMan form: written as CornersPlus1.
+    const int rule = m.faceVaryingRule == FaceVaryingRule::All      ? 0
+                     : m.faceVaryingRule == FaceVaryingRule::Smooth ? 2
+                     : m.faceVaryingRule == FaceVaryingRule::Boundaries ? 3
+                                                                        : 1;
+    tags.push_back("\"facevaryinginterpolateboundary\"");
+    nargs.insert(nargs.end(), {1, 0});
+    ints.push_back(rule);
+    if (m.faceVaryingRule == FaceVaryingRule::CornersPlus1 || m.faceVaryingRule == FaceVaryingRule::CornersPlus2) {
+      tags.push_back("\"facevaryingpropagatecorners\"");
+      nargs.insert(nargs.end(), {1, 0});
+      ints.push_back(1);
+    }
+  }
   out << "\n  ";
   list(tags);
   out << ' ';
@@ -192,7 +209,20 @@ void SubdivisionMesh(std::ostream& out, const SubdivMesh& m) {
   list(floats);
   out << "\n  \"P\" [";
   for (const Vec3& p : m.points) Point(out, p);
-  out << " ]\n";
+  out << " ]";
+  if (!m.st.empty()) {
+    // Face-varying values per face corner, in faceVertices' layout (a reader welds equal
+    // values at a vertex, as RenderMan does); vertex and varying ones per point.
+    out << "\n  \"" << (faceVarying ? "facevarying" : m.stClass == StClass::Vertex ? "vertex" : "varying") << " float[2] st\" [";
+    auto value = [&](const Vec2& t) { out << ' ' << t.x() << ' ' << t.y(); };
+    if (faceVarying) {
+      for (const int k : m.stIndices) value(m.st[static_cast<std::size_t>(k)]);
+    } else {
+      for (const Vec2& t : m.st) value(t);
+    }
+    out << " ]";
+  }
+  out << "\n";
 }
 
 // A polygon mesh as PointsPolygons of its triangles in world space, with the vertices
@@ -275,7 +305,7 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
     const Surface& s = scene.surfaces[k];
     // A cage's faces come from one request: the cage is written once, at its first face.
     const auto* face = std::get_if<SubdivFace>(&s.shape);
-    if (face && !cagesWritten.insert(&face->Cage()).second) continue;
+    if (face && !cagesWritten.insert(&face->Mesh()).second) continue;
     const bool placed = !s.worldFromObject.matrix().isIdentity(0.0);
     const bool dressed = !scene.appearanceOf.empty();
     if (placed || dressed) out << "AttributeBegin\n";
@@ -304,7 +334,7 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
     } else if (const auto* n = std::get_if<NurbsPiece>(&s.shape)) {
       NuPatch(out, *n);
     } else if (face) {
-      SubdivisionMesh(out, face->Cage());
+      SubdivisionMesh(out, face->Mesh());
     } else {
       return RibWriteError{"surface " + std::to_string(k + 1) + " (" + Describe(s) +
                            ") has no RIB form here: patches, NURBS, quadrics and subdivision meshes are written"};

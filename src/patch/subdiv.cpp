@@ -2,11 +2,16 @@
 
 #include <opensubdiv/bfr/refinerSurfaceFactory.h>
 #include <opensubdiv/bfr/surface.h>
+#include <opensubdiv/bfr/tessellation.h>
 #include <opensubdiv/far/error.h>
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
+#include <atomic>
+#include <cmath>
 #include <cstdint>
+#include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -14,18 +19,117 @@ namespace patchscan {
 
 namespace osd = OpenSubdiv;
 
-struct SubdivFace::Prepared {
-  std::shared_ptr<const SubdivMesh> cage;
-  int face = 0;
+namespace {
+
+// A prepared base face: its Bfr surfaces (points and, where the cage has them, texture
+// coordinates) and their patch points.
+struct FaceData {
   osd::Bfr::Surface<double> surface;
   std::vector<double> patchPoints;  // x y z per point: the control points, then any Bfr adds
-  std::vector<Vec3> hull;           // the same points as vectors
+  osd::Bfr::Surface<double> stSurface;
+  std::vector<double> stPatchPoints;  // s t per point
 };
 
-SubdivFace::SubdivFace(std::shared_ptr<const Prepared> face, int subFace) : face_(std::move(face)), subFace_(subFace) {
+// Bfr's options for a cage's faces (the cage and its independent tessellation alike).
+osd::Bfr::SurfaceFactory::Options FactoryOptions(const SubdivMesh& /*mesh*/) { return {}; }
+
+}  // namespace
+
+class SubdivFace::Cage {
+ public:
+  Cage(const SubdivMesh& mesh, std::unique_ptr<osd::Far::TopologyRefiner> refiner)
+      : mesh_(mesh), refiner_(std::move(refiner)), factory_(*refiner_, FactoryOptions(mesh)), slots_(static_cast<std::size_t>(mesh.faceSizes.size())) {
+    points_.reserve(mesh.points.size() * 3);
+    for (const Vec3& p : mesh.points) points_.insert(points_.end(), {p.x(), p.y(), p.z()});
+    st_.reserve(mesh.st.size() * 2);
+    for (const Vec2& t : mesh.st) st_.insert(st_.end(), {t.x(), t.y()});
+  }
+  ~Cage() {
+    for (Slot& s : slots_) delete s.data.load(std::memory_order_relaxed);
+  }
+  Cage(const Cage&) = delete;
+  Cage& operator=(const Cage&) = delete;
+
+  const SubdivMesh& Mesh() const { return mesh_; }
+  const osd::Far::TopologyRefiner& Refiner() const { return *refiner_; }
+  const osd::Bfr::RefinerSurfaceFactory<>& Factory() const { return factory_; }
+  const std::vector<double>& Points() const { return points_; }
+
+  // The prepared face, prepared now if it is not. Lock-free once prepared.
+  const FaceData& Data(int face) {
+    Slot& slot = slots_[static_cast<std::size_t>(face)];
+    if (const FaceData* d = slot.data.load(std::memory_order_acquire)) return *d;
+    const std::lock_guard lock(mutex_);
+    if (const FaceData* d = slot.data.load(std::memory_order_relaxed)) return *d;
+    auto* d = new FaceData;
+    Prepare(face, d);
+    slot.data.store(d, std::memory_order_release);
+    nPeak_ = std::max(nPeak_, ++nPrepared_);
+    ++nPreparations_;
+    return *d;
+  }
+  // Initialises `out` for the face's points and computes its patch points (the face has a
+  // limit surface: checked when the cage was made).
+  void Prepare(int face, FaceData* out) const {
+    const osd::Bfr::Surface<double>::PointDescriptor xyz(3), st(2);
+    factory_.InitVertexSurface(face, &out->surface);
+    out->patchPoints.resize(static_cast<std::size_t>(out->surface.GetNumPatchPoints()) * 3);
+    out->surface.PreparePatchPoints(points_.data(), xyz, out->patchPoints.data(), xyz);
+    if (mesh_.st.empty()) return;
+    switch (mesh_.stClass) {
+      case StClass::Vertex: factory_.InitVertexSurface(face, &out->stSurface); break;
+      case StClass::Varying: factory_.InitVaryingSurface(face, &out->stSurface); break;
+      case StClass::FaceVarying: factory_.InitFaceVaryingSurface(face, &out->stSurface, 0); break;
+    }
+    out->stPatchPoints.resize(static_cast<std::size_t>(out->stSurface.GetNumPatchPoints()) * 2);
+    out->stSurface.PreparePatchPoints(st_.data(), st, out->stPatchPoints.data(), st);
+  }
+  void Hold(int face) {
+    const std::lock_guard lock(mutex_);
+    ++slots_[static_cast<std::size_t>(face)].holds;
+  }
+  void Release(int face) {
+    const std::lock_guard lock(mutex_);
+    Slot& slot = slots_[static_cast<std::size_t>(face)];
+    if (slot.holds == 0 || --slot.holds > 0) return;
+    if (const FaceData* d = slot.data.exchange(nullptr, std::memory_order_acq_rel)) {
+      delete d;
+      --nPrepared_;
+    }
+  }
+  long PreparedNow() {
+    const std::lock_guard lock(mutex_);
+    return nPrepared_;
+  }
+  long Preparations() {
+    const std::lock_guard lock(mutex_);
+    return nPreparations_;
+  }
+  long PeakPrepared() {
+    const std::lock_guard lock(mutex_);
+    return nPeak_;
+  }
+
+ private:
+  struct Slot {
+    std::atomic<const FaceData*> data{nullptr};
+    int holds = 0;  // guarded by mutex_
+  };
+  const SubdivMesh mesh_;
+  std::unique_ptr<osd::Far::TopologyRefiner> refiner_;
+  // Bfr's factory and its cache of irregular patch topologies are used under mutex_ only.
+  const osd::Bfr::RefinerSurfaceFactory<> factory_;
+  std::vector<double> points_, st_;
+  std::mutex mutex_;
+  std::vector<Slot> slots_;
+  long nPrepared_ = 0, nPreparations_ = 0, nPeak_ = 0;
+};
+
+SubdivFace::SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, const std::array<Vec3, 8>& hull)
+    : cage_(std::move(cage)), face_(face), subFace_(subFace), hull_(hull) {
   if (subFace_ < 0) return;
   double c00[2], c10[2], c01[2], c11[2];
-  const osd::Bfr::Parameterization param = face_->surface.GetParameterization();
+  const osd::Bfr::Parameterization param = cage_->Factory().GetFaceParameterization(face_);
   if (param.GetType() == osd::Bfr::Parameterization::TRI) {
     // The kite at corner k of the triangle (0,0), (1,0), (0,1): the corner, the midpoint of
     // the edge after it, the centre, the midpoint of the edge before it.
@@ -56,14 +160,15 @@ SubdivFace::SubdivFace(std::shared_ptr<const Prepared> face, int subFace) : face
 }
 
 void SubdivFace::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const {
+  const FaceData& face = cage_->Data(face_);
   const double uv[2] = {c00_[0] + eu_[0] * u + ev_[0] * v + twist_[0] * u * v,
                         c00_[1] + eu_[1] * u + ev_[1] * v + twist_[1] * u * v};
   const osd::Bfr::Surface<double>::PointDescriptor desc(3);
   double p[3], du[3], dv[3], duu[3], duv[3], dvv[3];
-  const double* pts = face_->patchPoints.data();
-  if (Wants(order, DerivOrder::Second)) face_->surface.Evaluate(uv, pts, desc, p, du, dv, duu, duv, dvv);
-  else if (Wants(order, DerivOrder::First)) face_->surface.Evaluate(uv, pts, desc, p, du, dv);
-  else face_->surface.Evaluate(uv, pts, desc, p);
+  const double* pts = face.patchPoints.data();
+  if (Wants(order, DerivOrder::Second)) face.surface.Evaluate(uv, pts, desc, p, du, dv, duu, duv, dvv);
+  else if (Wants(order, DerivOrder::First)) face.surface.Evaluate(uv, pts, desc, p, du, dv);
+  else face.surface.Evaluate(uv, pts, desc, p);
   out->p = Vec3(p[0], p[1], p[2]);
   if (!Wants(order, DerivOrder::First)) return;
   const Vec3 Du(du[0], du[1], du[2]), Dv(dv[0], dv[1], dv[2]);
@@ -81,20 +186,37 @@ void SubdivFace::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* o
   out->d2pdv2 = a01 * a01 * Duu + 2.0 * a01 * a11 * Duv + a11 * a11 * Dvv;
 }
 
-std::span<const Vec3> SubdivFace::Hull() const { return face_->hull; }
+std::optional<TexCoords> SubdivFace::TextureCoords(double u, double v) const {
+  if (cage_->Mesh().st.empty()) return std::nullopt;
+  const FaceData& face = cage_->Data(face_);
+  const double uv[2] = {c00_[0] + eu_[0] * u + ev_[0] * v + twist_[0] * u * v,
+                        c00_[1] + eu_[1] * u + ev_[1] * v + twist_[1] * u * v};
+  const osd::Bfr::Surface<double>::PointDescriptor desc(2);
+  double st[2], du[2], dv[2];
+  face.stSurface.Evaluate(uv, face.stPatchPoints.data(), desc, st, du, dv);
+  // The chain rule through the sub-face's map, as in Evaluate.
+  const double a00 = eu_[0] + twist_[0] * v, a10 = eu_[1] + twist_[1] * v;
+  const double a01 = ev_[0] + twist_[0] * u, a11 = ev_[1] + twist_[1] * u;
+  const Vec2 Du(du[0], du[1]), Dv(dv[0], dv[1]);
+  return TexCoords{Vec2(st[0], st[1]), a00 * Du + a10 * Dv, a01 * Du + a11 * Dv};
+}
 
-int SubdivFace::Face() const { return face_->face; }
+bool SubdivFace::Regular() const { return cage_->Data(face_).surface.IsRegular(); }
 
-bool SubdivFace::Regular() const { return face_->surface.IsRegular(); }
-
-const SubdivMesh& SubdivFace::Cage() const { return *face_->cage; }
+const SubdivMesh& SubdivFace::Mesh() const { return cage_->Mesh(); }
 
 std::string SubdivFace::Describe() const {
-  std::string s = "subdivision face " + std::to_string(face_->face);
-  if (subFace_ >= 0) s += " (sub-face " + std::to_string(subFace_) + " of " + std::to_string(face_->surface.GetFaceSize()) + ")";
-  s += face_->surface.IsRegular() ? ", regular" : ", irregular";
+  std::string s = "subdivision face " + std::to_string(face_);
+  if (subFace_ >= 0)
+    s += " (sub-face " + std::to_string(subFace_) + " of " + std::to_string(cage_->Mesh().faceSizes[static_cast<std::size_t>(face_)]) + ")";
   return s;
 }
+
+void SubdivFace::Hold() const { cage_->Hold(face_); }
+void SubdivFace::Release() const { cage_->Release(face_); }
+long SubdivFace::PreparedNow() const { return cage_->PreparedNow(); }
+long SubdivFace::Preparations() const { return cage_->Preparations(); }
+long SubdivFace::PeakPrepared() const { return cage_->PeakPrepared(); }
 
 namespace {
 
@@ -181,7 +303,9 @@ void QuietOpenSubdiv() {
 
 }  // namespace
 
-std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts* counts) {
+// Checks `mesh` and builds its OpenSubdiv topology, with RenderMan's boundary rule and the
+// texture coordinates' channel. Throws std::invalid_argument (PrepareSubdivFaces).
+static std::unique_ptr<osd::Far::TopologyRefiner> BuildRefiner(const SubdivMesh& mesh) {
   QuietOpenSubdiv();
   using osd::Far::Index;
   const int nPoints = static_cast<int>(mesh.points.size());
@@ -264,6 +388,22 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
                                     "that has one together with creases: remove the creases or the vertex");
   }
 
+  // The texture coordinates: as many as their class asks, every index in range.
+  if (!mesh.st.empty()) {
+    if (mesh.stClass != StClass::FaceVarying && mesh.st.size() != mesh.points.size())
+      throw std::invalid_argument("\"st\" has " + std::to_string(mesh.st.size()) + " values, one per point expected (" +
+                                  std::to_string(mesh.points.size()) + ")");
+    if (mesh.stClass == StClass::FaceVarying) {
+      if (mesh.stIndices.size() != mesh.faceVertices.size())
+        throw std::invalid_argument("\"st\" has " + std::to_string(mesh.stIndices.size()) + " indices, one per face corner expected (" +
+                                    std::to_string(mesh.faceVertices.size()) + ")");
+      for (const int k : mesh.stIndices)
+        if (k < 0 || k >= static_cast<int>(mesh.st.size()))
+          throw std::invalid_argument("\"st\" index " + std::to_string(k) + " is out of range (" + std::to_string(mesh.st.size()) +
+                                      " values)");
+    }
+  }
+
   // Step 2: the topology, with RenderMan's boundary rule.
   osd::Far::TopologyDescriptor desc;
   desc.numVertices = nPoints;
@@ -278,7 +418,17 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
   desc.cornerWeights = cornerWeights.data();
   desc.numHoles = static_cast<int>(mesh.holes.size());
   desc.holeIndices = mesh.holes.data();
+  // Face-varying "st": one channel, its values indexed per face corner.
+  osd::Far::TopologyDescriptor::FVarChannel stChannel;
+  if (!mesh.st.empty() && mesh.stClass == StClass::FaceVarying) {
+    stChannel.numValues = static_cast<int>(mesh.st.size());
+    stChannel.valueIndices = mesh.stIndices.data();
+    desc.numFVarChannels = 1;
+    desc.fvarChannels = &stChannel;
+  }
   osd::Sdc::Options sdc;
+  // FaceVaryingRule lists OpenSubdiv's rules in OpenSubdiv's order.
+  sdc.SetFVarLinearInterpolation(static_cast<osd::Sdc::Options::FVarLinearInterpolation>(mesh.faceVaryingRule));
   sdc.SetVtxBoundaryInterpolation(mesh.interpolateBoundary == 1   ? osd::Sdc::Options::VTX_BOUNDARY_EDGE_AND_CORNER
                                   : mesh.interpolateBoundary == 2 ? osd::Sdc::Options::VTX_BOUNDARY_EDGE_ONLY
                                                                   : osd::Sdc::Options::VTX_BOUNDARY_NONE);
@@ -288,46 +438,155 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
                                                                               : osd::Sdc::SCHEME_CATMARK;
   std::unique_ptr<osd::Far::TopologyRefiner> refiner(RefinerFactory::Create(desc, RefinerFactory::Options(scheme, sdc)));
   if (!refiner) throw std::invalid_argument("OpenSubdiv cannot build the cage's topology");
+  return refiner;
+}
 
-  // Step 3: one Bfr surface per rendered face, its patch points prepared once.
-  const osd::Bfr::RefinerSurfaceFactory<> factory(*refiner);
+namespace {
+
+// The corners of the box of `points`.
+template <class Points>
+std::array<Vec3, 8> BoxCorners(const Points& points) {
+  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
+  for (const Vec3& p : points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  std::array<Vec3, 8> corners;
+  for (int k = 0; k < 8; ++k) corners[static_cast<std::size_t>(k)] = Vec3(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(), k & 4 ? hi.z() : lo.z());
+  return corners;
+}
+
+// The control points of a Catmull-Clark quadrilateral whose limit surface is the uniform
+// bicubic B-spline patch of its 16 neighbouring points (every vertex interior, of valence
+// 4, smooth, and every face around them a quadrilateral that is not a hole), or nothing.
+// The B-spline basis is non-negative, so the patch lies in the hull of these points: the
+// face's box without preparing it.
+std::optional<std::vector<int>> RegularNeighbourhood(const osd::Far::TopologyLevel& level, int face) {
+  const auto fv = level.GetFaceVertices(face);
+  if (fv.size() != 4) return std::nullopt;
+  std::vector<int> ring;
+  for (const int v : fv) {
+    if (level.IsVertexBoundary(v) || level.IsVertexNonManifold(v) || level.GetVertexFaces(v).size() != 4 ||
+        level.GetVertexSharpness(v) > 0.0f)
+      return std::nullopt;
+    for (const int e : level.GetVertexEdges(v))
+      if (level.GetEdgeSharpness(e) > 0.0f) return std::nullopt;
+    for (const int f : level.GetVertexFaces(v)) {
+      if (level.IsFaceHole(f) || level.GetFaceVertices(f).size() != 4) return std::nullopt;
+      for (const int w : level.GetFaceVertices(f)) ring.push_back(w);
+    }
+  }
+  return ring;
+}
+
+}  // namespace
+
+std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts* counts) {
+  QuietOpenSubdiv();
+  using osd::Far::Index;
+  std::unique_ptr<osd::Far::TopologyRefiner> refiner = BuildRefiner(mesh);
   const osd::Far::TopologyLevel& level = refiner->GetLevel(0);
   SubdivCounts c;
   c.faces = level.GetNumFaces();
   c.vertices = level.GetNumVertices();
   c.holes = static_cast<int>(mesh.holes.size());
-  c.creaseEdges = static_cast<int>(creaseWeights.size());
-  c.corners = static_cast<int>(cornerWeights.size());
+  for (const SubdivMesh::Crease& k : mesh.creases) c.creaseEdges += static_cast<int>(k.chain.size()) - 1;
+  c.corners = static_cast<int>(mesh.corners.size());
+  c.textureCoords = !mesh.st.empty();
   for (Index v = 0; v < level.GetNumVertices(); ++v)
     if (!level.IsVertexValenceRegular(v)) ++c.extraordinaryVertices;
-  std::vector<double> meshPoints;
-  meshPoints.reserve(mesh.points.size() * 3);
-  for (const Vec3& p : mesh.points) meshPoints.insert(meshPoints.end(), {p.x(), p.y(), p.z()});
-  const osd::Bfr::Surface<double>::PointDescriptor pointDesc(3);
+  const auto cage = std::make_shared<SubdivFace::Cage>(mesh, std::move(refiner));
+
+  // Step 3: every rendered face's surfaces with a box that contains it. The cage's points
+  // give the box of a bilinear face (its corners) and of a regular Catmull-Clark one (its
+  // 16 B-spline points); any other face is prepared once here for its patch points (Bfr's
+  // bases are non-negative: the surface lies in their hull), then freed.
+  const auto& factory = cage->Factory();
+  const osd::Far::TopologyLevel& base = cage->Refiner().GetLevel(0);
   std::vector<SubdivFace> faces;
-  const auto cage = std::make_shared<const SubdivMesh>(mesh);
-  for (Index f = 0; f < level.GetNumFaces(); ++f) {
-    auto prepared = std::make_shared<SubdivFace::Prepared>();
-    prepared->cage = cage;
-    prepared->face = f;
-    if (!factory.InitVertexSurface(f, &prepared->surface)) continue;  // a hole, or a dropped boundary face
-    if (!prepared->surface.IsRegular()) ++c.irregularFaces;
-    prepared->patchPoints.resize(static_cast<std::size_t>(prepared->surface.GetNumPatchPoints()) * 3);
-    prepared->surface.PreparePatchPoints(meshPoints.data(), pointDesc, prepared->patchPoints.data(), pointDesc);
-    for (std::size_t k = 0; k + 2 < prepared->patchPoints.size(); k += 3)
-      prepared->hull.emplace_back(prepared->patchPoints[k], prepared->patchPoints[k + 1], prepared->patchPoints[k + 2]);
-    const int n = prepared->surface.GetFaceSize();
-    std::shared_ptr<const SubdivFace::Prepared> shared = std::move(prepared);
-    const osd::Bfr::Parameterization param = shared->surface.GetParameterization();
-    if (param.HasSubFaces() || param.GetType() == osd::Bfr::Parameterization::TRI) {
-      for (int k = 0; k < n; ++k) faces.emplace_back(shared, k);
+  std::vector<Vec3> hullPoints;
+  FaceData scratch;
+  for (Index f = 0; f < base.GetNumFaces(); ++f) {
+    if (!factory.FaceHasLimitSurface(f)) continue;  // a hole, or a dropped boundary face
+    hullPoints.clear();
+    const std::optional<std::vector<int>> ring =
+        mesh.scheme == SubdivScheme::CatmullClark ? RegularNeighbourhood(base, f) : std::nullopt;
+    if (mesh.scheme == SubdivScheme::Bilinear || ring) {
+      for (const int v : ring ? *ring : std::vector<int>(base.GetFaceVertices(f).begin(), base.GetFaceVertices(f).end()))
+        hullPoints.push_back(mesh.points[static_cast<std::size_t>(v)]);
     } else {
-      faces.emplace_back(shared, -1);
+      cage->Prepare(f, &scratch);
+      if (!scratch.surface.IsRegular()) ++c.irregularFaces;
+      ++c.boundedAtLoad;
+      for (std::size_t k = 0; k + 2 < scratch.patchPoints.size(); k += 3)
+        hullPoints.emplace_back(scratch.patchPoints[k], scratch.patchPoints[k + 1], scratch.patchPoints[k + 2]);
+    }
+    const std::array<Vec3, 8> hull = BoxCorners(hullPoints);
+    const osd::Bfr::Parameterization param = factory.GetFaceParameterization(f);
+    if (param.HasSubFaces() || param.GetType() == osd::Bfr::Parameterization::TRI) {
+      for (int k = 0; k < param.GetFaceSize(); ++k) faces.emplace_back(cage, f, k, hull);
+    } else {
+      faces.emplace_back(cage, f, -1, hull);
     }
   }
   c.surfaces = static_cast<int>(faces.size());
   if (counts) *counts = c;
   return faces;
+}
+
+CageTessellation TessellateCage(const SubdivMesh& mesh, int rate) {
+  QuietOpenSubdiv();
+  const std::unique_ptr<osd::Far::TopologyRefiner> refiner = BuildRefiner(mesh);
+  const osd::Bfr::RefinerSurfaceFactory<> factory(*refiner, FactoryOptions(mesh));
+  std::vector<double> points;
+  for (const Vec3& p : mesh.points) points.insert(points.end(), {p.x(), p.y(), p.z()});
+  const osd::Bfr::Surface<double>::PointDescriptor xyz(3);
+  CageTessellation out;
+  osd::Bfr::Surface<double> surface;
+  std::vector<double> patchPoints, coords;
+  std::vector<int> facets;
+  for (int f = 0; f < refiner->GetLevel(0).GetNumFaces(); ++f) {
+    if (!factory.InitVertexSurface(f, &surface)) continue;
+    patchPoints.resize(static_cast<std::size_t>(surface.GetNumPatchPoints()) * 3);
+    surface.PreparePatchPoints(points.data(), xyz, patchPoints.data(), xyz);
+    const osd::Bfr::Tessellation tess(surface.GetParameterization(), rate, osd::Bfr::Tessellation::Options().SetFacetSize(3));
+    coords.resize(static_cast<std::size_t>(tess.GetNumCoords()) * 2);
+    facets.resize(static_cast<std::size_t>(tess.GetNumFacets()) * 3);
+    tess.GetCoords(coords.data());
+    tess.GetFacets(facets.data());
+    const int first = static_cast<int>(out.points.size());
+    for (int k = 0; k < tess.GetNumCoords(); ++k) {
+      double p[3];
+      surface.Evaluate(&coords[2 * static_cast<std::size_t>(k)], patchPoints.data(), xyz, p);
+      out.points.emplace_back(p[0], p[1], p[2]);
+    }
+    for (std::size_t k = 0; k + 2 < facets.size(); k += 3) {
+      out.triangles.push_back({first + facets[k], first + facets[k + 1], first + facets[k + 2]});
+      // The chord error at the edge midpoints and the centroid, in parameters and in space.
+      // A facet across sub-faces of an n-gon has coordinates in two of their tiles (averages
+      // of which are no point of the face): not measured, its neighbours are.
+      const osd::Bfr::Parameterization param = surface.GetParameterization();
+      if (param.HasSubFaces()) {
+        int sub[3];
+        for (int i = 0; i < 3; ++i) {
+          double normalised[2];
+          sub[i] = param.ConvertCoordToNormalizedSubFace(&coords[2 * static_cast<std::size_t>(facets[k + static_cast<std::size_t>(i)])], normalised);
+        }
+        if (sub[0] != sub[1] || sub[1] != sub[2]) continue;
+      }
+      constexpr double kAt[4][3] = {{0.5, 0.5, 0.0}, {0.0, 0.5, 0.5}, {0.5, 0.0, 0.5}, {1 / 3.0, 1 / 3.0, 1 / 3.0}};
+      for (const auto& b : kAt) {
+        double uv[2] = {0.0, 0.0}, p[3];
+        Vec3 flat = Vec3::Zero();
+        for (int i = 0; i < 3; ++i) {
+          const int c = facets[k + static_cast<std::size_t>(i)];
+          uv[0] += b[i] * coords[2 * static_cast<std::size_t>(c)];
+          uv[1] += b[i] * coords[2 * static_cast<std::size_t>(c) + 1];
+          flat += b[i] * out.points[static_cast<std::size_t>(first + c)];
+        }
+        surface.Evaluate(uv, patchPoints.data(), xyz, p);
+        out.maxChordError = std::max(out.maxChordError, (Vec3(p[0], p[1], p[2]) - flat).norm());
+      }
+    }
+  }
+  return out;
 }
 
 }  // namespace patchscan

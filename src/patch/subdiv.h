@@ -9,9 +9,16 @@
 // extraordinary vertex, a semi-sharp crease) by its approximation at the factory's default
 // adaptive level of 2 (OpenSubdiv 3.5 Bfr::SurfaceFactory::Options, "approxLevelSharp" and
 // "approxLevelSmooth"), a patch that matches its neighbours along the shared edges.
+//
+// A face is prepared (its Bfr surface initialised and its patch points computed) on demand,
+// when it is first evaluated, and freed when the last hold on it is released: a scan holds
+// a face from the row its screen box begins to the row it ends, so off-screen faces are
+// never prepared and memory follows the active faces, not the cage.
 #pragma once
 
+#include <array>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -23,6 +30,18 @@ namespace patchscan {
 // The subdivision rules: RenderMan's "catmull-clark", "loop" (triangles only) and
 // "bilinear" (the cage itself, flat: each face bilinear, an n-gon as n bilinear quarters).
 enum class SubdivScheme { CatmullClark, Loop, Bilinear };
+
+// How face-varying texture coordinates are interpolated: OpenSubdiv's
+// Sdc::Options::FVarLinearInterpolation, in its order. Smooth: subdivided like the points,
+// each region of the texture map bounded by a smooth curve; CornersOnly: and its corners
+// kept; CornersPlus1/Plus2: and points where three or more regions meet (and darts, concave
+// corners); Boundaries: the regions' boundaries linear; All: every face bilinear.
+enum class FaceVaryingRule { Smooth, CornersOnly, CornersPlus1, CornersPlus2, Boundaries, All };
+
+// The storage class of "st": Vertex, one per point, subdivided as the points are; Varying,
+// one per point, bilinear on each face; FaceVarying, one per face corner (so a texture map
+// may be cut along edges), by the mesh's FaceVaryingRule.
+enum class StClass { Vertex, Varying, FaceVarying };
 
 // A control cage and its tags, as RenderMan's SubdivisionMesh gives them.
 struct SubdivMesh {
@@ -42,6 +61,18 @@ struct SubdivMesh {
   // limit surface does not reach the cage's boundary), 1 boundary edges and corners sharp,
   // 2 boundary edges sharp, corners smooth.
   int interpolateBoundary = 0;
+  // Texture coordinates "st" (empty: none, each face's own (u, v) instead). Vertex and
+  // Varying: one per point. FaceVarying: stIndices has one index into st per face corner,
+  // in faceVertices' layout.
+  StClass stClass = StClass::FaceVarying;
+  std::vector<Vec2> st;
+  std::vector<int> stIndices;
+  FaceVaryingRule faceVaryingRule = FaceVaryingRule::CornersOnly;
+};
+
+// Texture coordinates at a point of a surface and their derivatives in (u, v).
+struct TexCoords {
+  Vec2 st, dstdu, dstdv;
 };
 
 // One base face (or one sub-face of a non-quadrilateral face) of a prepared cage. A
@@ -51,40 +82,73 @@ struct SubdivMesh {
 // the domain [0,1]^2 and no collapsed edge.
 class SubdivFace {
  public:
-  struct Prepared;  // the Bfr surface of the face and its patch points, shared by sub-faces
-  SubdivFace(std::shared_ptr<const Prepared> face, int subFace);
+  class Cage;  // the cage, its OpenSubdiv topology and the prepared faces, shared by its faces
+  SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, const std::array<Vec3, 8>& hull);
 
+  // Prepares the base face first if it is not (thread-safe; allocates then, and not after).
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
-  // The face's patch points: the surface lies in their convex hull (Catmull-Clark's and
-  // Bfr's bases are non-negative).
-  std::span<const Vec3> Hull() const;
+  // The texture coordinates "st" at (u, v) with their derivatives, or nullopt when the cage
+  // has none. Prepares as Evaluate does.
+  std::optional<TexCoords> TextureCoords(double u, double v) const;
+  // The corners of a box that contains the surface (known without preparing the face).
+  std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
   // The base face's index in the cage, and the sub-face (-1: the face is a quadrilateral).
-  int Face() const;
+  int Face() const { return face_; }
   int SubFace() const { return subFace_; }
   bool Regular() const;
   // The cage the face belongs to, as given (one copy shared by all its faces).
-  const SubdivMesh& Cage() const;
+  const SubdivMesh& Mesh() const;
+
+  // Holds the base face prepared (Hold) until as many Release calls: the last frees it. A
+  // face evaluated without a hold stays prepared until a hold on it ends. A face must not be
+  // evaluated by one thread while another releases its last hold.
+  void Hold() const;
+  void Release() const;
+  // Base faces of this face's cage prepared now, preparations so far and the most prepared
+  // at once (for tests and statistics; the boxes' preparations at load are not counted).
+  long PreparedNow() const;
+  long Preparations() const;
+  long PeakPrepared() const;
 
  private:
-  std::shared_ptr<const Prepared> face_;
+  std::shared_ptr<Cage> cage_;
+  int face_;
   int subFace_;
+  std::array<Vec3, 8> hull_;
   // The sub-face's (u, v) to the face's Bfr coordinates, bilinearly: c00 + eu u + ev v +
   // twist u v (affine, twist 0, for Bfr's quadrangulated sub-faces).
   double c00_[2] = {0.0, 0.0}, eu_[2] = {1.0, 0.0}, ev_[2] = {0.0, 1.0}, twist_[2] = {0.0, 0.0};
 };
 
 // Statistics of a cage, for `patchscan info`.
+// boundedAtLoad: the faces whose box took their Bfr patch points at load (every face but
+// the Catmull-Clark quadrilaterals of regular interior neighbourhood and the bilinear ones,
+// whose boxes the cage's points give): prepared then and freed at once.
 struct SubdivCounts {
+  // irregularFaces: the faces Bfr approximates (Catmull-Clark and Loop; bilinear faces are exact).
   int faces = 0, vertices = 0, irregularFaces = 0, extraordinaryVertices = 0, holes = 0, surfaces = 0;
-  int creaseEdges = 0, corners = 0;
+  int creaseEdges = 0, corners = 0, boundedAtLoad = 0;
+  bool textureCoords = false;
 };
 
-// Prepares every face of `mesh` that is rendered (not a hole, nor a boundary face where
-// interpolateBoundary is 0). Throws std::invalid_argument naming what is wrong with a cage
-// that is not a valid mesh (indices out of range, a face of fewer than 3 vertices, a face
-// using a vertex twice, a face of a Loop cage that is not a triangle, a non-manifold edge
-// OpenSubdiv refuses).
+// The surfaces of every face of `mesh` that is rendered (not a hole, nor a boundary face
+// where interpolateBoundary is 0), each prepared on demand. Throws std::invalid_argument
+// naming what is wrong with a cage that is not a valid mesh (indices out of range, a face of
+// fewer than 3 vertices, a face using a vertex twice, a face of a Loop cage that is not a
+// triangle, a non-manifold edge OpenSubdiv refuses, "st" of the wrong size).
 std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts* counts = nullptr);
+
+// An independent reference for tests: every rendered base face tessellated by Bfr's own
+// Tessellation pattern at `rate` segments per edge over the face's own parameterisation
+// (not SubdivFace's sub-faces), each point evaluated by Bfr; object space, counter-clockwise
+// as the faces. maxChordError: the largest distance, over every triangle's edge midpoints
+// and centroid, between the surface at that point's parameters and the flat triangle there.
+struct CageTessellation {
+  std::vector<Vec3> points;
+  std::vector<std::array<int, 3>> triangles;
+  double maxChordError = 0.0;
+};
+CageTessellation TessellateCage(const SubdivMesh& mesh, int rate);
 
 }  // namespace patchscan

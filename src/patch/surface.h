@@ -39,6 +39,31 @@ inline const PieceTrim* TrimOf(const Surface& s) {
   return n ? n->Trim() : nullptr;
 }
 
+// Texture coordinates at (u, v) with their derivatives in (u, v): a subdivision face's "st"
+// where its cage has them, else (u, v) itself.
+inline TexCoords TextureCoordsAt(const Surface& s, double u, double v) {
+  if (const auto* f = std::get_if<SubdivFace>(&s.shape))
+    if (auto st = f->TextureCoords(u, v)) return *st;
+  return TexCoords{Vec2(u, v), Vec2(1.0, 0.0), Vec2(0.0, 1.0)};
+}
+
+// Holds what a surface prepares on demand (a subdivision face's Bfr surface, patch/subdiv.h)
+// for the holder's lifetime; the last hold's end frees it. Other kinds prepare nothing.
+class SurfaceHold {
+ public:
+  explicit SurfaceHold(const Surface& s) : face_(std::get_if<SubdivFace>(&s.shape)) {
+    if (face_) face_->Hold();
+  }
+  ~SurfaceHold() {
+    if (face_) face_->Release();
+  }
+  SurfaceHold(const SurfaceHold&) = delete;
+  SurfaceHold& operator=(const SurfaceHold&) = delete;
+
+ private:
+  const SubdivFace* face_;
+};
+
 // Object-space evaluation of any surface (one dispatch per call: for tests and
 // non-hot code; hot code visits once and calls the shape's Evaluate directly).
 inline void EvaluateObject(const Surface& s, double u, double v, DerivOrder order,

@@ -42,7 +42,7 @@ void AppendPattern(const Surface& s, const Bfr::Tessellation& tess, std::uint32_
     const double u = coords[2 * k], v = coords[2 * k + 1];
     SurfaceDerivs d;
     EvaluateObject(s, u, v, DerivOrder::Position, &d);
-    out->vertices.push_back({s.worldFromObject * d.p, WorldNormal(s, u, v), Vec2(u, v)});
+    out->vertices.push_back({s.worldFromObject * d.p, WorldNormal(s, u, v), Vec2(u, v), TextureCoordsAt(s, u, v).st});
   }
   // A trimmed NURBS piece keeps the triangles whose centroid in (u,v) its trim keeps: the
   // cut edge is as fine as the tessellation, and two pieces sharing a knot line decide
@@ -79,6 +79,7 @@ double ScreenLength(const std::array<Vec3, 17>& world, const Mat4& screenFromWor
 }  // namespace
 
 void TessellateUniform(const Surface& s, int rate, std::uint32_t surfaceId, TessMesh* out) {
+  const SurfaceHold hold(s);
   rate = std::clamp(rate, 1, kMaxTessRate);
   const Bfr::Parameterization quad(OpenSubdiv::Sdc::SCHEME_CATMARK, 4);
   AppendPattern(s, Bfr::Tessellation(quad, rate, Bfr::Tessellation::Options().SetFacetSize(3)),
@@ -308,6 +309,7 @@ void AppendRates(const Surface& s, const std::array<int, 6>& rates, std::uint32_
 }  // namespace
 
 std::array<int, 4> ScreenEdgeRates(const Surface& s, const Camera& camera, double pixels) {
+  const SurfaceHold hold(s);
   const Mat4 screenFromWorld = ScreenFromWorld(camera);
   std::array<int, 4> rates;
   for (int e = 0; e < 4; ++e) rates[e] = LengthRate(EdgePoints(s, kBfrEdges[e]), screenFromWorld, pixels);
@@ -315,6 +317,7 @@ std::array<int, 4> ScreenEdgeRates(const Surface& s, const Camera& camera, doubl
 }
 
 std::array<int, 6> ChordErrorRates(const Surface& s, const Camera& camera, double errorPx) {
+  const SurfaceHold hold(s);
   const Mat4 screenFromWorld = ScreenFromWorld(camera);
   const double curveErrorPx = kCurveShareOfChordError * errorPx;
   // The twist's error h_u h_v T / 4 held to the same share: the smaller inner rate is
@@ -336,11 +339,13 @@ std::array<int, 6> ChordErrorRates(const Surface& s, const Camera& camera, doubl
 
 void TessellateToChordError(const Surface& s, const Camera& camera, double errorPx, std::uint32_t surfaceId,
                             TessMesh* out) {
+  const SurfaceHold hold(s);
   AppendRates(s, ChordErrorRates(s, camera, errorPx), surfaceId, out);
 }
 
 void TessellateToScreen(const Surface& s, const Camera& camera, double pixels,
                         std::uint32_t surfaceId, TessMesh* out) {
+  const SurfaceHold hold(s);
   const Mat4 screenFromWorld = ScreenFromWorld(camera);
   AppendRates(s,
               RatesOf(s, screenFromWorld, [&](const CurvePoints& c) { return LengthRate(c, screenFromWorld, pixels); },

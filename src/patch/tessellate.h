@@ -14,7 +14,8 @@ namespace patchscan {
 struct TessVertex {
   Vec3 position;  // world space
   Vec3 normal;    // world space, unit; at a collapsed edge, the limit from inside
-  Vec2 uv;
+  Vec2 uv;        // the surface's parameters
+  Vec2 st;        // its texture coordinates (TextureCoordsAt): uv, unless the scene gives "st"
 };
 
 struct TessMesh {

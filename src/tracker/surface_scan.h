@@ -102,6 +102,7 @@ class SurfaceScan {
   std::vector<Stationary> PrePass();
 
   const Surface& surface_;
+  SurfaceHold hold_;  // the surface prepared while it is scanned (before the members that evaluate it)
   ScreenMap map_;
   Mat3 normalFromObject_;
   Counters& counters_;

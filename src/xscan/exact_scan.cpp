@@ -54,10 +54,13 @@ raster::Fragment FragmentAt(const LevelPoint& p, const Surface& surface,
     f.normal = (normalFromObject * n).normalized();
   else
     f.normal = WorldNormal(surface, p.uv.x(), p.uv.y());
-  f.uv = p.uv;
-  // The inverse of the screen Jacobian [x_u x_v; y_u y_v]: uv per pixel in x and y.
-  f.duvdx = ClampLength(Vec2(p.gradY.y(), -p.gradY.x()) / p.j, kMaxUvPerPixel);
-  f.duvdy = ClampLength(Vec2(-p.gradX.y(), p.gradX.x()) / p.j, kMaxUvPerPixel);
+  // The texture coordinates and, through the inverse of the screen Jacobian
+  // [x_u x_v; y_u y_v], their change per pixel in x and y.
+  const TexCoords t = TextureCoordsAt(surface, p.uv.x(), p.uv.y());
+  const Vec2 duvdx = Vec2(p.gradY.y(), -p.gradY.x()) / p.j, duvdy = Vec2(-p.gradX.y(), p.gradX.x()) / p.j;
+  f.uv = t.st;
+  f.duvdx = ClampLength(t.dstdu * duvdx.x() + t.dstdv * duvdx.y(), kMaxUvPerPixel);
+  f.duvdy = ClampLength(t.dstdu * duvdy.x() + t.dstdv * duvdy.y(), kMaxUvPerPixel);
   f.surfaceId = surfaceId;
   return f;
 }

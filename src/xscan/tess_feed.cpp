@@ -17,7 +17,7 @@ raster::TriangleMesh ToRasterMesh(const TessMesh& mesh, const Camera& camera) {
   r.vertices.reserve(mesh.vertices.size());
   for (const TessVertex& v : mesh.vertices) {
     const Vec4 h = screenFromWorld * v.position.homogeneous();
-    r.vertices.push_back({Vec3(h.x(), h.y(), h.w()), v.position, v.normal, v.uv, depthRow.dot(v.position.homogeneous())});
+    r.vertices.push_back({Vec3(h.x(), h.y(), h.w()), v.position, v.normal, v.st, depthRow.dot(v.position.homogeneous())});
   }
   r.triangles.reserve(mesh.triangles.size());
   for (size_t k = 0; k < mesh.triangles.size(); ++k)

@@ -84,6 +84,30 @@ inline SubdivMesh Icosahedron() {
   return m;
 }
 
+// A torus of nu x nv quadrilaterals, one of them cut into two triangles along a diagonal:
+// the diagonal's two ends are extraordinary (valence 5), the faces around them irregular.
+inline SubdivMesh Torus(int nu, int nv) {
+  SubdivMesh m;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double a = 2.0 * M_PI * i / nu, b = 2.0 * M_PI * j / nv;
+      m.points.emplace_back((1.0 + 0.45 * std::cos(b)) * std::cos(a), (1.0 + 0.45 * std::cos(b)) * std::sin(a), 0.45 * std::sin(b));
+    }
+  auto at = [&](int i, int j) { return ((i + nu) % nu) * nv + (j + nv) % nv; };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const int q[4] = {at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)};
+      if (i == 0 && j == 0) {
+        m.faceSizes.insert(m.faceSizes.end(), {3, 3});
+        m.faceVertices.insert(m.faceVertices.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+      } else {
+        m.faceSizes.push_back(4);
+        m.faceVertices.insert(m.faceVertices.end(), q, q + 4);
+      }
+    }
+  return m;
+}
+
 // Grid(n) with each quadrilateral cut into two triangles along the same diagonal: interior
 // vertices of valence 6, Loop's regular case.
 inline SubdivMesh TriangleGrid(int n, int interpolateBoundary);
@@ -105,6 +129,7 @@ inline std::vector<Cage> Cages() {
   c.push_back({"tetrahedron", tetra});
   c.push_back({"pyramid, apex of valence 8, octagonal base", Pyramid(8)});
   c.push_back({"pyramid, pentagonal base", Pyramid(5)});
+  c.push_back({"torus, two vertices of valence 5", Torus(8, 6)});
   c.push_back({"open grid, boundary edges and corners sharp", Grid(4, 1)});
   c.push_back({"open grid, boundary faces dropped", Grid(4, 0)});
   c.push_back({"octahedron, Loop, valence 4", Octahedron()});

@@ -126,9 +126,11 @@ TEST(Subdiv, NeighboursMeetAlongSharedEdges) {
   for (const test::Cage& c : test::Cages()) {
     const auto faces = PrepareSubdivFaces(c.mesh);
     std::vector<std::pair<Vec3, std::size_t>> samples;
+    // A sub-face's outer edges are halves of its face's edges: a quadrilateral beside it
+    // is sampled twice as finely, so that every sample on either side has its partner.
     for (std::size_t k = 0; k < faces.size(); ++k)
-      for (int i = 0; i <= kPerEdge; ++i) {
-        const double t = static_cast<double>(i) / kPerEdge;
+      for (int n = faces[k].SubFace() < 0 ? 2 * kPerEdge : kPerEdge, i = 0; i <= n; ++i) {
+        const double t = static_cast<double>(i) / n;
         for (const auto& [u, v] : {std::pair{t, 0.0}, {t, 1.0}, {0.0, t}, {1.0, t}})
           samples.emplace_back(At(faces[k], u, v).p, k);
       }
@@ -325,6 +327,194 @@ TEST(Subdiv, WrittenAsTheSubdivisionMeshItWasReadAs) {
   const auto refused = WriteRib(saddle, camera, {});
   ASSERT_TRUE(std::holds_alternative<RibWriteError>(refused));
   EXPECT_NE(std::get<RibWriteError>(refused).message.find("has no RIB form here"), std::string::npos);
+}
+
+TEST(Subdiv, FacesArePreparedOnDemandAndFreedWhenTheirLastHoldEnds) {
+  // An 8x8 grid: the 36 faces whose corners are all interior have regular neighbourhoods and
+  // get their boxes from the cage's points; the 28 others are prepared once at load for their
+  // boxes and freed. None is prepared after loading.
+  SubdivCounts n;
+  const auto faces = PrepareSubdivFaces(test::Grid(8, 1), &n);
+  ASSERT_EQ(faces.size(), 64u);
+  EXPECT_EQ(n.boundedAtLoad, 28);
+  EXPECT_EQ(faces[0].PreparedNow(), 0);
+  EXPECT_EQ(faces[0].Preparations(), 0);
+  // Evaluated without a hold: prepared, and kept.
+  At(faces[0], 0.5, 0.5);
+  EXPECT_EQ(faces[0].PreparedNow(), 1);
+  // Held twice, evaluated, released twice: prepared once, freed at the last release.
+  faces[9].Hold();
+  faces[9].Hold();
+  At(faces[9], 0.5, 0.5);
+  At(faces[9], 0.25, 0.5);
+  EXPECT_EQ(faces[0].PreparedNow(), 2);
+  faces[9].Release();
+  EXPECT_EQ(faces[0].PreparedNow(), 2);
+  faces[9].Release();
+  EXPECT_EQ(faces[0].PreparedNow(), 1);
+  EXPECT_EQ(faces[0].Preparations(), 2);
+  // The unheld face is freed when a hold on it ends; a release without a hold does nothing.
+  faces[0].Hold();
+  faces[0].Release();
+  faces[0].Release();
+  EXPECT_EQ(faces[0].PreparedNow(), 0);
+  EXPECT_EQ(faces[0].PeakPrepared(), 2);
+  // Prepared again on demand, the same surface.
+  const SurfaceDerivs again = At(faces[9], 0.25, 0.5);
+  faces[9].Hold();
+  faces[9].Release();
+  SubdivMesh copy = test::Grid(8, 1);
+  const auto fresh = PrepareSubdivFaces(copy);
+  EXPECT_LT((again.p - At(fresh[9], 0.25, 0.5).p).norm(), 1e-15);
+}
+
+// A cage with "st" of class `c` equal to each point's (x, y).
+SubdivMesh WithPlanarSt(SubdivMesh m, StClass c) {
+  m.stClass = c;
+  for (const Vec3& p : m.points) m.st.emplace_back(p.x(), p.y());
+  if (c == StClass::FaceVarying) m.stIndices = m.faceVertices;
+  return m;
+}
+
+TEST(Subdiv, VertexTextureCoordsAreSubdividedAsThePointsAre) {
+  // "vertex" st equal to the points' (x, y) is the surface's (x, y), with its derivatives:
+  // the same Bfr surface with other data. So is face-varying st without seams under the
+  // smooth rule on closed cages (no boundary rule to differ). Both evaluate the same weights:
+  // kSameTol is rounding.
+  constexpr double kSameTol = 1e-12;
+  struct Case {
+    const char* name;
+    SubdivMesh mesh;
+  };
+  SubdivMesh smooth = WithPlanarSt(test::Pyramid(5), StClass::FaceVarying);
+  smooth.faceVaryingRule = FaceVaryingRule::Smooth;
+  SubdivMesh ico = WithPlanarSt(test::Icosahedron(), StClass::FaceVarying);
+  ico.faceVaryingRule = FaceVaryingRule::Smooth;
+  const Case cases[] = {{"cube, vertex", WithPlanarSt(test::Cube(), StClass::Vertex)},
+                        {"open grid, vertex", WithPlanarSt(test::Grid(4, 1), StClass::Vertex)},
+                        {"pentagonal pyramid, vertex", WithPlanarSt(test::Pyramid(5), StClass::Vertex)},
+                        {"pentagonal pyramid, face-varying smooth", smooth},
+                        {"icosahedron, Loop, face-varying smooth", ico}};
+  for (const Case& c : cases)
+    for (const SubdivFace& f : PrepareSubdivFaces(c.mesh))
+      for (double u : {0.0, 0.3, 0.77, 1.0})
+        for (double v : {0.0, 0.45, 1.0}) {
+          const SurfaceDerivs d = At(f, u, v);
+          const auto t = f.TextureCoords(u, v);
+          ASSERT_TRUE(t.has_value());
+          EXPECT_LT((t->st - d.p.head<2>()).norm(), kSameTol) << c.name << ", " << f.Describe() << " at " << u << ", " << v;
+          EXPECT_LT((t->dstdu - d.dpdu.head<2>()).norm(), kSameTol) << c.name << ", " << f.Describe();
+          EXPECT_LT((t->dstdv - d.dpdv.head<2>()).norm(), kSameTol) << c.name << ", " << f.Describe();
+        }
+  // Without "st", none.
+  EXPECT_FALSE(PrepareSubdivFaces(test::Cube())[0].TextureCoords(0.5, 0.5).has_value());
+}
+
+TEST(Subdiv, FaceVaryingTextureCoordsFollowTheirRule) {
+  // Each face of the cube its own unit square of the map (every edge a seam): under the
+  // bilinear rule a quadrilateral's st is its own (u, v) exactly; under the smooth rules each
+  // face's map is still a square's, bounded by its corners where they are kept.
+  constexpr double kSameTol = 1e-12;
+  SubdivMesh m = test::Cube();
+  m.st = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  for (std::size_t f = 0; f < 6; ++f) m.stIndices.insert(m.stIndices.end(), {0, 1, 2, 3});
+  // The same values at every face's corners but indexed per corner: seams everywhere.
+  m.st.resize(24);
+  for (std::size_t k = 0; k < 24; ++k) {
+    m.st[k] = m.st[k % 4];
+    m.stIndices[k] = static_cast<int>(k);
+  }
+  m.faceVaryingRule = FaceVaryingRule::All;
+  for (const SubdivFace& f : PrepareSubdivFaces(m))
+    for (double u : {0.0, 0.3, 1.0})
+      for (double v : {0.0, 0.6, 1.0}) {
+        const TexCoords t = *f.TextureCoords(u, v);
+        EXPECT_LT((t.st - Vec2(u, v)).norm(), kSameTol) << f.Describe();
+        EXPECT_LT((t.dstdu - Vec2(1, 0)).norm(), kSameTol);
+        EXPECT_LT((t.dstdv - Vec2(0, 1)).norm(), kSameTol);
+      }
+  m.faceVaryingRule = FaceVaryingRule::CornersOnly;
+  for (const SubdivFace& f : PrepareSubdivFaces(m)) {
+    for (const auto& [u, v] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {1.0, 1.0}, {0.0, 1.0}})
+      EXPECT_LT((f.TextureCoords(u, v)->st - Vec2(u, v)).norm(), kSameTol) << "a kept corner of " << f.Describe();
+    const Vec2 centre = f.TextureCoords(0.5, 0.5)->st;
+    EXPECT_LT((centre - Vec2(0.5, 0.5)).norm(), kSameTol) << "the square's symmetry";
+  }
+  // Out-of-range indices and wrong counts are refused.
+  SubdivMesh bad = m;
+  bad.stIndices[5] = 24;
+  EXPECT_THROW(PrepareSubdivFaces(bad), std::invalid_argument);
+  bad = m;
+  bad.stIndices.pop_back();
+  EXPECT_THROW(PrepareSubdivFaces(bad), std::invalid_argument);
+  bad = WithPlanarSt(test::Cube(), StClass::Vertex);
+  bad.st.pop_back();
+  EXPECT_THROW(PrepareSubdivFaces(bad), std::invalid_argument);
+}
+
+TEST(Subdiv, RibTextureCoordsByClassAndTag) {
+  const std::string head = "WorldBegin\nSubdivisionMesh \"catmull-clark\" [4 4 4 4 4 4]\n"
+                           "  [0 1 3 2  2 3 5 4  4 5 7 6  6 7 1 0  1 7 5 3  6 0 2 4]\n";
+  const std::string p = "  \"P\" [-1 -1 1  1 -1 1  -1 1 1  1 1 1  -1 1 -1  1 1 -1  -1 -1 -1  1 -1 -1]\n";
+  std::string perCorner;
+  for (int f = 0; f < 6; ++f) perCorner += " 0 0 1 0 1 1 0 1";
+  auto read = [&](const std::string& text) {
+    auto r = ParseRib(text, "st.rib");
+    if (auto* e = std::get_if<SourceError>(&r)) ADD_FAILURE() << e->What();
+    return std::get<Scene>(std::move(r));
+  };
+  // Face-varying, bilinear (RenderMan's 0): each face's own square, the corners welded where
+  // their values agree at a vertex.
+  const Scene fv = read(head + "  [\"facevaryinginterpolateboundary\"] [1 0] [0] []\n" + p +
+                        "  \"facevarying float[2] st\" [" + perCorner + "]\nWorldEnd\n");
+  const auto& face = std::get<SubdivFace>(fv.surfaces[0].shape);
+  EXPECT_EQ(face.Mesh().stClass, StClass::FaceVarying);
+  EXPECT_EQ(face.Mesh().faceVaryingRule, FaceVaryingRule::All);
+  EXPECT_EQ(face.Mesh().stIndices.size(), 24u);
+  EXPECT_LT(face.Mesh().st.size(), 24u);
+  EXPECT_LT((face.TextureCoords(0.3, 0.8)->st - Vec2(0.3, 0.8)).norm(), 1e-12);
+  // The default rule is RenderMan's 1 (corners kept); propagated corners are OpenSubdiv's
+  // CornersPlus1.
+  EXPECT_EQ(std::get<SubdivFace>(read(head + p + "  \"facevarying float[2] st\" [" + perCorner + "]\nWorldEnd\n")
+                                     .surfaces[0].shape).Mesh().faceVaryingRule,
+            FaceVaryingRule::CornersOnly);
+  EXPECT_EQ(std::get<SubdivFace>(read(head + "  [\"facevaryingpropagatecorners\"] [1 0] [1] []\n" + p +
+                                      "  \"facevarying float[2] st\" [" + perCorner + "]\nWorldEnd\n")
+                                     .surfaces[0].shape).Mesh().faceVaryingRule,
+            FaceVaryingRule::CornersPlus1);
+  // Undeclared and one per point: varying (RenderMan's predeclared class); "vertex" declared.
+  const std::string perPoint = " [0 0 1 0 0 1 1 1 0 1 1 1 0 0 1 0]\n";
+  EXPECT_EQ(std::get<SubdivFace>(read(head + p + "  \"st\"" + perPoint + "WorldEnd\n").surfaces[0].shape).Mesh().stClass,
+            StClass::Varying);
+  EXPECT_EQ(std::get<SubdivFace>(read(head + p + "  \"vertex float[2] st\"" + perPoint + "WorldEnd\n").surfaces[0].shape)
+                .Mesh().stClass,
+            StClass::Vertex);
+  // Wrong counts and unknown rules name the file and line.
+  for (const auto& [text, message] :
+       {std::pair{head + p + "  \"st\" [0 0 1]\nWorldEnd\n", "st.rib:5: SubdivisionMesh: \"st\" expects 2 numbers per face corner (48) or per point (16), found 3"},
+        {head + p + "  \"vertex float[2] st\" [0 0]\nWorldEnd\n", "st.rib:5: SubdivisionMesh: \"st\" expects 2 numbers per point (16), found 2"},
+        {head + "  [\"facevaryinginterpolateboundary\"] [1 0] [4] []\n" + p + "WorldEnd\n",
+         "st.rib:4: SubdivisionMesh: \"facevaryinginterpolateboundary\" takes nothing, or 0, 1, 2 or 3"}}) {
+    const auto r = ParseRib(text, "st.rib");
+    ASSERT_TRUE(std::holds_alternative<SourceError>(r)) << message;
+    EXPECT_NE(std::get<SourceError>(r).What().find(message), std::string::npos)
+        << std::get<SourceError>(r).What() << "\nwanted: " << message;
+  }
+  // Written and read back: the same texture coordinates.
+  Camera camera;
+  camera.eye = Vec3(3, -4, 2);
+  for (const Scene* s : {&fv}) {
+    const auto rib = WriteRib(*s, camera, {});
+    ASSERT_TRUE(std::holds_alternative<std::string>(rib));
+    const Scene back = read(std::get<std::string>(rib));
+    ASSERT_EQ(back.surfaces.size(), s->surfaces.size());
+    for (std::size_t k = 0; k < back.surfaces.size(); ++k) {
+      const auto& a = std::get<SubdivFace>(s->surfaces[k].shape);
+      const auto& b = std::get<SubdivFace>(back.surfaces[k].shape);
+      EXPECT_EQ(b.Mesh().faceVaryingRule, a.Mesh().faceVaryingRule);
+      EXPECT_LT((a.TextureCoords(0.2, 0.7)->st - b.TextureCoords(0.2, 0.7)->st).norm(), 1e-12);
+    }
+  }
 }
 
 }  // namespace

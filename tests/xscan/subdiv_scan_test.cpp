@@ -4,10 +4,14 @@
 // faces lets a sample through.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cctype>
+#include <iostream>
 
 #include "patch/cages.h"
 #include "patch/surface.h"
+#include "patch/tessellate.h"
+#include "tracker/maxima.h"
 #include "xscan/agreement.h"
 
 namespace patchscan {
@@ -22,6 +26,258 @@ TEST_P(EveryCage, AgreesWithTheRayCaster) {
   std::vector<Surface> surfaces;
   for (SubdivFace& f : PrepareSubdivFaces(c.mesh)) surfaces.push_back(Surface{std::move(f), Affine3::Identity()});
   for (const Vec3& eye : {Vec3(3.1, -4.2, 2.6), Vec3(-0.7, 1.3, -5.0)}) test::ExpectAgree(surfaces, test::View(eye, 40), c.name);
+}
+
+// Bfr's own tessellation of each base face at rate 32, rasterised at pixel centres by plain
+// barycentric tests (perspective-correct depth): a reference that shares with the exact scan
+// neither the trackers, the Newton solves nor SubdivFace's sub-face parameterisation.
+constexpr int kReferenceRate = 64;
+// The reference says something only if its chords stay this close to the surface: measured
+// at rate 64, 0.006 px on the smooth cube and 0.29-0.32 px on the creased cube (its chord
+// error only halves from rate 32, 0.74 px: the creases' sharp patches meet with a kink
+// inside the faces), so rPx up to 0.63 px there.
+constexpr double kMaxEdgePx = 1.0;
+
+struct MeshSample {
+  double w = INFINITY;
+  double cosView = 1.0;  // |cos| of the angle between the nearest triangle and the view ray
+  bool covered() const { return std::isfinite(w); }
+};
+
+std::vector<MeshSample> RasteriseReference(const CageTessellation& mesh, const Camera& camera) {
+  const Mat4 screenFromWorld = ScreenFromWorld(camera);
+  std::vector<Vec3> screen;  // x, y, w
+  const Vec3 eye = EyePoint(camera);
+  for (const Vec3& p : mesh.points) {
+    const Vec4 h = screenFromWorld * p.homogeneous();
+    screen.emplace_back(h.x() / h.w(), h.y() / h.w(), h.w());
+  }
+  std::vector<MeshSample> image(static_cast<std::size_t>(camera.width * camera.height));
+  for (const auto& t : mesh.triangles) {
+    const Vec3 &a = screen[static_cast<std::size_t>(t[0])], &b = screen[static_cast<std::size_t>(t[1])],
+               &c = screen[static_cast<std::size_t>(t[2])];
+    if (!(a.z() > 0 && b.z() > 0 && c.z() > 0)) continue;
+    const double area = (b.x() - a.x()) * (c.y() - a.y()) - (c.x() - a.x()) * (b.y() - a.y());
+    if (area == 0.0) continue;
+    const Vec3& pa = mesh.points[static_cast<std::size_t>(t[0])];
+    const Vec3 n = (mesh.points[static_cast<std::size_t>(t[1])] - pa).cross(mesh.points[static_cast<std::size_t>(t[2])] - pa);
+    const double cosView = std::abs(n.normalized().dot((pa - eye).normalized()));
+    const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), c.x()}) - 0.5)));
+    const int x1 = std::min(camera.width - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
+    const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}) - 0.5)));
+    const int y1 = std::min(camera.height - 1, static_cast<int>(std::ceil(std::max({a.y(), b.y(), c.y()}))));
+    for (int j = y0; j <= y1; ++j)
+      for (int i = x0; i <= x1; ++i) {
+        const double x = i + 0.5, y = j + 0.5;
+        const double l0 = ((b.x() - x) * (c.y() - y) - (c.x() - x) * (b.y() - y)) / area;
+        const double l1 = ((c.x() - x) * (a.y() - y) - (a.x() - x) * (c.y() - y)) / area;
+        const double l2 = 1.0 - l0 - l1;
+        if (l0 < 0 || l1 < 0 || l2 < 0) continue;
+        const double w = 1.0 / (l0 / a.z() + l1 / b.z() + l2 / c.z());
+        MeshSample& m = image[static_cast<std::size_t>(j * camera.width + i)];
+        if (w < m.w) m = {w, cosView};
+      }
+  }
+  return image;
+}
+
+// Samples the exact scan is known to miss, with the reason (kept so that any other miss, or
+// more of these, fails). Bfr's Gregory triangles (every face of the Loop octahedron, whose
+// vertices all have valence 4) give second derivatives up to 53 % off their positions'
+// (Subdiv.DerivativesMatchFiniteDifferencesOnEveryCage): on a kite seen almost edge-on the
+// silhouette Newton, whose Jacobian takes J's gradient from them, runs away from the two
+// silhouette points of a closed level curve 0.11 px below the kite's top, and the repair
+// search's Newton likewise, so that row's two samples of the kite are lost.
+struct KnownMiss {
+  const char* cage;
+  int view;
+  long samples;
+};
+constexpr KnownMiss kKnownMisses[] = {{"octahedron, Loop, valence 4", 0, 2}};
+
+class EveryCageAgainstBfr : public ::testing::TestWithParam<std::size_t> {};
+
+TEST_P(EveryCageAgainstBfr, CoverageAndDepthAgreeAwayFromEdges) {
+  // The exact scan's nearest surface at each pixel centre against the reference mesh's.
+  // They may differ only within rPx of the mesh's own coverage edges (its silhouettes and
+  // boundaries are chords of the surface's, rPx covering twice the largest chord error
+  // measured, in pixels at the nearest point, plus kEdgePx of rounding); elsewhere both
+  // cover or neither does, so an uncovered sample inside the mesh (a hole, a crack between
+  // faces) fails. Along the view ray the surface and a chord differ by the chord error over
+  // the cosine of the view's angle to the triangle: kDepthChordFactor of that, relative to
+  // the depth; where the view grazes the triangle (cosine below kGrazingCos) the sample is
+  // on a silhouette, an edge.
+  constexpr double kDepthChordFactor = 2.0, kGrazingCos = 0.1;
+  const test::Cage c = test::Cages()[GetParam()];
+  std::vector<Surface> surfaces;
+  for (SubdivFace& f : PrepareSubdivFaces(c.mesh)) surfaces.push_back(Surface{std::move(f), Affine3::Identity()});
+  const CageTessellation mesh = TessellateCage(c.mesh, kReferenceRate);
+  const Vec3 eyes[] = {Vec3(3.1, -4.2, 2.6), Vec3(-0.7, 1.3, -5.0)};
+  for (int view = 0; view < 2; ++view) {
+    const Camera camera = test::View(eyes[view], 96);
+    long known = 0;
+    for (const KnownMiss& k : kKnownMisses)
+      if (c.name == k.cage && view == k.view) known = k.samples;
+    double wMin = INFINITY;
+    for (const Vec3& p : mesh.points) wMin = std::min(wMin, ViewDepthRow(camera).dot(p.homogeneous()));
+    const double chordPx = mesh.maxChordError * FocalPixels(camera) / wMin;
+    const double rPx = 2.0 * chordPx + test::kEdgePx;
+    const std::vector<MeshSample> reference = RasteriseReference(mesh, camera);
+    // Coverage of the reference within rPx of a pixel centre, by the mesh rasterised again
+    // shifted by +-rPx in x and y.
+    std::vector<std::vector<MeshSample>> shifted;
+    for (const auto& [dx, dy] : {std::pair{rPx, 0.0}, {-rPx, 0.0}, {0.0, rPx}, {0.0, -rPx}}) {
+      Camera moved = camera;
+      CageTessellation m = mesh;
+      // Moving the mesh by (-dx, -dy) px in screen is sampling it at (x + dx, y + dy).
+      const Mat4 screenFromWorld = ScreenFromWorld(camera);
+      const Mat4 worldFromScreen = screenFromWorld.inverse();
+      for (Vec3& p : m.points) {
+        Vec4 h = screenFromWorld * p.homogeneous();
+        h.x() -= dx * h.w();
+        h.y() -= dy * h.w();
+        const Vec4 back = worldFromScreen * h;
+        p = back.head<3>() / back.w();
+      }
+      shifted.push_back(RasteriseReference(m, moved));
+    }
+    ExactScan scan(surfaces, camera);
+    const raster::SampleColumns cols{0.5, 1.0, camera.width};
+    std::vector<test::Nearest> row(static_cast<std::size_t>(camera.width));
+    long covered = 0, nearEdge = 0, mismatches = 0;
+    double worstDepth = 0.0;
+    std::string first;
+    for (int j = 0; j < camera.height; ++j) {
+      std::fill(row.begin(), row.end(), test::Nearest{});
+      test::NearestRow out(&row);
+      ASSERT_TRUE(scan.ScanRow(j + 0.5, cols, out));
+      for (int i = 0; i < camera.width; ++i) {
+        const std::size_t k = static_cast<std::size_t>(j * camera.width + i);
+        const MeshSample& want = reference[k];
+        const test::Nearest& got = row[static_cast<std::size_t>(i)];
+        covered += want.covered();
+        bool edge = false;
+        for (const auto& s : shifted) edge = edge || s[k].covered() != want.covered();
+        bool differ = got.covered() != want.covered();
+        if (!differ && got.covered()) {
+          const double rel = std::abs(got.w - want.w) / want.w;
+          const double depthRel = kDepthChordFactor * mesh.maxChordError / (std::max(want.cosView, kGrazingCos) * want.w) + test::kDepthRel;
+          edge = edge || want.cosView < kGrazingCos;
+          // Across an occlusion edge the nearest depth jumps: an edge too.
+          for (const auto& s : shifted) edge = edge || (s[k].covered() && std::abs(s[k].w - want.w) > 0.05 * want.w);
+          differ = rel > depthRel;
+          if (!edge) worstDepth = std::max(worstDepth, rel / depthRel);
+        }
+        if (!differ) continue;
+        if (edge) {
+          ++nearEdge;
+          continue;
+        }
+        if (++mismatches <= 5)
+          first += " (" + std::to_string(i) + ", " + std::to_string(j) + "): exact " +
+                   (got.covered() ? std::to_string(got.w) : "-") + ", Bfr mesh " + (want.covered() ? std::to_string(want.w) : "-") + ";";
+      }
+    }
+    std::cout << c.name << ": " << mesh.triangles.size() << " reference triangles, chord error " << chordPx << " px; "
+              << covered << " covered, " << nearEdge << " differ within " << rPx << " px of an edge, worst depth difference "
+              << worstDepth << " of its bound\n";
+    EXPECT_LE(mismatches, known) << c.name << first;
+    if (mismatches > 0) std::cout << c.name << ": " << mismatches << " known misses (kKnownMisses):" << first << "\n";
+    EXPECT_GE(covered, 200) << c.name << ": the view misses the cage";
+    EXPECT_LT(rPx, kMaxEdgePx) << c.name << ": the reference is too coarse to say anything";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(SubdivScanBfr, EveryCageAgainstBfr, ::testing::Range<std::size_t>(0, test::Cages().size()));
+
+TEST(SubdivScan, TheTopOfAKiteSeenAlmostEdgeOnIsFound) {
+  // A kite of the Loop octahedron seen almost edge-on: its screen y varies by 2 px over the
+  // whole domain, and its top is inside. The climb stops (each step gains under 1e-10 px)
+  // with the gradient still above the stationary test's; the maximum must be found anyway,
+  // at the top that 2001 x 2001 samples of the kite find (kTopTolPx: their spacing's share).
+  constexpr double kTopTolPx = 1e-4;
+  const test::Cage c = test::Cages()[9];
+  ASSERT_EQ(c.name, "octahedron, Loop, valence 4");
+  std::vector<SubdivFace> faces = PrepareSubdivFaces(c.mesh);
+  const Surface kite{faces[5], Affine3::Identity()};
+  const Camera camera = test::View(Vec3(3.1, -4.2, 2.6), 96);
+  const ScreenMap map(camera, kite.worldFromObject);
+  double top = INFINITY;
+  for (int i = 0; i <= 2000; ++i)
+    for (int j = 0; j <= 2000; ++j) {
+      ScreenDerivs d;
+      EvaluateScreen(kite, map, i / 2000.0, j / 2000.0, DerivOrder::Position, &d);
+      top = std::min(top, d.p.y());
+    }
+  Counters counters;
+  const std::vector<Stationary> found = FindStationaryPoints(kite, map, &counters);
+  ASSERT_FALSE(found.empty());
+  EXPECT_EQ(found[0].kind, StationaryKind::StrictMaximum);
+  EXPECT_NEAR(found[0].y, top, kTopTolPx);
+  EXPECT_GT(counters[Counter::MaximaByValue], 0);
+}
+
+TEST(SubdivScan, FacesArePreparedOnlyWhileTheScanHoldsThem) {
+  // A 24x24 grid seen from above at an angle: rows of faces enter and leave the active set
+  // as the scan goes down. At most the faces of a band of rows are prepared at once, none
+  // at the end, and no face is prepared twice by the scan.
+  std::vector<Surface> surfaces;
+  const SubdivMesh grid = test::Grid(24, 1);
+  for (SubdivFace& f : PrepareSubdivFaces(grid)) surfaces.push_back(Surface{std::move(f), Affine3::Identity()});
+  const SubdivFace& any = std::get<SubdivFace>(surfaces[0].shape);
+  ASSERT_EQ(any.PreparedNow(), 0);
+  long covered = 0;
+  {
+    ExactScan scan(surfaces, test::View(Vec3(0.0, -2.2, 2.6), 128));
+    const raster::SampleColumns cols{0.5, 1.0, 128};
+    std::vector<test::Nearest> row(128);
+    for (int j = 0; j < 128; ++j) {
+      std::fill(row.begin(), row.end(), test::Nearest{});
+      test::NearestRow out(&row);
+      ASSERT_TRUE(scan.ScanRow(j + 0.5, cols, out));
+      for (const auto& n : row) covered += n.covered();
+    }
+  }  // the faces still active on the last row are released with the scan
+  std::cout << "24x24 grid: " << any.Preparations() << " preparations, at most " << any.PeakPrepared()
+            << " faces prepared at once of " << surfaces.size() << "\n";
+  EXPECT_GT(covered, 5000);
+  EXPECT_EQ(any.PreparedNow(), 0);
+  EXPECT_LE(any.Preparations(), static_cast<long>(surfaces.size()));
+  EXPECT_LT(any.PeakPrepared(), static_cast<long>(surfaces.size()) / 3);
+}
+
+TEST(SubdivScan, FragmentsAndTessellationCarryTheTextureCoords) {
+  // "vertex" st equal to the points' (x, y) is the limit surface's (x, y): every exact
+  // fragment's uv is its world position's (x, y) (identity placement), and so is every
+  // tessellation vertex's. Both sides evaluate the same Bfr weights; the exact scan's point
+  // is solved to 1e-7 px, far below kStTol in st.
+  constexpr double kStTol = 1e-9;
+  SubdivMesh m = test::Pyramid(5);
+  m.stClass = StClass::Vertex;
+  for (const Vec3& p : m.points) m.st.emplace_back(p.x(), p.y());
+  std::vector<Surface> surfaces;
+  for (SubdivFace& f : PrepareSubdivFaces(m)) surfaces.push_back(Surface{std::move(f), Affine3::Identity()});
+  class Check final : public raster::FragmentRow {
+   public:
+    void Add(int, const raster::Fragment& f) override {
+      ++n;
+      worst = std::max(worst, (f.uv - f.position.head<2>()).norm());
+    }
+    void AddTriangle(const raster::RasterVertex&, const raster::RasterVertex&, const raster::RasterVertex&, std::uint32_t) override {}
+    long n = 0;
+    double worst = 0.0;
+  } check;
+  const Camera camera = test::View(Vec3(3.1, -4.2, 2.6), 64);
+  ExactScan scan(surfaces, camera);
+  const raster::SampleColumns cols{0.5, 1.0, 64};
+  for (int j = 0; j < 64; ++j) ASSERT_TRUE(scan.ScanRow(j + 0.5, cols, check));
+  EXPECT_GT(check.n, 200);
+  EXPECT_LT(check.worst, kStTol);
+  TessMesh tess;
+  for (std::size_t k = 0; k < surfaces.size(); ++k) TessellateUniform(surfaces[k], 4, static_cast<std::uint32_t>(k), &tess);
+  double worst = 0.0;
+  for (const TessVertex& v : tess.vertices) worst = std::max(worst, (v.st - v.position.head<2>()).norm());
+  EXPECT_LT(worst, kStTol);
 }
 
 INSTANTIATE_TEST_SUITE_P(SubdivScan, EveryCage, ::testing::Range<std::size_t>(0, test::Cages().size()),
