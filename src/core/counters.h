@@ -39,7 +39,6 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(Setup, MaximaNewtonIterations, "maxima_newton_iterations", "Newton iterations on grad y = 0", "iterations", Sum) \
   X(Setup, MaximaDuplicates, "maxima_duplicates", "climbs that found a point already found", "climbs", Sum)         \
   X(Setup, MaximaRejectedCollapsed, "maxima_rejected_collapsed", "climbs stopped on a collapsed edge that is no maximum", "climbs", Sum) \
-  X(Setup, MaximaByValue, "maxima_by_value", "climbs ended at a maximum of the values, the gradient not yet below tolerance", "climbs", Sum) \
   X(Setup, Stationary, "stationary_points", "maxima and saddles", "points", Sum)                                   \
   X(YScan, SampleRows, "sample_rows", "sample rows scanned", "rows", Max)                                          \
   X(YScan, TrackerRows, "tracker_rows", "edge and silhouette trackers advanced, summed over rows", "tracker-rows", Sum) \

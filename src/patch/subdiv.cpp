@@ -7,6 +7,7 @@
 #include <opensubdiv/far/topologyDescriptor.h>
 #include <opensubdiv/far/topologyRefinerFactory.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -21,14 +22,23 @@ namespace osd = OpenSubdiv;
 
 namespace {
 
+// Step of the differences that give an irregular face's second derivatives
+// (SubdivFace::Evaluate): truncation ~step times the third derivative, ~1e-6 of the
+// second's size on faces of size ~1; rounding ~1e-16 / step far below.
+constexpr double kSecondDiffStep = 1e-6;
+
 // A prepared base face: its Bfr surfaces (points and, where the cage has them, texture
 // coordinates) and their patch points.
+}  // namespace
+
 struct FaceData {
   osd::Bfr::Surface<double> surface;
   std::vector<double> patchPoints;  // x y z per point: the control points, then any Bfr adds
   osd::Bfr::Surface<double> stSurface;
   std::vector<double> stPatchPoints;  // s t per point
 };
+
+namespace {
 
 // Bfr's options for a cage's faces (the cage and its independent tessellation alike).
 osd::Bfr::SurfaceFactory::Options FactoryOptions(const SubdivMesh& /*mesh*/) { return {}; }
@@ -125,8 +135,8 @@ class SubdivFace::Cage {
   long nPrepared_ = 0, nPreparations_ = 0, nPeak_ = 0;
 };
 
-SubdivFace::SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, const std::array<Vec3, 8>& hull)
-    : cage_(std::move(cage)), face_(face), subFace_(subFace), hull_(hull) {
+SubdivFace::SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, std::shared_ptr<const std::vector<Vec3>> hull)
+    : cage_(std::move(cage)), face_(face), subFace_(subFace), hull_(std::move(hull)) {
   if (subFace_ < 0) return;
   double c00[2], c10[2], c01[2], c11[2];
   const osd::Bfr::Parameterization param = cage_->Factory().GetFaceParameterization(face_);
@@ -161,6 +171,28 @@ SubdivFace::SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, const 
 
 void SubdivFace::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const {
   const FaceData& face = cage_->Data(face_);
+  if (Wants(order, DerivOrder::Second) && !face.surface.IsRegular()) {
+    // Bfr's irregular patches (Gregory patches at an extraordinary corner) give second
+    // derivatives up to 21 % (Catmull-Clark) and 53 % (Loop) off those of their first
+    // derivatives, and Newton on the silhouette system, whose Jacobian takes J's gradient
+    // from them, can run away (a Loop kite seen edge-on lost its top row). Taken instead as
+    // forward differences of the first derivatives kSecondDiffStep apart (backward at the
+    // domain's far edges): consistent with them to O(step), two evaluations more.
+    EvaluateBfr(face, u, v, DerivOrder::First, out);
+    SurfaceDerivs a, b;
+    const double hu = u + kSecondDiffStep <= 1.0 ? kSecondDiffStep : -kSecondDiffStep;
+    const double hv = v + kSecondDiffStep <= 1.0 ? kSecondDiffStep : -kSecondDiffStep;
+    EvaluateBfr(face, u + hu, v, DerivOrder::First, &a);
+    EvaluateBfr(face, u, v + hv, DerivOrder::First, &b);
+    out->d2pdu2 = (a.dpdu - out->dpdu) / hu;
+    out->d2pdv2 = (b.dpdv - out->dpdv) / hv;
+    out->d2pduv = 0.5 * ((a.dpdv - out->dpdv) / hu + (b.dpdu - out->dpdu) / hv);
+    return;
+  }
+  EvaluateBfr(face, u, v, order, out);
+}
+
+void SubdivFace::EvaluateBfr(const FaceData& face, double u, double v, DerivOrder order, SurfaceDerivs* out) const {
   const double uv[2] = {c00_[0] + eu_[0] * u + ev_[0] * v + twist_[0] * u * v,
                         c00_[1] + eu_[1] * u + ev_[1] * v + twist_[1] * u * v};
   const osd::Bfr::Surface<double>::PointDescriptor desc(3);
@@ -443,16 +475,6 @@ static std::unique_ptr<osd::Far::TopologyRefiner> BuildRefiner(const SubdivMesh&
 
 namespace {
 
-// The corners of the box of `points`.
-template <class Points>
-std::array<Vec3, 8> BoxCorners(const Points& points) {
-  Vec3 lo = Vec3::Constant(INFINITY), hi = Vec3::Constant(-INFINITY);
-  for (const Vec3& p : points) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  std::array<Vec3, 8> corners;
-  for (int k = 0; k < 8; ++k) corners[static_cast<std::size_t>(k)] = Vec3(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(), k & 4 ? hi.z() : lo.z());
-  return corners;
-}
-
 // The control points of a Catmull-Clark quadrilateral whose limit surface is the uniform
 // bicubic B-spline patch of its 16 neighbouring points (every vertex interior, of valence
 // 4, smooth, and every face around them a quadrilateral that is not a hole), or nothing.
@@ -473,6 +495,8 @@ std::optional<std::vector<int>> RegularNeighbourhood(const osd::Far::TopologyLev
       for (const int w : level.GetFaceVertices(f)) ring.push_back(w);
     }
   }
+  std::sort(ring.begin(), ring.end());
+  ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
   return ring;
 }
 
@@ -501,11 +525,10 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
   const auto& factory = cage->Factory();
   const osd::Far::TopologyLevel& base = cage->Refiner().GetLevel(0);
   std::vector<SubdivFace> faces;
-  std::vector<Vec3> hullPoints;
   FaceData scratch;
   for (Index f = 0; f < base.GetNumFaces(); ++f) {
     if (!factory.FaceHasLimitSurface(f)) continue;  // a hole, or a dropped boundary face
-    hullPoints.clear();
+    std::vector<Vec3> hullPoints;
     const std::optional<std::vector<int>> ring =
         mesh.scheme == SubdivScheme::CatmullClark ? RegularNeighbourhood(base, f) : std::nullopt;
     if (mesh.scheme == SubdivScheme::Bilinear || ring) {
@@ -518,7 +541,7 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
       for (std::size_t k = 0; k + 2 < scratch.patchPoints.size(); k += 3)
         hullPoints.emplace_back(scratch.patchPoints[k], scratch.patchPoints[k + 1], scratch.patchPoints[k + 2]);
     }
-    const std::array<Vec3, 8> hull = BoxCorners(hullPoints);
+    const auto hull = std::make_shared<const std::vector<Vec3>>(std::move(hullPoints));
     const osd::Bfr::Parameterization param = factory.GetFaceParameterization(f);
     if (param.HasSubFaces() || param.GetType() == osd::Bfr::Parameterization::TRI) {
       for (int k = 0; k < param.GetFaceSize(); ++k) faces.emplace_back(cage, f, k, hull);

@@ -27,6 +27,8 @@
 
 namespace patchscan {
 
+struct FaceData;  // a prepared base face (patch/subdiv.cpp)
+
 // The subdivision rules: RenderMan's "catmull-clark", "loop" (triangles only) and
 // "bilinear" (the cage itself, flat: each face bilinear, an n-gon as n bilinear quarters).
 enum class SubdivScheme { CatmullClark, Loop, Bilinear };
@@ -83,15 +85,16 @@ struct TexCoords {
 class SubdivFace {
  public:
   class Cage;  // the cage, its OpenSubdiv topology and the prepared faces, shared by its faces
-  SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, const std::array<Vec3, 8>& hull);
+  SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, std::shared_ptr<const std::vector<Vec3>> hull);
 
   // Prepares the base face first if it is not (thread-safe; allocates then, and not after).
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
   // The texture coordinates "st" at (u, v) with their derivatives, or nullopt when the cage
   // has none. Prepares as Evaluate does.
   std::optional<TexCoords> TextureCoords(double u, double v) const;
-  // The corners of a box that contains the surface (known without preparing the face).
-  std::span<const Vec3> Hull() const { return hull_; }
+  // Points whose convex hull contains the surface, known without preparing the face (the
+  // cage's points or, for faces bounded at load, Bfr's patch points; shared by sub-faces).
+  std::span<const Vec3> Hull() const { return *hull_; }
   std::string Describe() const;
   // The base face's index in the cage, and the sub-face (-1: the face is a quadrilateral).
   int Face() const { return face_; }
@@ -112,10 +115,13 @@ class SubdivFace {
   long PeakPrepared() const;
 
  private:
+  // Bfr's evaluation of the prepared face through the sub-face map.
+  void EvaluateBfr(const FaceData& face, double u, double v, DerivOrder order, SurfaceDerivs* out) const;
+
   std::shared_ptr<Cage> cage_;
   int face_;
   int subFace_;
-  std::array<Vec3, 8> hull_;
+  std::shared_ptr<const std::vector<Vec3>> hull_;
   // The sub-face's (u, v) to the face's Bfr coordinates, bilinearly: c00 + eu u + ev v +
   // twist u v (affine, twist 0, for Bfr's quadrangulated sub-faces).
   double c00_[2] = {0.0, 0.0}, eu_[2] = {1.0, 0.0}, ev_[2] = {0.0, 1.0}, twist_[2] = {0.0, 0.0};

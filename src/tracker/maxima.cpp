@@ -1,9 +1,6 @@
 #include "tracker/maxima.h"
 
 #include <algorithm>
-#include <cmath>
-#include <numbers>
-#include <optional>
 
 namespace patchscan {
 
@@ -55,17 +52,6 @@ constexpr int kMaxClimbIterations = 200;
 constexpr double kStationaryParamDist = 1e-6;
 // Samples around a collapsed edge to check that h falls away from it in every direction.
 constexpr int kCollapsedEdgeSamples = 16;
-// An interior climb end whose gradient does not vanish but whose values are a maximum:
-// probed this far (parameter units) in eight directions, and its Hessian taken from
-// central differences of h this wide. A climb stops when a step gains less than
-// kClimbTolPx; where h is nearly flat (a surface seen almost edge-on, y varying by a pixel
-// or two over the whole domain) that happens while |grad h| is still above
-// kStationaryParamDist |Hess h|, and the maximum was dropped (measured: a Loop kite of
-// tests/patch/cages.h's octahedron, its top row missed). The climb ends within
-// sqrt(kClimbTolPx / |H|) of the maximum, far inside the probe, where h falls by about
-// |H| probe^2 / 2 and rises by at most |grad h| probe.
-constexpr double kValueProbe = 1e-4;
-constexpr double kValueHessianStep = 1e-3;
 
 // At a boundary coordinate, whether the gradient pushes out of the domain.
 bool PushesOut(double t, double g) { return (t <= 0.0 && g < 0.0) || (t >= 1.0 && g > 0.0); }
@@ -90,28 +76,6 @@ bool OnCollapsedEdgeThatIsNoMaximum(const ShapeT& shape, const ScreenMap& map, c
     }
   }
   return false;
-}
-
-// Whether h at interior point uv is above its values kValueProbe away in eight directions;
-// if so, the Hessian of h there from central differences of its values.
-template <class ShapeT>
-std::optional<Mat2> MaximumByValue(const ShapeT& shape, const ScreenMap& map, const Vec2& uv, double h) {
-  const double e = kValueHessianStep;
-  if ((uv.array() - e <= 0.0).any() || (uv.array() + e >= 1.0).any()) return std::nullopt;
-  auto hAt = [&](double du, double dv) {
-    ScreenDerivs d;
-    EvaluateScreen(shape, map, uv.x() + du, uv.y() + dv, DerivOrder::Position, &d);
-    return -d.p.y();
-  };
-  for (int k = 0; k < 8; ++k) {
-    const double a = k * std::numbers::pi / 4.0;
-    if (hAt(kValueProbe * std::cos(a), kValueProbe * std::sin(a)) >= h) return std::nullopt;
-  }
-  Mat2 H;
-  H(0, 0) = (hAt(e, 0) - 2.0 * h + hAt(-e, 0)) / (e * e);
-  H(1, 1) = (hAt(0, e) - 2.0 * h + hAt(0, -e)) / (e * e);
-  H(0, 1) = H(1, 0) = (hAt(e, e) - hAt(e, -e) - hAt(-e, e) + hAt(-e, -e)) / (4.0 * e * e);
-  return H;
 }
 
 template <class ShapeT>
@@ -194,14 +158,7 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
       } else {
         // An interior end must be stationary: the gradient, over the Hessian's scale, is
         // the distance (in parameter units) still to go.
-        if (at.g.norm() > kStationaryParamDist * std::max(at.H.norm(), 1e-300)) {
-          const auto byValue = MaximumByValue(shape, map, uv, at.h);
-          if (!byValue) continue;
-          ++st[Counter::MaximaByValue];
-          s.gradH = Vec2::Zero();
-          s.hessH = *byValue;
-          at.H = *byValue;
-        }
+        if (at.g.norm() > kStationaryParamDist * std::max(at.H.norm(), 1e-300)) continue;
         s.kind = classifyInterior(at.H);
         if (s.kind == StationaryKind::Saddle) continue;  // a climb does not end on a saddle
       }

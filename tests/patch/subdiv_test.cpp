@@ -55,16 +55,20 @@ TEST(Subdiv, DerivativesMatchFiniteDifferencesOnEveryCage) {
   // them, ~1e-6 in the second; kFdRel covers both.
   // Near an extraordinary vertex Bfr (at its default approximation level 2) evaluates a
   // Gregory patch, a rational blend whose derivatives OpenSubdiv 3.5 computes without the
-  // blend's own derivative: there position and derivatives disagree, relative to their size,
-  // by up to 1.0 % in the first derivatives and 21 % in the second (measured over these
-  // cages; kGregoryRel and kGregorySecondRel bound that). The trackers and the exact scan
-  // converge with a Jacobian this close (more iterations, same answer: the positions are
-  // Bfr's exactly); the shading normal there is off by up to the first figure.
-  // Loop's irregular faces are Bfr's Gregory triangles, further off: up to 2.6 % and 53 %
-  // (kLoopGregoryRel, kLoopGregorySecondRel). Regular faces of either scheme, and Loop's
-  // kites (a bilinear map into the triangle, its twist in the chain rule), are within kFdRel.
-  constexpr double kFdRel = 1e-5, kGregoryRel = 0.015, kGregorySecondRel = 0.25;
-  constexpr double kLoopGregoryRel = 0.03, kLoopGregorySecondRel = 0.6;
+  // blend's own derivative: there position and first derivatives disagree, relative to
+  // their size, by up to 1.0 % (measured over these cages; kGregoryRel bounds it), and
+  // Bfr's second derivatives by 21 % (Loop's Gregory triangles: 2.6 % and 53 %,
+  // kLoopGregoryRel). SubdivFace takes an irregular face's second derivatives from central
+  // differences of the first instead (the silhouette Newton ran away on Bfr's own); what
+  // remains against differences is the first derivatives' own disagreement (their mixed
+  // partials differ): measured up to 3.4 % (Catmull-Clark) and 4.5 % (Loop), bounded by
+  // kGregorySecondRel, which Bfr's own second derivatives fail. The trackers and the exact
+  // scan converge with a Jacobian this close (the positions are Bfr's exactly); the shading
+  // normal there is off by up to the first figure. Regular faces of either scheme, and
+  // Loop's kites (a bilinear map into the triangle, its twist in the chain rule), are
+  // within kFdRel.
+  constexpr double kFdRel = 1e-5, kGregoryRel = 0.015, kGregorySecondRel = 0.06;
+  constexpr double kLoopGregoryRel = 0.03, kLoopGregorySecondRel = 0.06;
   for (const test::Cage& c : test::Cages()) {
     const auto faces = PrepareSubdivFaces(c.mesh);
     ASSERT_FALSE(faces.empty()) << c.name;
