@@ -13,10 +13,14 @@
 //   t interpolateboundary 1/0/0 k       RenderMan's 0, 1 or 2; by default 1 here (a
 //                                       modelling tool shows a cage's boundary; RenderMan's
 //                                       own default, 0, drops the boundary faces)
-// `vt` and `vn` are counted and their indices checked; their values are not used (the
-// limit surface's normal is exact; texture coordinates on cages are not applied yet: a
-// warning says so). `g`, `o`, `s`, `usemtl` and `mtllib` are ignored; any other statement
-// is skipped with one warning per kind giving its first line and count.
+//   t facevaryinginterpolateboundary 1/0/0 k   OpenSubdiv's face-varying rule 0-5
+//                                       (FaceVaryingRule's order); by default 1, corners kept
+// `vt u v` are the face-varying texture coordinates "st" = (u, 1 - v) (OBJ's v runs up the
+// image) when every face gives them (`v/vt`); if some faces do and others do not, they are
+// not applied and a warning says so. `vn` are counted and their indices checked; their
+// values are not used (the limit surface's normal is exact). `g`, `o`, `s`, `usemtl` and
+// `mtllib` are ignored; any other statement is skipped with one warning per kind giving its
+// first line and count.
 //
 // Errors name file:line: a number that is not one, an index of 0 or out of range, a face of
 // fewer than 3 vertices or using a vertex twice, a Loop face that is not a triangle, a tag

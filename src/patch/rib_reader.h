@@ -13,7 +13,8 @@
 //               Orientation, ReverseOrientation, Sides
 //   geometry    Basis (by name or by matrix, with step), Patch "bilinear"/"bicubic" and
 //               PatchMesh (periodic and nonperiodic) with "P", "Pw" or "Pz", NuPatch with
-//               "P" or "Pw", TrimCurve and Attribute "trimcurve" "sense", SubdivisionMesh,
+//               "P" or "Pw", TrimCurve and Attribute "trimcurve" "sense", SubdivisionMesh
+//               (with "st" of class vertex, varying or facevarying and its tags),
 //               Sphere, Cylinder, Cone, Paraboloid, Hyperboloid, Disk, Torus,
 //               Geometry "teapot"; Polygon, GeneralPolygon, PointsPolygons and
 //               PointsGeneralPolygons with "P" or "Pw", "N", "Cs" and "st" of any storage
