@@ -312,6 +312,8 @@ bool RibParser::SubdivTextureCoords(const Request& r, std::size_t first, SubdivM
   for (const Param& q : params) {
     if (q.name != "st") continue;
     if (!q.value->Numeric()) return Fail(q.value->line, "SubdivisionMesh: \"st\" expects numbers");
+    mesh->st.clear();  // given twice: the last counts, as for any parameter
+    mesh->stIndices.clear();
     const std::size_t size = q.value->numbers.size(), points = mesh->points.size(), corners = mesh->faceVertices.size();
     // The declared class, else by count: per point as RenderMan predeclares "st" (varying),
     // per corner face-varying.

@@ -223,10 +223,11 @@ class RibParser {
   bool TrimCurve(const Request& r);
   // Attribute "name" params: "trimcurve" "sense" is read, every other attribute skipped.
   bool AttributeRequest(const Request& r);
-  // SubdivisionMesh's tags (RenderMan Interface 3.2 and prman: crease, corner, hole,
-  // interpolateboundary) into `mesh`; unknown tags are warned about and ignored.
   // "st" of a SubdivisionMesh, by its class (declared, else by its count) into mesh.
   bool SubdivTextureCoords(const Request& r, std::size_t first, SubdivMesh* mesh);
+  // SubdivisionMesh's tags (RenderMan Interface 3.2 and prman: crease, corner, hole,
+  // interpolateboundary, facevaryinginterpolateboundary, facevaryingpropagatecorners) into
+  // `mesh`; unknown tags are warned about and ignored.
   bool SubdivTags(const Value& tags, const Value& nargs, const Value& ints, const Value& floats,
                   SubdivMesh* mesh);
   // Polygon, GeneralPolygon, PointsPolygons, PointsGeneralPolygons (RenderMan Interface
