@@ -27,10 +27,10 @@ namespace {
 // second's size on faces of size ~1; rounding ~1e-16 / step far below.
 constexpr double kSecondDiffStep = 1e-6;
 
-// A prepared base face: its Bfr surfaces (points and, where the cage has them, texture
-// coordinates) and their patch points.
 }  // namespace
 
+// A prepared base face: its Bfr surfaces (points and, where the cage has them, texture
+// coordinates) and their patch points.
 struct FaceData {
   osd::Bfr::Surface<double> surface;
   std::vector<double> patchPoints;  // x y z per point: the control points, then any Bfr adds
@@ -38,17 +38,10 @@ struct FaceData {
   std::vector<double> stPatchPoints;  // s t per point
 };
 
-namespace {
-
-// Bfr's options for a cage's faces (the cage and its independent tessellation alike).
-osd::Bfr::SurfaceFactory::Options FactoryOptions(const SubdivMesh& /*mesh*/) { return {}; }
-
-}  // namespace
-
 class SubdivFace::Cage {
  public:
   Cage(const SubdivMesh& mesh, std::unique_ptr<osd::Far::TopologyRefiner> refiner)
-      : mesh_(mesh), refiner_(std::move(refiner)), factory_(*refiner_, FactoryOptions(mesh)), slots_(static_cast<std::size_t>(mesh.faceSizes.size())) {
+      : mesh_(mesh), refiner_(std::move(refiner)), factory_(*refiner_), slots_(static_cast<std::size_t>(mesh.faceSizes.size())) {
     points_.reserve(mesh.points.size() * 3);
     for (const Vec3& p : mesh.points) points_.insert(points_.end(), {p.x(), p.y(), p.z()});
     st_.reserve(mesh.st.size() * 2);
@@ -63,7 +56,6 @@ class SubdivFace::Cage {
   const SubdivMesh& Mesh() const { return mesh_; }
   const osd::Far::TopologyRefiner& Refiner() const { return *refiner_; }
   const osd::Bfr::RefinerSurfaceFactory<>& Factory() const { return factory_; }
-  const std::vector<double>& Points() const { return points_; }
 
   // The prepared face, prepared now if it is not. Lock-free once prepared.
   const FaceData& Data(int face) {
@@ -557,7 +549,7 @@ std::vector<SubdivFace> PrepareSubdivFaces(const SubdivMesh& mesh, SubdivCounts*
 CageTessellation TessellateCage(const SubdivMesh& mesh, int rate) {
   QuietOpenSubdiv();
   const std::unique_ptr<osd::Far::TopologyRefiner> refiner = BuildRefiner(mesh);
-  const osd::Bfr::RefinerSurfaceFactory<> factory(*refiner, FactoryOptions(mesh));
+  const osd::Bfr::RefinerSurfaceFactory<> factory(*refiner);
   std::vector<double> points;
   for (const Vec3& p : mesh.points) points.insert(points.end(), {p.x(), p.y(), p.z()});
   const osd::Bfr::Surface<double>::PointDescriptor xyz(3);
