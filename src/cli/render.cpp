@@ -18,6 +18,7 @@
 #include "patch/rib_reader.h"
 #include "patch/tessellate.h"
 #include "raster/async_row_sink.h"
+#include "raster/image_io.h"
 #include "raster/image_writer.h"
 #include "xscan/exact_scan.h"
 #include "xscan/partitioned_scan.h"
@@ -393,6 +394,7 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   report.output = (async ? async->WriterSeconds() : progress.OutputSeconds()) + Seconds(tCommit, tDone);
   report.peakKiB = PeakResidentKiB();
   report.texture = backEnd.TextureReport();
+  report.imageLibrary = raster::imageio::Loaded();
   if (o.stats) PrintReport(report, err);
   if (!o.statsJson.empty()) {
     if (const auto why = WriteFileWhole(o.statsJson, ReportJson(report))) {

@@ -50,7 +50,8 @@ void PrintReport(const RenderReport& r, std::ostream& out) {
         << p.bytesReceived << " bytes, peak memory " << p.peakKiB << " KiB\n";
   out << "time: load " << r.load << " s, " << (Direct(r.mode) ? "set up " : "tessellate ") << r.setUp
       << " s, render " << r.render << " s (of which writing the image " << r.output << " s)\npeak memory: "
-      << r.peakKiB << " KiB\ntexture: " << r.texture << '\n';
+      << r.peakKiB << " KiB\ntexture: " << r.texture << "\nimage library (OpenImageIO): "
+      << (r.imageLibrary ? "loaded" : "not loaded") << '\n';
 }
 
 std::string ReportJson(const RenderReport& r) {
@@ -61,7 +62,8 @@ std::string ReportJson(const RenderReport& r) {
   js << ", \"seconds_load\": " << r.load << ", \"seconds_tessellate\": " << r.setUp << ", \"seconds_render\": "
      << r.render << ", \"seconds_output\": " << r.output << ", \"seconds_workers\": [";
   for (std::size_t k = 0; k < r.workerSeconds.size(); ++k) js << (k ? ", " : "") << r.workerSeconds[k];
-  js << "], \"seconds_composite\": " << r.compositeSeconds << ", \"peak_rss_kib\": " << r.peakKiB;
+  js << "], \"seconds_composite\": " << r.compositeSeconds << ", \"peak_rss_kib\": " << r.peakKiB
+     << ", \"image_library_loaded\": " << (r.imageLibrary ? "true" : "false");
   if (!r.processes.empty()) {
     js << ", \"processes\": [";
     for (std::size_t k = 0; k < r.processes.size(); ++k) {

@@ -24,6 +24,7 @@ struct RenderReport {
   std::vector<double> workerSeconds;
   double compositeSeconds = 0.0;
   std::string texture;  // what became of the texture: "none", "opened, N lookups", ...
+  bool imageLibrary = false;  // whether OpenImageIO's module was loaded (raster/image_io.h)
   // patchscan-mpi: each process's seconds, traffic and peak memory.
   std::vector<DirectScanSource::Process> processes;
 };
@@ -33,7 +34,7 @@ void PrintReport(const RenderReport& report, std::ostream& out);
 
 // The report as one JSON object: "mode", every counter and ratio by its key (all groups,
 // zero where the mode does not run them), "seconds_load", "seconds_tessellate" (the set-up),
-// "seconds_render", "seconds_output" and "peak_rss_kib".
+// "seconds_render", "seconds_output", "peak_rss_kib" and "image_library_loaded".
 std::string ReportJson(const RenderReport& report);
 
 }  // namespace patchscan::cli

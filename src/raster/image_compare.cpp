@@ -1,34 +1,33 @@
 #include "raster/image_compare.h"
 
 #include <Eigen/Geometry>
-#include <OpenImageIO/imageio.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
+#include "raster/image_io.h"
 #include "raster/srgb.h"
 
 namespace patchscan::raster {
 
 std::variant<ComparableImage, std::string> ReadComparable(const std::string& path) {
   // As stored: a straight-alpha file's colour is linearised before alpha multiplies it.
-  OIIO::ImageSpec config;
-  config.attribute("oiio:UnassociatedAlpha", 1);
-  auto in = OIIO::ImageInput::open(path, &config);
-  if (!in) return path + ": cannot read: " + OIIO::geterror();
-  const OIIO::ImageSpec& spec = in->spec();
-  if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0) return path + ": empty image";
+  const auto library = imageio::Get();
+  if (const auto* why = std::get_if<std::string>(&library)) return path + ": " + *why;
+  auto read = std::get<const imageio::Library*>(library)->Read(path, imageio::Library::kAllChannels,
+                                                                /*unassociatedAlpha=*/true);
+  if (const auto* why = std::get_if<std::string>(&read)) return path + ": cannot read: " + *why;
+  const imageio::FileSpec& spec = std::get<imageio::Image>(read).spec;
+  if (spec.width <= 0 || spec.height <= 0 || spec.channels <= 0) return path + ": empty image";
   if (spec.depth > 1) return path + ": volume images are not compared";
-  const int nc = spec.nchannels;
+  const int nc = spec.channels;
   const std::size_t nPixels = static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height);
-  std::vector<float> all(nPixels * static_cast<std::size_t>(nc));
-  if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, all.data()))
-    return path + ": cannot read: " + in->geterror();
+  std::vector<float>& all = std::get<imageio::Image>(read).pixels;
 
   auto channel = [&](const char* name, int fallback) {
     for (int c = 0; c < nc; ++c)
-      if (spec.channelnames[static_cast<std::size_t>(c)] == name) return c;
+      if (static_cast<std::size_t>(c) < spec.channelNames.size() && spec.channelNames[static_cast<std::size_t>(c)] == name) return c;
     return fallback;
   };
   auto copy = [&](int c, std::vector<float>& dst) {
@@ -50,9 +49,9 @@ std::variant<ComparableImage, std::string> ReadComparable(const std::string& pat
 
   // Linear light, premultiplied, as renders are: 8-bit sRGB files (PNG, JPEG) decoded
   // through the sRGB curve, straight alpha multiplied in.
-  const bool srgb = spec.get_string_attribute("oiio:ColorSpace") == "sRGB";
-  const bool straight = spec.get_int_attribute("oiio:UnassociatedAlpha", 0) != 0;
-  const int alphaChannel = channel("A", spec.alpha_channel);
+  const bool srgb = spec.colorSpace == "sRGB";
+  const bool straight = spec.unassociatedAlpha;
+  const int alphaChannel = channel("A", spec.alphaChannel);
   if (srgb || straight)
     for (std::size_t i = 0; i < nPixels; ++i) {
       float* px = &all[i * static_cast<std::size_t>(nc)];
@@ -68,8 +67,8 @@ std::variant<ComparableImage, std::string> ReadComparable(const std::string& pat
   img.height = spec.height;
   // Colour: R, G, B by name, else the first three channels (a grey image in all three).
   copy3(channel("R", 0), channel("G", nc >= 3 ? 1 : 0), channel("B", nc >= 3 ? 2 : 0), img.rgb);
-  copy(channel("A", spec.alpha_channel), img.alpha);
-  copy(channel("Z", spec.z_channel), img.z);
+  copy(channel("A", spec.alphaChannel), img.alpha);
+  copy(channel("Z", spec.zChannel), img.z);
   const int nx = channel("N.x", -1), ny = channel("N.y", -1), nz = channel("N.z", -1);
   if (nx >= 0 && ny >= 0 && nz >= 0) copy3(nx, ny, nz, img.normal);
   copy(channel("id", -1), img.id);

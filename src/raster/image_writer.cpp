@@ -1,6 +1,5 @@
 #include "raster/image_writer.h"
 
-#include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -10,13 +9,14 @@
 #include <limits>
 #include <system_error>
 
+#include "raster/image_io.h"
 #include "raster/png_encoder.h"
 #include "raster/srgb.h"
 
 namespace patchscan::raster {
 
 struct ImageWriter::Impl {
-  std::unique_ptr<OIIO::ImageOutput> out;  // every format but PNG
+  std::unique_ptr<imageio::Output> out;  // every format but PNG (OpenImageIO's module)
   std::FILE* file = nullptr;               // PNG: our own encoder, deflating on threads
   std::unique_ptr<PngEncoder> png;
   std::filesystem::path target, temp;
@@ -29,7 +29,7 @@ struct ImageWriter::Impl {
   // Until committed, the temporary file goes, also when Open fails after creating it.
   ~Impl() {
     if (committed) return;
-    if (out) out->close();
+    out.reset();  // closes it
     png.reset();
     if (file) std::fclose(file);
     std::error_code ec;
@@ -67,11 +67,11 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   impl->target = path;
   if (auto why = CheckFormat(path, aovs)) return *why;
   const std::string ext = LowerExtension(impl->target);
-  OIIO::TypeDesc type = OIIO::TypeDesc::HALF;  // .exr
-  if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") type = OIIO::TypeDesc::UINT8;
-  else if (ext == ".tif" || ext == ".tiff") type = OIIO::TypeDesc::UINT16;
+  imageio::PixelType type = imageio::PixelType::kHalf;  // .exr
+  if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") type = imageio::PixelType::kUint8;
+  else if (ext == ".tif" || ext == ".tiff") type = imageio::PixelType::kUint16;
   impl->channels = (ext == ".jpg" || ext == ".jpeg") ? 3 : aovs ? kChannels : 4;  // JPEG: no alpha
-  if (aovs) type = OIIO::TypeDesc::FLOAT;  // depth and ids need more than half precision
+  if (aovs) type = imageio::PixelType::kFloat;  // depth and ids need more than half precision
   impl->width = width;
   std::string tempName = ".";
   tempName += impl->target.stem().string();
@@ -87,28 +87,31 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   }
   std::fclose(impl->file);  // OpenImageIO opens it again by name
   impl->file = nullptr;
-  impl->out = OIIO::ImageOutput::create(path);
-  if (!impl->out) return path + ": cannot create an image writer: " + OIIO::geterror();
-  OIIO::ImageSpec spec(width, height, impl->channels, type);
-  if (impl->channels >= 4) spec.alpha_channel = 3;
+  const auto library = imageio::Get();
+  if (const auto* why = std::get_if<std::string>(&library)) return path + ": " + *why;
+  imageio::FileSpec spec;
+  spec.width = width;
+  spec.height = height;
+  spec.channels = impl->channels;
+  if (impl->channels >= 4) spec.alphaChannel = 3;
   if (window.frameWidth > 0) {
     spec.x = window.x;
     spec.y = window.y;
-    spec.full_x = spec.full_y = 0;
-    spec.full_width = window.frameWidth;
-    spec.full_height = window.frameHeight;
+    spec.fullWidth = window.frameWidth;
+    spec.fullHeight = window.frameHeight;
     impl->y0 = window.y;
   }
   // 8-bit files hold sRGB-encoded colour; EXR and 16-bit TIFF linear (raster/srgb.h).
-  impl->srgb8 = type == OIIO::TypeDesc::UINT8;
-  spec.attribute("oiio:ColorSpace", impl->srgb8 ? "sRGB" : "Linear");
+  impl->srgb8 = type == imageio::PixelType::kUint8;
+  spec.colorSpace = impl->srgb8 ? "sRGB" : "Linear";
   if (impl->srgb8) impl->bytes.resize(static_cast<std::size_t>(width) * impl->channels);
   if (aovs) {
-    spec.channelnames = {"R", "G", "B", "A", "Z", "N.x", "N.y", "N.z", "u", "v", "id"};
-    spec.z_channel = kChannelZ;
+    spec.channelNames = {"R", "G", "B", "A", "Z", "N.x", "N.y", "N.z", "u", "v", "id"};
+    spec.zChannel = kChannelZ;
   }
-  if (!impl->out->open(impl->temp.string(), spec))
-    return path + ": cannot write: " + impl->out->geterror();
+  auto out = std::get<const imageio::Library*>(library)->Create(ext.substr(1), impl->temp.string(), spec, type);
+  if (const auto* why = std::get_if<std::string>(&out)) return path + ": cannot write: " + *why;
+  impl->out = std::move(std::get<std::unique_ptr<imageio::Output>>(out));
   return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
 }
 
@@ -124,19 +127,24 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::OpenDepthMa
   if (!impl->file) return path + ": cannot write: " + std::strerror(errno);
   std::fclose(impl->file);
   impl->file = nullptr;
-  impl->out = OIIO::ImageOutput::create("tiff");
-  if (!impl->out) return path + ": cannot create a TIFF writer: " + OIIO::geterror();
-  OIIO::ImageSpec spec(width, height, 1, OIIO::TypeDesc::FLOAT);
-  spec.channelnames = {"Z"};
-  spec.z_channel = 0;
+  const auto library = imageio::Get();
+  if (const auto* why = std::get_if<std::string>(&library)) return path + ": " + *why;
+  imageio::FileSpec spec;
+  spec.width = width;
+  spec.height = height;
+  spec.channels = 1;
+  spec.channelNames = {"Z"};
+  spec.zChannel = 0;
   // As RenderMan keeps them, for row vectors: the transposes.
   for (const auto& [name, m] : {std::pair{"worldtocamera", &camera.worldToCamera}, std::pair{"worldtoscreen", &camera.worldToScreen}}) {
-    float rows[16];
+    std::array<float, 16> rows;
     for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < 4; ++j) rows[4 * i + j] = static_cast<float>((*m)(j, i));
-    spec.attribute(name, OIIO::TypeMatrix, rows);
+      for (int j = 0; j < 4; ++j) rows[static_cast<std::size_t>(4 * i + j)] = static_cast<float>((*m)(j, i));
+    spec.matrices.emplace_back(name, rows);
   }
-  if (!impl->out->open(impl->temp.string(), spec)) return path + ": cannot write: " + impl->out->geterror();
+  auto out = std::get<const imageio::Library*>(library)->Create("tiff", impl->temp.string(), spec, imageio::PixelType::kFloat);
+  if (const auto* why = std::get_if<std::string>(&out)) return path + ": cannot write: " + *why;
+  impl->out = std::move(std::get<std::unique_ptr<imageio::Output>>(out));
   return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
 }
 
@@ -148,16 +156,16 @@ bool ImageWriter::WriteRow(int y, const float* pixels) {
     for (int x = 0; x < impl_->width; ++x)
       impl_->depth[static_cast<std::size_t>(x)] =
           std::min(pixels[static_cast<std::size_t>(x) * kChannels + kChannelZ], std::numeric_limits<float>::max());
-    return impl_->out->write_scanline(y, 0, OIIO::TypeDesc::FLOAT, impl_->depth.data());
+    return impl_->out->WriteRow(y, imageio::PixelType::kFloat, impl_->depth.data(), sizeof(float));
   }
   if (impl_->srgb8) {  // JPEG: no alpha, the colour over black as it is (premultiplied)
     for (int x = 0; x < impl_->width; ++x)
       for (int c = 0; c < impl_->channels; ++c)
         impl_->bytes[static_cast<std::size_t>(x * impl_->channels + c)] =
             SrgbCode(pixels[static_cast<std::size_t>(x) * kChannels + c]);
-    return impl_->out->write_scanline(y + impl_->y0, 0, OIIO::TypeDesc::UINT8, impl_->bytes.data());
+    return impl_->out->WriteRow(y + impl_->y0, imageio::PixelType::kUint8, impl_->bytes.data(), impl_->channels);
   }
-  return impl_->out->write_scanline(y + impl_->y0, 0, OIIO::TypeDesc::FLOAT, pixels, kChannels * sizeof(float));
+  return impl_->out->WriteRow(y + impl_->y0, imageio::PixelType::kFloat, pixels, kChannels * sizeof(float));
 }
 
 std::variant<std::monostate, std::string> ImageWriter::Commit() {
@@ -167,8 +175,8 @@ std::variant<std::monostate, std::string> ImageWriter::Commit() {
     const bool closed = std::fclose(impl_->file) == 0;
     impl_->file = nullptr;
     if (!encoded || !closed) return impl_->target.string() + ": writing the image failed";
-  } else if (!impl_->out->close()) {
-    return impl_->target.string() + ": " + impl_->out->geterror();
+  } else if (!impl_->out->Close()) {
+    return impl_->target.string() + ": " + impl_->out->Error();
   }
   std::error_code ec;
   std::filesystem::rename(impl_->temp, impl_->target, ec);

@@ -1,54 +1,59 @@
 #include "raster/shadow_map.h"
 
-#include <OpenImageIO/imagebuf.h>
-#include <OpenImageIO/imagebufalgo.h>
-#include <OpenImageIO/imageio.h>
-
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
 
+#include "raster/image_io.h"
+
 namespace patchscan::raster {
 namespace {
 
 // OpenImageIO keeps matrices as RenderMan does, for row vectors: the transpose of ours.
-bool ReadMatrix(const OIIO::ImageSpec& spec, const char* name, Mat4* out) {
-  const OIIO::ParamValue* p = spec.find_attribute(name, OIIO::TypeMatrix);
-  if (!p) return false;
-  const float* m = static_cast<const float*>(p->data());
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) (*out)(j, i) = m[4 * i + j];
-  return true;
+bool ReadMatrix(const imageio::FileSpec& spec, const char* name, Mat4* out) {
+  for (const auto& [key, m] : spec.matrices)
+    if (key == name) {
+      for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) (*out)(j, i) = m[static_cast<std::size_t>(4 * i + j)];
+      return true;
+    }
+  return false;
+}
+
+bool HasMatrices(const imageio::FileSpec& spec, ShadowCamera* camera) {
+  return ReadMatrix(spec, "worldtocamera", &camera->worldToCamera) &&
+         ReadMatrix(spec, "worldtoscreen", &camera->worldToScreen);
 }
 
 }  // namespace
 
 std::variant<std::unique_ptr<ShadowMap>, std::string> ShadowMap::Load(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) return path + ": cannot read the shadow map: " + OIIO::geterror();
-  const OIIO::ImageSpec spec = in->spec();
+  const auto library = imageio::Get();
+  if (const auto* why = std::get_if<std::string>(&library)) return path + ": " + *why;
+  // The description first: the size is checked before the texels are read.
+  auto header = std::get<const imageio::Library*>(library)->Read(path, 0, false);
+  if (const auto* why = std::get_if<std::string>(&header)) return path + ": cannot read the shadow map: " + *why;
+  const imageio::FileSpec& spec = std::get<imageio::Image>(header).spec;
   ShadowCamera camera;
-  if (!ReadMatrix(spec, "worldtocamera", &camera.worldToCamera) || !ReadMatrix(spec, "worldtoscreen", &camera.worldToScreen))
-    return path + ": not a shadow map (no worldtocamera and worldtoscreen matrices)";
+  if (!HasMatrices(spec, &camera)) return path + ": not a shadow map (no worldtocamera and worldtoscreen matrices)";
   if (spec.width <= 0 || spec.height <= 0 || static_cast<long long>(spec.width) * spec.height > (1LL << 28))
     return path + ": a shadow map of " + std::to_string(spec.width) + "x" + std::to_string(spec.height) + " texels is not supported";
-  std::vector<float> depth(static_cast<std::size_t>(spec.width) * static_cast<std::size_t>(spec.height));
-  if (!in->read_image(0, 0, 0, 1, OIIO::TypeDesc::FLOAT, depth.data()))
-    return path + ": cannot read the shadow map: " + in->geterror();
-  return std::make_unique<ShadowMap>(spec.width, spec.height, std::move(depth), camera);
+  auto image = std::get<const imageio::Library*>(library)->Read(path, 1, false);
+  if (const auto* why = std::get_if<std::string>(&image)) return path + ": cannot read the shadow map: " + *why;
+  return std::make_unique<ShadowMap>(spec.width, spec.height, std::move(std::get<imageio::Image>(image).pixels), camera);
 }
 
 std::optional<std::string> MakeShadowTexture(const std::string& input, const std::string& output) {
-  OIIO::ImageBuf in(input);
-  if (!in.read(0, 0, true, OIIO::TypeDesc::FLOAT)) return input + ": cannot read the depth map: " + in.geterror();
-  Mat4 unused;
-  if (!ReadMatrix(in.spec(), "worldtocamera", &unused) || !ReadMatrix(in.spec(), "worldtoscreen", &unused))
+  const auto library = imageio::Get();
+  if (const auto* why = std::get_if<std::string>(&library)) return input + ": " + *why;
+  auto header = std::get<const imageio::Library*>(library)->Read(input, 0, false);
+  if (const auto* why = std::get_if<std::string>(&header)) return input + ": cannot read the depth map: " + *why;
+  ShadowCamera unused;
+  if (!HasMatrices(std::get<imageio::Image>(header).spec, &unused))
     return input + ": not a depth map (no worldtocamera and worldtoscreen matrices)";
-  OIIO::ImageSpec config;
-  config.attribute("maketx:fileformatname", "tiff");
-  if (!OIIO::ImageBufAlgo::make_texture(OIIO::ImageBufAlgo::MakeTxShadow, in, output, config))
-    return output + ": cannot make the shadow texture: " + OIIO::geterror();
+  if (auto why = std::get<const imageio::Library*>(library)->MakeShadowTexture(input, output))
+    return output + ": cannot make the shadow texture: " + *why;
   return std::nullopt;
 }
 
