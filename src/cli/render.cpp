@@ -172,6 +172,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   cmd->add_flag("--aov", o->aov,
                 "also write the channels Z (eye distance), N.x N.y N.z (world normal), u v and id "
                 "(surface index) of the surface covering most of each pixel; .exr only");
+  cmd->add_option("--compression", o->compression, raster::ImageWriter::kCompressionHelp);
   cmd->add_option("--crop", o->crop,
                   "render a window of the image: XMIN,XMAX,YMIN,YMAX as fractions of the width and "
                   "height from the top left (RenderMan's CropWindow, which a RIB scene may give); "
@@ -297,14 +298,14 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   if (const int* code = std::get_if<int>(&setup)) return *code;
   BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);
   backEnd.settings.threads = threads;
-  if (const auto why = raster::ImageWriter::CheckFormat(output, o.aov); why && !depthMap) {
+  if (const auto why = raster::ImageWriter::CheckFormat(output, o.aov, o.compression); why && !depthMap) {
     err << "patchscan: " << *why << '\n';
     return kExitUsage;
   }
   raster::ImageWriter::Window placement;
   if (cropNdc) placement = {window.x0, window.y0, camera.width, camera.height};
   auto opened = depthMap ? raster::ImageWriter::OpenDepthMap(output, outWidth, outHeight, LightCamera(camera))
-                         : raster::ImageWriter::Open(output, outWidth, outHeight, o.aov, threads, placement);
+                         : raster::ImageWriter::Open(output, outWidth, outHeight, o.aov, threads, placement, o.compression);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';
     return kExitOutputError;

@@ -48,6 +48,7 @@ struct RenderOptions {
   bool hiddenLine = false;
   double opacity = 1.0;
   bool aov = false;
+  std::string compression;  // --compression: the image file's (raster/image_writer.h); "": the format's default
   // --crop "xmin,xmax,ymin,ymax": a window of the frame in RenderMan's NDC (0..1, y down),
   // as RIB CropWindow; empty: the scene's CropWindow, else the whole frame.
   std::string crop;

@@ -32,6 +32,7 @@ struct FileSpec {
   int alphaChannel = -1, zChannel = -1;
   std::string colorSpace;                // "oiio:ColorSpace": "sRGB", "Linear"
   bool unassociatedAlpha = false;        // "oiio:UnassociatedAlpha": colour not premultiplied
+  std::string compression;               // "compression" ("zip", "zip:9", "piz"...); "": the format's default
   // 4x4 float matrices by name, as the file stores them (OpenImageIO's and RenderMan's
   // convention: for row vectors).
   std::vector<std::pair<std::string, std::array<float, 16>>> matrices;

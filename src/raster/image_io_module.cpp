@@ -38,6 +38,7 @@ FileSpec FromOiio(const OIIO::ImageSpec& s) {
   f.zChannel = s.z_channel;
   f.colorSpace = s.get_string_attribute("oiio:ColorSpace");
   f.unassociatedAlpha = s.get_int_attribute("oiio:UnassociatedAlpha", 0) != 0;
+  f.compression = s.get_string_attribute("compression");
   for (const OIIO::ParamValue& p : s.extra_attribs)
     if (p.type() == OIIO::TypeMatrix) {
       std::array<float, 16> m;
@@ -60,6 +61,7 @@ OIIO::ImageSpec ToOiio(const FileSpec& f, PixelType type) {
     s.full_height = f.fullHeight;
   }
   if (!f.colorSpace.empty()) s.attribute("oiio:ColorSpace", f.colorSpace);
+  if (!f.compression.empty()) s.attribute("compression", f.compression);
   for (const auto& [name, m] : f.matrices) s.attribute(name, OIIO::TypeMatrix, m.data());
   return s;
 }

@@ -49,24 +49,81 @@ std::string LowerExtension(const std::filesystem::path& path) {
   return ext;
 }
 
+// Each format's default compression (image_writer.h).
+std::string DefaultCompression(const std::string& ext) {
+  if (ext == ".png") return "zip:6";
+  if (ext == ".jpg" || ext == ".jpeg") return "jpeg:98";
+  return "zip";
+}
+
+// A compression as CheckFormat takes it, split: the method and its level (-1: none given).
+struct Compression {
+  std::string method;
+  int level = -1;
+};
+
+// `text` parsed for the format of extension `ext`; the message when it is not one of the
+// format's (image_writer.h lists them). "": the format's default.
+std::variant<Compression, std::string> ParseCompression(const std::string& ext, const std::string& text) {
+  Compression c;
+  const std::size_t colon = text.find(':');
+  c.method = text.substr(0, colon);
+  if (colon != std::string::npos) {
+    const std::string digits = text.substr(colon + 1);
+    if (digits.empty() || digits.size() > 3 || digits.find_first_not_of("0123456789") != std::string::npos)
+      return "compression '" + text + "': the level after ':' must be a whole number";
+    c.level = std::stoi(digits);
+  }
+  auto oneOf = [&](std::initializer_list<const char*> methods) {
+    for (const char* m : methods)
+      if (c.method == m) return true;
+    return false;
+  };
+  auto levelIn = [&](int lo, int hi) { return c.level < 0 || (c.level >= lo && c.level <= hi); };
+  if (ext == ".png") {
+    if (c.method == "none" && c.level < 0) return Compression{"zip", 0};
+    if (c.method == "zip" && levelIn(0, 9)) return Compression{"zip", c.level < 0 ? 6 : c.level};
+    return "compression '" + text + "' is not one of PNG's: zip:L (L 0-9; zip = zip:6), none";
+  }
+  if (ext == ".tif" || ext == ".tiff") {
+    if ((c.method == "zip" && levelIn(1, 9)) || (oneOf({"lzw", "packbits", "none"}) && c.level < 0)) return c;
+    return "compression '" + text + "' is not one of TIFF's: zip, zip:L (L 1-9), lzw, packbits, none";
+  }
+  if (ext == ".exr") {
+    if ((oneOf({"dwaa", "dwab"}) && levelIn(1, 999)) ||
+        (oneOf({"zip", "zips", "piz", "rle", "pxr24", "b44", "b44a", "none"}) && c.level < 0))
+      return c;
+    return "compression '" + text +
+           "' is not one of OpenEXR's: zip, zips, piz, rle, pxr24, b44, b44a, dwaa[:L], dwab[:L], none";
+  }
+  if (c.method == "jpeg" && c.level >= 1 && c.level <= 100) return c;
+  return "compression '" + text + "' is not one of JPEG's: jpeg:Q (Q the quality 1-100)";
+}
+
 }  // namespace
 
-std::optional<std::string> ImageWriter::CheckFormat(const std::string& path, bool aovs) {
+std::optional<std::string> ImageWriter::CheckFormat(const std::string& path, bool aovs, const std::string& compression) {
   const std::string ext = LowerExtension(path);
   if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".tif" && ext != ".tiff" && ext != ".exr")
     return path + ": unknown image format '" + ext + "' (known: .png .tif .tiff .jpg .jpeg .exr)";
   if (aovs && ext != ".exr") return path + ": AOV channels need an .exr output";
+  if (compression.empty()) return std::nullopt;
+  const auto parsed = ParseCompression(ext, compression);
+  if (const auto* why = std::get_if<std::string>(&parsed)) return path + ": " + *why;
   return std::nullopt;
 }
 
 std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const std::string& path,
                                                                           int width, int height,
                                                                           bool aovs, int threads,
-                                                                          Window window) {
+                                                                          Window window,
+                                                                          const std::string& compression) {
   auto impl = std::make_unique<Impl>();
   impl->target = path;
-  if (auto why = CheckFormat(path, aovs)) return *why;
+  if (auto why = CheckFormat(path, aovs, compression)) return *why;
   const std::string ext = LowerExtension(impl->target);
+  const auto parsed = ParseCompression(ext, compression.empty() ? DefaultCompression(ext) : compression);
+  const Compression& chosen = std::get<Compression>(parsed);
   imageio::PixelType type = imageio::PixelType::kHalf;  // .exr
   if (ext == ".png" || ext == ".jpg" || ext == ".jpeg") type = imageio::PixelType::kUint8;
   else if (ext == ".tif" || ext == ".tiff") type = imageio::PixelType::kUint16;
@@ -82,7 +139,7 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   impl->file = std::fopen(impl->temp.c_str(), "wb");
   if (!impl->file) return path + ": cannot write: " + std::strerror(errno);
   if (ext == ".png") {
-    impl->png = std::make_unique<PngEncoder>(impl->file, width, height, PngEncoder::Options{6, threads});
+    impl->png = std::make_unique<PngEncoder>(impl->file, width, height, PngEncoder::Options{chosen.level, threads});
     return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
   }
   std::fclose(impl->file);  // OpenImageIO opens it again by name
@@ -105,6 +162,7 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   impl->srgb8 = type == imageio::PixelType::kUint8;
   spec.colorSpace = impl->srgb8 ? "sRGB" : "Linear";
   if (impl->srgb8) impl->bytes.resize(static_cast<std::size_t>(width) * impl->channels);
+  spec.compression = chosen.level >= 0 ? chosen.method + ":" + std::to_string(chosen.level) : chosen.method;
   if (aovs) {
     spec.channelNames = {"R", "G", "B", "A", "Z", "N.x", "N.y", "N.z", "u", "v", "id"};
     spec.zChannel = kChannelZ;

@@ -28,12 +28,14 @@ class ImageWriter final : public RowSink {
   // An image that is a window of a larger frame (a crop) says where it lies in `window`:
   // EXR and TIFF record it (OpenEXR's data window in the display window); PNG and JPEG
   // hold the window alone.
+  // `compression` as CheckFormat takes it ("": the format's default).
   using Window = ImageWindow;
   static std::variant<std::unique_ptr<ImageWriter>, std::string> Open(const std::string& path,
                                                                      int width, int height,
                                                                      bool aovs = false,
                                                                      int threads = 1,
-                                                                     Window window = ImageWindow());
+                                                                     Window window = ImageWindow(),
+                                                                     const std::string& compression = {});
   // A depth map (RenderMan's "zfile" and "shadow" displays): one float channel Z, the eye
   // distance along the view axis of the nearest surface (the largest float where none),
   // written as TIFF whatever `path`'s extension.
@@ -41,9 +43,20 @@ class ImageWriter final : public RowSink {
   static std::variant<std::unique_ptr<ImageWriter>, std::string> OpenDepthMap(const std::string& path, int width,
                                                                                int height, const ShadowCamera& camera);
   ~ImageWriter() override;
-  // Whether `path` names a format Open takes (with `aovs`, an .exr): the message if not. A
-  // refusal here is the user's choice of name; a failure of Open after it is the file system's.
-  static std::optional<std::string> CheckFormat(const std::string& path, bool aovs = false);
+  // Whether `path` names a format Open takes (with `aovs`, an .exr), and `compression` is one
+  // of that format's: the message if not. A refusal here is the user's choice; a failure of
+  // Open after it is the file system's. Compression, by format (default first; kCompressionHelp):
+  //   .png         zip:L, L the zlib level 0 (stored) to 9; default zip:6; "none" is zip:0
+  //   .tif .tiff   zip (zip:L, L 1-9), lzw, packbits, none
+  //   .exr         zip (16 rows a block), zips (one), piz, rle, pxr24, b44, b44a, dwaa, dwab
+  //                (lossy, dwaa:L and dwab:L with L the quality), none
+  //   .jpg .jpeg   jpeg:Q, Q the quality 1-100; default jpeg:98
+  static std::optional<std::string> CheckFormat(const std::string& path, bool aovs = false,
+                                                const std::string& compression = {});
+  static constexpr const char* kCompressionHelp =
+      "compression of the image file, by format (the first is the default): .png zip:L (zlib level L 0-9; zip = "
+      "zip:6; none = zip:0); .tif/.tiff zip[:L], lzw, packbits, none; .exr zip (16 rows a block), zips (one row), piz, "
+      "rle, pxr24, b44, b44a, dwaa[:L], dwab[:L] (lossy), none; .jpg/.jpeg jpeg:Q (quality 1-100; default 98, as OpenImageIO)";
 
   bool WriteRow(int y, const float* pixels) override;
   // Whether the format encodes on threads of its own (PNG): then a row costs the caller a

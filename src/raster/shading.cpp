@@ -8,12 +8,12 @@ LightRig DefaultLightRig(const Vec3& forward, const Vec3& up, const Vec3& right)
   LightRig rig;
   rig.ambient = 0.15 * Rgb(0.9, 0.92, 1.0);
   // Directions the light travels (from the light towards the scene).
-  rig.lights.push_back({Light::Kind::Directional, (forward + right - 1.2 * up).normalized(),
-                        Rgb(0.95, 0.9, 0.82)});
-  rig.lights.push_back({Light::Kind::Directional, (forward - 1.5 * right + 0.2 * up).normalized(),
-                        Rgb(0.25, 0.3, 0.4)});
-  rig.lights.push_back({Light::Kind::Directional, (-forward - 0.5 * up).normalized(),
-                        Rgb(0.3, 0.3, 0.3)});
+  rig.lights.push_back(Light::Of(Light::Kind::Directional, (forward + right - 1.2 * up).normalized(),
+                        Rgb(0.95, 0.9, 0.82)));
+  rig.lights.push_back(Light::Of(Light::Kind::Directional, (forward - 1.5 * right + 0.2 * up).normalized(),
+                        Rgb(0.25, 0.3, 0.4)));
+  rig.lights.push_back(Light::Of(Light::Kind::Directional, (-forward - 0.5 * up).normalized(),
+                        Rgb(0.3, 0.3, 0.3)));
   return rig;
 }
 

@@ -35,6 +35,17 @@ struct Light {
   std::vector<const ShadowMap*> shadows;
   double shadowBias = 0.0, shadowBlur = 0.0;
   int shadowSamples = 1;
+
+  // A light of `kind` at (or travelling along) `vector`, with `intensity` and `attenuation`;
+  // the rest as above.
+  static Light Of(Kind kind, const Vec3& vector, const Rgb& intensity, double attenuation = 0.0) {
+    Light l;
+    l.kind = kind;
+    l.vector = vector;
+    l.intensity = intensity;
+    l.attenuation = attenuation;
+    return l;
+  }
 };
 
 struct Material {

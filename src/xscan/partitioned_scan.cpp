@@ -110,9 +110,15 @@ void MergeByRank(std::size_t nLists, Entries&& entries, std::vector<std::size_t>
   }
 }
 
-// Rows the scan-ahead may be in front of the back end: two pixel rows of the largest
-// supersampling grid (the back end takes aa of them at a time), so memory stays O(width).
-constexpr int kRowsAhead = 2 * raster::kMaxAa;
+// Sample rows the scan-ahead may be in front of the back end: two pixel rows' worth of the
+// render's supersampling grid (RowsAhead), at most those of the largest grid. A row held
+// is every fragment of every layer of it (144 bytes each): 16 rows of a 16384-wide teapot
+// were 60 MB, so the ring is sized by the grid in use, and memory stays O(width).
+constexpr int kMaxRowsAhead = 2 * raster::kMaxAa;
+int RowsAhead(double dy) {
+  const double perPixel = dy > 0.0 ? std::round(1.0 / dy) : 1.0;
+  return static_cast<int>(std::clamp(2.0 * perPixel, 2.0, static_cast<double>(kMaxRowsAhead)));
+}
 
 // A composited row kept for the back end: what the workers handed over, in scan order.
 class StoredRow final : public raster::FragmentRow {
@@ -143,15 +149,16 @@ class StoredRow final : public raster::FragmentRow {
 
 }  // namespace
 
-// The scan-ahead: a thread composites rows 0, 1, ... into a ring of kRowsAhead slots (its
+// The scan-ahead: a thread composites rows 0, 1, ... into a ring of `depth` slots (its
 // workers' scans on the arena) while the back end replays them in order; it waits while the
 // ring is full.
 struct PartitionedScan::Ahead {
   raster::SampleColumns columns;
   double y0 = 0.0, dy = 1.0;
   int nRows = 0;
-  std::vector<StoredRow> slots = std::vector<StoredRow>(kRowsAhead);
-  std::vector<char> okOf = std::vector<char>(kRowsAhead, 1);
+  int depth = 2;  // RowsAhead(dy)
+  std::vector<StoredRow> slots;
+  std::vector<char> okOf;
   std::mutex m;
   std::condition_variable cv;
   int produced = 0, consumed = 0;  // rows composited, rows replayed
@@ -222,14 +229,17 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
   a.y0 = y0;
   a.dy = dy;
   a.nRows = nRows;
+  a.depth = RowsAhead(dy);
+  a.slots.resize(static_cast<std::size_t>(a.depth));
+  a.okOf.assign(static_cast<std::size_t>(a.depth), 1);
   a.producer = std::thread([this, &a] {
       for (int j = 0; j < a.nRows; ++j) {
         {
           std::unique_lock lock(a.m);
-          a.cv.wait(lock, [&] { return a.cancel || j - a.consumed < kRowsAhead; });
+          a.cv.wait(lock, [&] { return a.cancel || j - a.consumed < a.depth; });
           if (a.cancel) return;
         }
-        StoredRow& slot = a.slots[static_cast<std::size_t>(j % kRowsAhead)];
+        StoredRow& slot = a.slots[static_cast<std::size_t>(j % a.depth)];
         slot.Clear();
         bool ok = false;
         try {
@@ -242,7 +252,7 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
         }
         {
           std::lock_guard lock(a.m);
-          a.okOf[static_cast<std::size_t>(j % kRowsAhead)] = ok;
+          a.okOf[static_cast<std::size_t>(j % a.depth)] = ok;
           a.produced = j + 1;
         }
         a.cv.notify_all();
@@ -280,7 +290,7 @@ bool PartitionedScan::ScanRow(double y, const raster::SampleColumns& columns, ra
   if (a.error) std::rethrow_exception(a.error);
   lock.unlock();
   // The producer leaves slot j alone until row j is consumed.
-  const auto k = static_cast<std::size_t>(j % kRowsAhead);
+  const auto k = static_cast<std::size_t>(j % a.depth);
   a.slots[k].Replay(out);
   const bool ok = a.okOf[k] != 0;
   lock.lock();

@@ -77,7 +77,7 @@ class PartitionedScan final : public DirectScanSource {
   ~PartitionedScan() override;
 
   // With more than one thread, rows are scanned and composited ahead of the back end (up
-  // to kRowsAhead rows) on a task of their own while the back end shades the rows before.
+  // to two pixel rows) on a task of their own while the back end shades the rows before.
   void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) override;
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 

@@ -220,6 +220,11 @@ TEST(Cli, OpenImageIOIsLoadedOnlyWhenARunNeedsIt) {
   json = Slurp(js);
   EXPECT_NE(json.find("\"image_library_loaded\": true"), std::string::npos) << json;
   EXPECT_TRUE(std::filesystem::exists(dir / "a.exr"));
+  // A compression the format does not have is a usage error, and nothing is written.
+  r = Patchscan("render " + kTeapot + " -o " + (dir / "b.png").string() + " --size 1x1 --compression piz");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("compression 'piz' is not one of PNG's"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "b.png"));
   std::filesystem::remove_all(dir);
 }
 

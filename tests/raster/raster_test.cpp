@@ -388,14 +388,14 @@ TEST(Shading, IlluminationModelTerms) {
   m.ks = 0.3;
   LightRig rig;
   rig.ambient = Rgb(1, 1, 1);
-  rig.lights.push_back({Light::Kind::Point, Vec3(0, 0, 2), Rgb(1, 1, 1), 0.25});
+  rig.lights.push_back(Light::Of(Light::Kind::Point, Vec3(0, 0, 2), Rgb(1, 1, 1), 0.25));
   const Rgb c = Shade(Vec3::Zero(), Vec3(0, 0, 3), m.colour, Vec3(0, 0, 10), m, rig);
   const double fall = 1.0 / (1.0 + 0.25 * 4.0);
   for (int k = 0; k < 3; ++k)
     EXPECT_NEAR(c[k], 0.1 * m.colour[k] + fall * (0.6 * m.colour[k] + 0.3), 1e-12) << k;
   // A directional light from below does not light the top; the normal facing away from
   // the eye is turned towards it (two-sided), so the result is the same for -n.
-  rig.lights = {{Light::Kind::Directional, Vec3(0, 0, 1), Rgb(1, 1, 1), 0.0}};
+  rig.lights = {Light::Of(Light::Kind::Directional, Vec3(0, 0, 1), Rgb(1, 1, 1))};
   const Rgb below = Shade(Vec3::Zero(), Vec3(0, 0, -1), m.colour, Vec3(0, 0, 10), m, rig);
   EXPECT_LE((below - 0.1 * m.colour).norm(), 1e-12);
 }
@@ -629,6 +629,64 @@ TEST(ImageWriter, FormatsAndChannels) {
   }
   EXPECT_NE(std::get<std::string>(ImageWriter::Open((dir / "c.png").string(), 4, 2, true)).find("need an .exr"),
             std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ImageWriter, CompressionByFormat) {
+  // Each format's methods are accepted and recorded in the file (PNG has no record: its
+  // zlib level shows in the size), the pixels the same; other methods are refused by name.
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_writer_compression_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  constexpr int kWidth = 64, kHeight = 16;
+  std::vector<float> row(kChannels * kWidth);
+  auto fill = [&](int y) {
+    for (int x = 0; x < kWidth; ++x)
+      for (int c = 0; c < 4; ++c) row[x * kChannels + c] = c == 3 ? 1.0f : static_cast<float>((x * 7 + y * 3 + c) % 64) / 63;
+  };
+  auto write = [&](const std::string& name, const std::string& compression) {
+    const std::string path = (dir / name).string();
+    auto w = std::get<std::unique_ptr<ImageWriter>>(
+        ImageWriter::Open(path, kWidth, kHeight, false, 1, ImageWindow(), compression));
+    for (int y = 0; y < kHeight; ++y) {
+      fill(y);
+      EXPECT_TRUE(w->WriteRow(y, row.data()));
+    }
+    EXPECT_TRUE(std::holds_alternative<std::monostate>(w->Commit())) << name;
+    return path;
+  };
+  auto pixels = [](const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    std::vector<float> px(static_cast<std::size_t>(in->spec().image_pixels() * in->spec().nchannels));
+    in->read_image(0, 0, 0, in->spec().nchannels, OIIO::TypeDesc::FLOAT, px.data());
+    return std::make_pair(in->spec().get_string_attribute("compression"), px);
+  };
+  const auto stored = std::filesystem::file_size(write("stored.png", "none"));
+  const auto fast = std::filesystem::file_size(write("fast.png", "zip:1"));
+  const auto normal = std::filesystem::file_size(write("normal.png", ""));
+  EXPECT_GT(stored, fast);
+  EXPECT_GE(fast, normal);
+  EXPECT_EQ(pixels((dir / "stored.png").string()).second, pixels((dir / "normal.png").string()).second);
+  for (const auto& [name, compression, recorded] :
+       std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"d.tif", "", "zip"}, {"l.tif", "lzw", "lzw"}, {"p.tif", "packbits", "packbits"}, {"n.tif", "none", "none"},
+           {"d.exr", "", "zip"}, {"p.exr", "piz", "piz"}, {"s.exr", "zips", "zips"}, {"w.exr", "dwaa:45", "dwaa"}}) {
+    const auto [got, px] = pixels(write(name, compression));
+    EXPECT_EQ(got.substr(0, got.find(':')), recorded) << name;
+    // Lossless ones hold the default's pixels (the lossy DWA is only recorded).
+    const std::filesystem::path reference = dir / std::filesystem::path(name).replace_filename("d").replace_extension(
+                                                      std::filesystem::path(name).extension());
+    if (name != "w.exr") {
+      EXPECT_EQ(px, pixels(reference.string()).second) << name;
+    }
+  }
+  for (const auto& [name, compression] : std::vector<std::pair<std::string, std::string>>{
+           {"a.png", "lzw"}, {"a.png", "zip:10"}, {"a.png", "zip:"}, {"a.tif", "piz"}, {"a.tif", "zip:0"},
+           {"a.exr", "lzw"}, {"a.exr", "zip:3"}, {"a.jpg", "zip"}, {"a.jpg", "jpeg:0"}, {"a.jpg", "jpeg:x"}}) {
+    const auto why = ImageWriter::CheckFormat((dir / name).string(), false, compression);
+    ASSERT_TRUE(why) << name << " " << compression;
+    EXPECT_NE(why->find("compression '" + compression + "'"), std::string::npos) << *why;
+  }
+  EXPECT_FALSE(ImageWriter::CheckFormat((dir / "a.jpg").string(), false, "jpeg:80"));
   std::filesystem::remove_all(dir);
 }
 
