@@ -26,6 +26,38 @@ EdgeSample SampleEdge(const ShapeT& shape, const ScreenMap& map, PatchEdge e, do
   return {d.p.y(), pt.y(), ptt.y(), SilhouetteJ(d), pt.head<2>().norm(), across.head<2>().norm()};
 }
 
+// Where a tracker's Newton iteration starts on scan line yNext. Paper 001 §3.5 extrapolates
+// the solutions of the last lines (ExtrapolatedStart, which assumes equal steps); here t is
+// predicted as a function of screen y from what the evaluations at the last two solutions
+// already gave (y, y_t, y_tt), so no evaluation is added:
+//  - the next line one step on (the steps equal, as in the exact scan): the cubic Hermite
+//    interpolant of t(y) through both solutions with slopes 1 / y_t, extended one step
+//    (error O(h^4); quadratic extrapolation errs by O(h^3));
+//  - else (the first step, or a θ scan's longer steps between sampled lines): the inverse's
+//    second-order Taylor expansion t + dy / y_t - y_tt dy^2 / (2 y_t^3), its second term
+//    dropped where it exceeds half the first (near a turn of y along the edge, where the
+//    expansion no longer holds).
+// Measured on the teapot at 1024x768 (--stats newton_iterations_per_tracker_row, edge and
+// silhouette trackers together): exact aa 3 1.199 -> 0.813, θ aa 4 2.103 -> 0.847; the
+// images the same bit for bit.
+double PredictedStart(const EdgeTracker& tr, double yNext, double tolerancePx) {
+  if (tr.nSolved < 1 || !(std::abs(tr.yt) > 0.0))
+    return ExtrapolatedStart(tr.t, tr.tPrev, tr.tPrev2, tr.nSolved, tolerancePx <= kQuadraticExtrapolationTolPx);
+  const double h = tr.y - tr.yPrev;
+  // The next line's place in steps of the last: 2 when the steps are equal (the solutions'
+  // y are within the tolerance of their lines, hence the slack).
+  constexpr double kEqualStepSlack = 1e-3;
+  const double s = std::abs(h) > 0.0 ? (yNext - tr.yPrev) / h : 0.0;
+  if (tr.nSolved >= 2 && std::abs(tr.ytPrev) > 0.0 && s > 1.0 && s <= 2.0 + kEqualStepSlack) {
+    const double s2 = s * s, s3 = s2 * s;
+    return (2 * s3 - 3 * s2 + 1) * tr.tPrev + (s3 - 2 * s2 + s) * h / tr.ytPrev + (-2 * s3 + 3 * s2) * tr.t +
+           (s3 - s2) * h / tr.yt;
+  }
+  const double dy = yNext - tr.y, inv = 1.0 / tr.yt;
+  const double first = dy * inv, second = -0.5 * tr.ytt * dy * dy * inv * inv * inv;
+  return tr.t + first + (std::abs(second) <= 0.5 * std::abs(first) ? second : 0.0);
+}
+
 template <class ShapeT>
 std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEdge e, double* collapsedY) {
   // Step 1: collapsed edges (kCollapsedRel everywhere along them) have no crossing to track.
@@ -118,8 +150,7 @@ void EdgeScan::Advance(double yScan) {
     // Step 3: Newton from the extrapolated start (§3.5), bisection on the piece if it fails.
     for (EdgeTracker& tr : trackers_) {
       const EdgePiece& p = pieces_[tr.piece];
-      const double start = extrapolate_ ? ExtrapolatedStart(tr.t, tr.tPrev, tr.tPrev2, tr.nSolved,
-                                                              tolerancePx_ <= kQuadraticExtrapolationTolPx) : tr.t;
+      const double start = extrapolate_ ? PredictedStart(tr, yScan, tolerancePx_) : tr.t;
       auto f = [&](double t, double* v, double* d) {
         const EdgeSample s = SampleEdge(shape, map_, p.edge, t);
         *v = s.y - yScan;
@@ -136,7 +167,8 @@ void EdgeScan::Advance(double yScan) {
         ++counters_[Counter::EdgeRepairs];
         ++events_;
       }
-      const double j = SampleEdge(shape, map_, p.edge, t).j;
+      const EdgeSample at = SampleEdge(shape, map_, p.edge, t);
+      const double j = at.j;
       tr.folded = (j > 0 && tr.j < 0) || (j < 0 && tr.j > 0);
       counters_[Counter::Folds] += tr.folded;
       events_ += tr.folded;
@@ -144,6 +176,11 @@ void EdgeScan::Advance(double yScan) {
       tr.j = j;
       tr.tPrev2 = tr.tPrev;
       tr.tPrev = tr.hasPrev ? tr.t : t;
+      tr.yPrev = tr.y;
+      tr.ytPrev = tr.yt;
+      tr.y = at.y;
+      tr.yt = at.yt;
+      tr.ytt = at.ytt;
       ++tr.nSolved;
       tr.t = t;
       tr.hasPrev = true;

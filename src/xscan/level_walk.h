@@ -13,6 +13,7 @@
 #pragma once
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -196,6 +197,33 @@ class LevelWalker {
     EmitArc(a, b, emit, 0);
     EndArc();
   }
+  // Where the exact X scan's solve at screen x starts when the walk's last two points q0
+  // and q1 are known: the cubic Hermite interpolant of uv(x) through both, with the level
+  // curve's slopes duv/dx = [grad x; grad y]^-1 (1, 0) from the evaluations that found them
+  // (so no evaluation is added), extended to x; error O(h^4) where the tangent step's is
+  // O(h^2). Only one step on at most (x no farther beyond q1 than q1 is beyond q0, the
+  // columns' equal spacing; the points' x are within tolerance of their columns, hence the
+  // slack): nullopt otherwise, or where a slope is singular (the curve turning in x).
+  static std::optional<Vec2> PredictColumn(const LevelPoint& q0, const LevelPoint& q1, double x) {
+    auto slope = [](const LevelPoint& q, Vec2* d) {
+      Mat2 jac;
+      jac << q.gradX.x(), q.gradX.y(), q.gradY.x(), q.gradY.y();
+      const double det = jac.determinant();
+      constexpr double kSingularRelDet = 1e-14;  // as SolveNewton2's
+      if (!std::isfinite(det) || std::abs(det) <= kSingularRelDet * jac.squaredNorm()) return false;
+      *d = jac.inverse().col(0);
+      return true;
+    };
+    const double h = q1.x - q0.x;
+    constexpr double kEqualStepSlack = 1e-3;
+    const double s = std::abs(h) > 0.0 ? (x - q0.x) / h : 0.0;
+    Vec2 d0, d1;
+    if (!(s > 1.0 && s <= 2.0 + kEqualStepSlack) || !slope(q0, &d0) || !slope(q1, &d1)) return std::nullopt;
+    const double s2 = s * s, s3 = s2 * s;
+    return Vec2((2 * s3 - 3 * s2 + 1) * q0.uv + (s3 - 2 * s2 + s) * h * d0 + (-2 * s3 + 3 * s2) * q1.uv +
+                (s3 - s2) * h * d1);
+  }
+
   template <class Emit>
   void EmitArc(const LevelPoint& a, const LevelPoint& b, Emit& emit, int depth) {
     const int dir = b.x > a.x ? 1 : -1;
@@ -404,14 +432,18 @@ class LevelWalker {
   // boundary), or Rejected (the correction failed, jumped to another branch, turned the
   // tangent more than kWalkMaxTurn, or an aimed step crossed the silhouette): try again
   // shorter. The one step of both walks, the exact X scan's and the θ crawl's.
-  StepResult TryStep(const LevelPoint& p, double sense, double step, int column, LevelPoint* next) const {
+  // `before`: the walk's point before p, if the caller has one (PredictColumn's seed for
+  // an aimed step; else the tangent step's end).
+  StepResult TryStep(const LevelPoint& p, double sense, double step, int column, LevelPoint* next,
+                     const LevelPoint* before = nullptr) const {
     const Vec2 tan = Tangent(p, sense);
     const Vec2 q = p.uv + step * tan;
     const double cosTurn = std::cos(kWalkMaxTurn);
     bool ok = false;
     if (Inside(q)) {
       if (column >= 0) {
-        ok = SolveColumn(column, q, next);
+        const std::optional<Vec2> predicted = before ? PredictColumn(*before, p, cols_.At(column)) : std::nullopt;
+        ok = SolveColumn(column, predicted ? *predicted : q, next);
       } else {
         *next = Correct(q);
         ok = next->ok;
@@ -452,7 +484,7 @@ class LevelWalker {
       const double step = aimed ? hColumn : *h;
       ++(*counters_)[aimed ? Counter::ColumnSteps : Counter::ArcSteps];
       LevelPoint next;
-      const StepResult r = TryStep(*p, sense, step, aimed ? c : -1, &next);
+      const StepResult r = TryStep(*p, sense, step, aimed ? c : -1, &next, hasBefore_ ? &before_ : nullptr);
       if (r == StepResult::Rejected) {
         *h = 0.5 * step;
         continue;
@@ -462,6 +494,8 @@ class LevelWalker {
         *p = next;
         return Step::Exit;
       }
+      before_ = *p;
+      hasBefore_ = true;
       if (aimed) {
         ++(*counters_)[Counter::ColumnsSolved];
         BeginArc(p->uv, p->x, next.uv, next.x);
@@ -505,6 +539,7 @@ class LevelWalker {
     }
     const double sense = InwardSense(p, edge);
     if (sense == 0.0) return;
+    hasBefore_ = false;
     StartTrim(p, sense);
     // A column exactly at the start belongs to this curve.
     const int c0 = cols_.Ceil(p.x - kColumnEpsPx);
@@ -531,6 +566,7 @@ class LevelWalker {
     ++(*counters_)[Counter::ClosedWalks];
     LevelPoint p = start;
     p.jn = 0.0;  // the start is on the silhouette whatever rounding says
+    hasBefore_ = false;
     StartTrim(p, 1.0);
     double h = kWalkStepStart;
     LevelPoint passed;
@@ -545,6 +581,7 @@ class LevelWalker {
         if (!UseEdgeTracker(p.uv)) Repaired(p.uv, Counter::UntrackedExits);
         LevelPoint back = start;
         back.jn = 0.0;
+        hasBefore_ = false;
         StartTrim(back, -1.0);
         double hb = kWalkStepStart;
         for (long kb = 0; kb < MaxSteps(); ++kb) {
@@ -575,6 +612,8 @@ class LevelWalker {
   bool kept_ = true;           // the walk is in the kept region
   std::size_t arcNext_ = 0;    // the next crossing of the current arc to toggle at
   double arcDir_ = 1.0;        // the current arc runs this way in x
+  LevelPoint before_;          // the walk's point before the current one (TryStep's `before`)
+  bool hasBefore_ = false;
 };
 
 }  // namespace patchscan
