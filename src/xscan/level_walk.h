@@ -204,8 +204,15 @@ class LevelWalker {
   // O(h^2). Only one step on at most (x no farther beyond q1 than q1 is beyond q0, the
   // columns' equal spacing; the points' x are within tolerance of their columns, hence the
   // slack): nullopt otherwise, or where a slope is singular (the curve turning in x).
-  static std::optional<Vec2> PredictColumn(const LevelPoint& q0, const LevelPoint& q1, double x) {
-    auto slope = [](const LevelPoint& q, Vec2* d) {
+  // What PredictColumn needs of a point of the walk (copied each step, so kept small).
+  struct CurvePoint {
+    Vec2 uv = Vec2::Zero();
+    double x = 0.0;
+    Vec2 gradX = Vec2::Zero(), gradY = Vec2::Zero();
+    static CurvePoint Of(const LevelPoint& p) { return {p.uv, p.x, p.gradX, p.gradY}; }
+  };
+  static std::optional<Vec2> PredictColumn(const CurvePoint& q0, const CurvePoint& q1, double x) {
+    auto slope = [](const CurvePoint& q, Vec2* d) {
       Mat2 jac;
       jac << q.gradX.x(), q.gradX.y(), q.gradY.x(), q.gradY.y();
       const double det = jac.determinant();
@@ -435,14 +442,14 @@ class LevelWalker {
   // `before`: the walk's point before p, if the caller has one (PredictColumn's seed for
   // an aimed step; else the tangent step's end).
   StepResult TryStep(const LevelPoint& p, double sense, double step, int column, LevelPoint* next,
-                     const LevelPoint* before = nullptr) const {
+                     const CurvePoint* before = nullptr) const {
     const Vec2 tan = Tangent(p, sense);
     const Vec2 q = p.uv + step * tan;
     const double cosTurn = std::cos(kWalkMaxTurn);
     bool ok = false;
     if (Inside(q)) {
       if (column >= 0) {
-        const std::optional<Vec2> predicted = before ? PredictColumn(*before, p, cols_.At(column)) : std::nullopt;
+        const std::optional<Vec2> predicted = before ? PredictColumn(*before, CurvePoint::Of(p), cols_.At(column)) : std::nullopt;
         ok = SolveColumn(column, predicted ? *predicted : q, next);
       } else {
         *next = Correct(q);
@@ -494,7 +501,7 @@ class LevelWalker {
         *p = next;
         return Step::Exit;
       }
-      before_ = *p;
+      before_ = CurvePoint::Of(*p);
       hasBefore_ = true;
       if (aimed) {
         ++(*counters_)[Counter::ColumnsSolved];
@@ -612,7 +619,7 @@ class LevelWalker {
   bool kept_ = true;           // the walk is in the kept region
   std::size_t arcNext_ = 0;    // the next crossing of the current arc to toggle at
   double arcDir_ = 1.0;        // the current arc runs this way in x
-  LevelPoint before_;          // the walk's point before the current one (TryStep's `before`)
+  CurvePoint before_;          // the walk's point before the current one (TryStep's `before`)
   bool hasBefore_ = false;
 };
 
