@@ -26,11 +26,12 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--binary", default="build/patchscan")
     ap.add_argument("--baseline", default="", help="another patchscan build, measured beside")
+    ap.add_argument("--baseline-label", default="baseline", help="its name in the tables (e.g. its commit)")
     ap.add_argument("--out", default="docs")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--povray-steps", type=int, default=4)
     args = ap.parse_args()
-    builds = [("patchscan", args.binary)] + ([("baseline", args.baseline)] if args.baseline else [])
+    builds = [("patchscan", args.binary)] + ([(args.baseline_label, args.baseline)] if args.baseline else [])
     have_pov = args.povray_steps > 0 and shutil.which("povray")
     results = {}
     with tempfile.TemporaryDirectory() as work:
