@@ -298,14 +298,19 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   if (const int* code = std::get_if<int>(&setup)) return *code;
   BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);
   backEnd.settings.threads = threads;
-  if (const auto why = raster::ImageWriter::CheckFormat(output, o.aov, o.compression); why && !depthMap) {
-    err << "patchscan: " << *why << '\n';
+  // --compression, else the scene's Display's when the scene names the file.
+  const std::string compression =
+      !o.compression.empty() || !o.output.empty() ? o.compression : scene.image.displayCompression;
+  if (const auto why = raster::ImageWriter::CheckFormat(output, o.aov, compression); why && !depthMap) {
+    err << "patchscan: ";
+    if (compression != o.compression) err << o.file << ':' << scene.image.displayLine << ": Display: ";
+    err << *why << '\n';
     return kExitUsage;
   }
   raster::ImageWriter::Window placement;
   if (cropNdc) placement = {window.x0, window.y0, camera.width, camera.height};
   auto opened = depthMap ? raster::ImageWriter::OpenDepthMap(output, outWidth, outHeight, LightCamera(camera))
-                         : raster::ImageWriter::Open(output, outWidth, outHeight, o.aov, threads, placement, o.compression);
+                         : raster::ImageWriter::Open(output, outWidth, outHeight, o.aov, threads, placement, compression);
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';
     return kExitOutputError;

@@ -82,10 +82,26 @@ bool RibParser::PixelSamples(const Request& r) {
 bool RibParser::Display(const Request& r) {
   std::string name, type;
   if (!StringArg(r, 0, &name) || !StringArg(r, 1, &type)) return false;
+  // After the mode, the display driver's parameters: "compression" (as RenderMan's tiff and
+  // openexr drivers take it; raster/image_writer.h lists each format's) is kept.
+  std::string compression;
+  if (r.args.size() > 3) {
+    std::vector<Param> params;
+    if (!Params(r, 3, &params)) return false;
+    for (const Param& p : params) {
+      if (p.name == "compression") {
+        if (!ParamString(r, p, &compression)) return false;
+      } else {
+        IgnoreParam(r, p);
+      }
+    }
+  }
   // A name starting with '+' adds a further display: only the first is written.
   if (type != "framebuffer" && !name.empty() && name[0] != '+') {
     scene_.image.displayName = name;
     scene_.image.displayType = type;
+    scene_.image.displayCompression = compression;
+    scene_.image.displayLine = r.line;
   }
   return true;
 }

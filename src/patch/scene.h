@@ -69,6 +69,8 @@ struct SceneImage {
   std::optional<int> pixelSamples;          // PixelSamples, as the side of a square grid
   std::string displayName;                  // Display's file name ("" when none)
   std::string displayType;                  // its type: "file", "tiff", ..., "zfile", "shadow"
+  std::string displayCompression;           // its "compression" parameter ("" when none)
+  int displayLine = 0;                      // the Display request's line in the scene file
 };
 
 // A subdivision cage of the scene, for `patchscan info` (its faces are among the scene's

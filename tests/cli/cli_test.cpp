@@ -228,6 +228,37 @@ TEST(Cli, OpenImageIOIsLoadedOnlyWhenARunNeedsIt) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Cli, ARibDisplaysCompressionIsUsed) {
+  // RenderMan's display drivers take "compression": the file the scene names is written
+  // with it (unless --compression says otherwise); one its format lacks is refused, naming
+  // the Display's line.
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_display_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  auto scene = [&](const std::string& compression) {
+    std::ofstream(dir / "s.rib") << "Format 32 24 1\nDisplay \"c.tif\" \"tiff\" \"rgba\" \"string compression\" [\""
+                                  << compression << "\"]\nProjection \"perspective\" \"fov\" [40]\n"
+                                  << "Translate 0 -1 8\nWorldBegin\nGeometry \"teapot\"\nWorldEnd\n";
+  };
+  auto stored = [&] {
+    auto in = OIIO::ImageInput::open((dir / "c.tif").string());
+    return in ? std::string(in->spec().get_string_attribute("compression")) : std::string("(unreadable)");
+  };
+  const std::string cd = "cd " + dir.string() + " && " + PATCHSCAN_BINARY + " render s.rib";
+  scene("lzw");
+  ASSERT_EQ(std::system((cd + " 2>err.txt").c_str()), 0) << Slurp(dir / "err.txt");
+  EXPECT_EQ(stored(), "lzw");
+  ASSERT_EQ(std::system((cd + " --compression packbits 2>err.txt").c_str()), 0) << Slurp(dir / "err.txt");
+  EXPECT_EQ(stored(), "packbits");
+  std::filesystem::remove(dir / "c.tif");
+  scene("piz");
+  EXPECT_EQ(WEXITSTATUS(std::system((cd + " 2>err.txt").c_str())), 2);
+  EXPECT_NE(Slurp(dir / "err.txt").find("s.rib:2: Display: c.tif: compression 'piz' is not one of TIFF's"),
+            std::string::npos)
+      << Slurp(dir / "err.txt");
+  EXPECT_FALSE(std::filesystem::exists(dir / "c.tif"));
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Cli, ExactModeIsTheDefaultAndReportsItsTrackers) {
   const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_exact";
   std::filesystem::create_directories(dir);
