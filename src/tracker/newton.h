@@ -115,6 +115,13 @@ Newton1Result SolveNewton1(Eval&& eval, double t0, double lo, double hi, double 
   }
 }
 
+// Whether a 2x2 Jacobian with determinant `det` is singular for Newton's purposes: its
+// determinant, relative to its entries, below kSingularRelDet (the step would be noise).
+constexpr double kSingularRelDet = 1e-14;
+inline bool SingularJacobian(const Mat2& jac, double det) {
+  return !std::isfinite(det) || std::abs(det) <= kSingularRelDet * jac.squaredNorm();
+}
+
 struct Newton2Result {
   Vec2 uv = Vec2::Zero();
   Vec2 f = Vec2::Zero();  // residual at uv
@@ -143,10 +150,8 @@ Newton2Result SolveNewton2(Eval&& eval, const Vec2& uv0, const Vec2& tolerance,
       return r;
     }
     ++r.iterations;
-    // The Jacobian's determinant, relative to its entries: below this the step is noise.
-    constexpr double kSingularRelDet = 1e-14;
     const double det = jac.determinant();
-    if (!std::isfinite(det) || std::abs(det) <= kSingularRelDet * jac.squaredNorm()) {
+    if (SingularJacobian(jac, det)) {
       r.status = NewtonStatus::Singular;
       return r;
     }

@@ -13,8 +13,8 @@
 #pragma once
 
 #include <algorithm>
-#include <optional>
 #include <cmath>
+#include <optional>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -197,13 +197,6 @@ class LevelWalker {
     EmitArc(a, b, emit, 0);
     EndArc();
   }
-  // Where the exact X scan's solve at screen x starts when the walk's last two points q0
-  // and q1 are known: the cubic Hermite interpolant of uv(x) through both, with the level
-  // curve's slopes duv/dx = [grad x; grad y]^-1 (1, 0) from the evaluations that found them
-  // (so no evaluation is added), extended to x; error O(h^4) where the tangent step's is
-  // O(h^2). Only one step on at most (x no farther beyond q1 than q1 is beyond q0, the
-  // columns' equal spacing; the points' x are within tolerance of their columns, hence the
-  // slack): nullopt otherwise, or where a slope is singular (the curve turning in x).
   // What PredictColumn needs of a point of the walk (copied each step, so kept small).
   struct CurvePoint {
     Vec2 uv = Vec2::Zero();
@@ -211,13 +204,18 @@ class LevelWalker {
     Vec2 gradX = Vec2::Zero(), gradY = Vec2::Zero();
     static CurvePoint Of(const LevelPoint& p) { return {p.uv, p.x, p.gradX, p.gradY}; }
   };
+  // Where the exact X scan's solve at screen x starts when the walk's last two points q0
+  // and q1 are known: the cubic Hermite interpolant of uv(x) through both, with the level
+  // curve's slopes duv/dx = [grad x; grad y]^-1 (1, 0) from the evaluations that found them
+  // (so no evaluation is added), extended to x; error O(h^4) where the tangent step's is
+  // O(h^2). Only one step on at most (x no farther beyond q1 than q1 is beyond q0, the
+  // columns' equal spacing; the points' x are within tolerance of their columns, hence the
+  // slack): nullopt otherwise, or where a slope is singular (the curve turning in x).
   static std::optional<Vec2> PredictColumn(const CurvePoint& q0, const CurvePoint& q1, double x) {
     auto slope = [](const CurvePoint& q, Vec2* d) {
       Mat2 jac;
       jac << q.gradX.x(), q.gradX.y(), q.gradY.x(), q.gradY.y();
-      const double det = jac.determinant();
-      constexpr double kSingularRelDet = 1e-14;  // as SolveNewton2's
-      if (!std::isfinite(det) || std::abs(det) <= kSingularRelDet * jac.squaredNorm()) return false;
+      if (SingularJacobian(jac, jac.determinant())) return false;
       *d = jac.inverse().col(0);
       return true;
     };
