@@ -15,7 +15,7 @@ from common import run  # noqa: E402
 
 # (extension, compression or "" for the format's default): each format's default first.
 SETTINGS = [
-    ("png", ""), ("png", "zip:1"), ("png", "zip:3"), ("png", "zip:5"), ("png", "zip:9"), ("png", "none"),
+    ("png", ""), ("png", "zip:6"), ("png", "zip:1"), ("png", "zip:3"), ("png", "zip:5"), ("png", "zip:9"), ("png", "none"),
     ("tif", ""), ("tif", "zip:1"), ("tif", "lzw"), ("tif", "none"),
     ("exr", ""), ("exr", "zips"), ("exr", "piz"), ("exr", "rle"), ("exr", "dwaa"), ("exr", "none"),
     ("jpg", ""), ("jpg", "jpeg:90"),

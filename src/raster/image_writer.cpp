@@ -51,7 +51,7 @@ std::string LowerExtension(const std::filesystem::path& path) {
 
 // Each format's default compression (image_writer.h).
 std::string DefaultCompression(const std::string& ext) {
-  if (ext == ".png") return "zip:6";
+  if (ext == ".png") return "rle";
   if (ext == ".jpg" || ext == ".jpeg") return "jpeg:98";
   return "zip";
 }
@@ -83,7 +83,8 @@ std::variant<Compression, std::string> ParseCompression(const std::string& ext, 
   if (ext == ".png") {
     if (c.method == "none" && c.level < 0) return Compression{"zip", 0};
     if (c.method == "zip" && levelIn(0, 9)) return Compression{"zip", c.level < 0 ? 6 : c.level};
-    return "compression '" + text + "' is not one of PNG's: zip:L (L 0-9; zip = zip:6), none";
+    if (c.method == "rle" && c.level < 0) return Compression{"rle", 6};  // any level but 0 (stored)
+    return "compression '" + text + "' is not one of PNG's: rle, zip:L (L 0-9; zip = zip:6), none";
   }
   if (ext == ".tif" || ext == ".tiff") {
     if ((c.method == "zip" && levelIn(1, 9)) || (oneOf({"lzw", "packbits", "none"}) && c.level < 0)) return c;
@@ -139,7 +140,7 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::Open(const 
   impl->file = std::fopen(impl->temp.c_str(), "wb");
   if (!impl->file) return path + ": cannot write: " + std::strerror(errno);
   if (ext == ".png") {
-    impl->png = std::make_unique<PngEncoder>(impl->file, width, height, PngEncoder::Options{chosen.level, threads});
+    impl->png = std::make_unique<PngEncoder>(impl->file, width, height, PngEncoder::Options{chosen.level, threads, chosen.method == "rle"});
     return std::unique_ptr<ImageWriter>(new ImageWriter(std::move(impl)));
   }
   std::fclose(impl->file);  // OpenImageIO opens it again by name

@@ -46,7 +46,8 @@ class ImageWriter final : public RowSink {
   // Whether `path` names a format Open takes (with `aovs`, an .exr), and `compression` is one
   // of that format's: the message if not. A refusal here is the user's choice; a failure of
   // Open after it is the file system's. Compression, by format (default first; kCompressionHelp):
-  //   .png         zip:L, L the zlib level 0 (stored) to 9; default zip:6; "none" is zip:0
+  //   .png         rle (zlib's runs of a byte, the default: half zip:6's time, some 15 % more
+  //                bytes), zip:L with L the zlib level 0 (stored) to 9 (zip = zip:6), none = zip:0
   //   .tif .tiff   zip (zip:L, L 1-9), lzw, packbits, none
   //   .exr         zip (16 rows a block), zips (one), piz, rle, pxr24, b44, b44a, dwaa, dwab
   //                (lossy, dwaa:L and dwab:L with L the quality), none
@@ -54,8 +55,8 @@ class ImageWriter final : public RowSink {
   static std::optional<std::string> CheckFormat(const std::string& path, bool aovs = false,
                                                 const std::string& compression = {});
   static constexpr const char* kCompressionHelp =
-      "compression of the image file, by format (the first is the default): .png zip:L (zlib level L 0-9; zip = "
-      "zip:6; none = zip:0); .tif/.tiff zip[:L], lzw, packbits, none; .exr zip (16 rows a block), zips (one row), piz, "
+      "compression of the image file, by format (the first is the default): .png rle (zlib's runs), zip:L (zlib "
+      "level L 0-9; zip = zip:6; none = zip:0); .tif/.tiff zip[:L], lzw, packbits, none; .exr zip (16 rows a block), zips (one row), piz, "
       "rle, pxr24, b44, b44a, dwaa[:L], dwab[:L] (lossy), none; .jpg/.jpeg jpeg:Q (quality 1-100; default 98, as OpenImageIO)";
 
   bool WriteRow(int y, const float* pixels) override;

@@ -24,8 +24,9 @@ namespace patchscan::raster {
 class PngEncoder {
  public:
   struct Options {
-    int level = 6;    // zlib's compression level, 0 (stored) to 9
-    int threads = 1;  // threads deflating bands; the bytes do not depend on it
+    int level = 6;           // zlib's compression level, 0 (stored) to 9
+    int threads = 1;         // threads deflating bands; the bytes do not depend on it
+    bool runLength = false;  // zlib's Z_RLE strategy: matches only within runs of a byte (level ignored)
   };
 
   // Writes the signature and header to `file`, which the caller owns and closes.
@@ -43,7 +44,7 @@ class PngEncoder {
 
   // Rows per band for a given width: whole rows making at least kBandBytes of filtered data.
   static int RowsPerBand(int width);
-  static constexpr int kBandBytes = 128 * 1024;
+  static constexpr int kBandBytes = 512 * 1024;
 
  private:
   struct Impl;

@@ -65,9 +65,10 @@ class TriangleGeometry {
   Rgb ShadeSample(int /*r*/, const Sample& smp, double x, double y, std::int64_t& nCalls) {
     return store_.ShadeAt(smp.handle, x, y, nCalls);
   }
-  // A group of samples of one triangle-meshed surface is shaded once, at its centroid.
-  Rgb ShadeGroup(const Member* m, int /*n*/, double cx, double cy, std::int64_t& nCalls) {
-    return store_.ShadeAt(m[0].smp.handle, cx, cy, nCalls);
+  // A group of samples of one triangle-meshed surface is shaded once, at its centroid;
+  // `f` receives the fragment shaded (GroupFragment's).
+  Rgb ShadeGroup(const Member* m, int /*n*/, double cx, double cy, std::int64_t& nCalls, Fragment* f) {
+    return store_.ShadeAt(m[0].smp.handle, cx, cy, nCalls, f);
   }
   Fragment GroupFragment(const Member* m, int /*n*/, double cx, double cy) const {
     return store_.Interpolate(m[0].smp.handle, cx, cy);
@@ -149,9 +150,10 @@ class FragmentGeometry final : public FragmentRow {
     ++nCalls;
     return ShadeFragment(pools_[r][smp.handle], s_, &failed_);
   }
-  Rgb ShadeGroup(const Member* m, int n, double cx, double cy, std::int64_t& nCalls) {
+  Rgb ShadeGroup(const Member* m, int n, double cx, double cy, std::int64_t& nCalls, Fragment* f) {
     ++nCalls;
-    return ShadeFragment(GroupFragment(m, n, cx, cy), s_, &failed_);
+    *f = GroupFragment(m, n, cx, cy);
+    return ShadeFragment(*f, s_, &failed_);
   }
   // A group of exact samples of one surface is shaded once, with its samples' attributes
   // averaged: the surface at their centroid to second order. A group with slab samples
@@ -206,6 +208,15 @@ class FragmentGeometry final : public FragmentRow {
 // microseconds) is small against its shading calls.
 constexpr int kPixelsPerTask = 32;
 
+// Whether any of the aa x aa samples of the pixel whose first sample column is i0 holds a
+// fragment.
+bool AnyCovered(const std::vector<std::vector<Sample>>& rows, int i0, int aa, int layers) {
+  for (int r = 0; r < aa; ++r)
+    for (int c = 0; c < aa; ++c)
+      if (rows[r][static_cast<size_t>(i0 + c) * layers].handle >= 0) return true;
+  return false;
+}
+
 template <class Geometry>
 std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const Lattice& lat,
                                       int layers, Counters& stats, RowSink& sink) {
@@ -219,6 +230,11 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
   std::unique_ptr<tbb::task_arena> arena;
   if (s.threads > 1) arena = std::make_unique<tbb::task_arena>(std::min(s.threads, tbb::info::default_concurrency()));
   std::mutex merge;
+  // A pixel no surface covers: no colour, no coverage, depth +inf (OpenEXR's and prman's
+  // background), the other AOVs 0 and surface id -1.
+  std::array<float, kChannels> background{};
+  background[kChannelZ] = std::numeric_limits<float>::infinity();
+  background[kChannelId] = -1.0f;
   bool previous = false;  // the pixel row above was rendered: its last sample row is this one's first
   for (int py = 0; py < s.height; ++py) {
     if (s.ownsRow && !s.ownsRow(py)) {
@@ -240,6 +256,11 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
     // chunk counting into its own counts (added up in any order: sums).
     auto shadePixels = [&](int pxBegin, int pxEnd, Counters& stats) {
     for (int px = pxBegin; px < pxEnd; ++px) {
+      float* out = &pixels[static_cast<size_t>(px) * kChannels];
+      if (!AnyCovered(rows, lat.FirstOfPixel(px), s.aa, layers)) {
+        std::copy(background.begin(), background.end(), out);  // most pixels of most frames
+        continue;
+      }
       // Group the pixel's samples by surface and layer: one shading call per group.
       struct Group {
         std::uint32_t surface;
@@ -291,6 +312,13 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
         return n;
       };
       stats[Counter::SamplesCovered] += covered;
+      // The AOVs are of the surface that covers most of the pixel, at its samples' centroid:
+      // the fragment its shading call takes (hidden-line mode, which shades none, asks for it).
+      int major = -1;
+      for (int g = 0; g < nGroups; ++g)
+        if (groups[g].layer == 0 && (major < 0 || groups[g].count > groups[major].count)) major = g;
+      Fragment majorFragment, shaded;
+      bool haveMajor = false;
       Rgb colour = Rgb::Zero();
       if (s.hiddenLine) {
         // White surfaces, black triangle edges, no shading.
@@ -303,8 +331,10 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
           // a_j contributes a prod (1 - a_j) of its colour at each sample.
           Group& gr = groups[g];
           const int n = gather(g);
-          gr.rgb = geo.ShadeGroup(gathered.data(), n, gr.sx / gr.count, gr.sy / gr.count, stats[Counter::ShadingCalls]);
+          gr.rgb = geo.ShadeGroup(gathered.data(), n, gr.sx / gr.count, gr.sy / gr.count,
+                                  stats[Counter::ShadingCalls], g == major ? &majorFragment : &shaded);
           colour += (gr.weight / perPixel) * gr.rgb;
+          haveMajor |= g == major;
         }
         // Only the (l-1) x (l-1) samples a pixel owns (not its right and bottom edges, which
         // belong to the neighbours) draw, so each sample draws once.
@@ -330,22 +360,15 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
           }
         }
       }
-      float* out = &pixels[static_cast<size_t>(px) * kChannels];
       for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(colour[k]);
       out[3] = static_cast<float>(alpha / perPixel);
-      // AOVs of the surface that covers most of the pixel, at its samples' centroid.
-      int major = -1;
-      for (int g = 0; g < nGroups; ++g)
-        if (groups[g].layer == 0 && (major < 0 || groups[g].count > groups[major].count)) major = g;
       if (major < 0) {
-        // No surface: depth +inf (OpenEXR's and prman's background), the rest 0, id -1.
-        std::fill(out + 4, out + kChannels, 0.0f);
-        out[kChannelZ] = std::numeric_limits<float>::infinity();
-        out[kChannelId] = -1.0f;
+        std::copy(background.begin() + 4, background.end(), out + 4);
       } else {
         const Group& gr = groups[major];
-        const int n = gather(major);
-        const Fragment a = geo.GroupFragment(gathered.data(), n, gr.sx / gr.count, gr.sy / gr.count);
+        if (!haveMajor)
+          majorFragment = geo.GroupFragment(gathered.data(), gather(major), gr.sx / gr.count, gr.sy / gr.count);
+        const Fragment& a = majorFragment;
         const Vec3 nrm = a.normal.normalized();
         out[kChannelZ] = static_cast<float>(a.w);
         for (int k = 0; k < 3; ++k) out[kChannelN + k] = static_cast<float>(nrm.allFinite() ? nrm[k] : 0.0);

@@ -222,9 +222,11 @@ class TriangleStore {
   // Perspective-correct attributes of a triangle at (x, y).
   Fragment Interpolate(int slot, double x, double y) const { return InterpolateAt(active_[slot], x, y).f; }
 
-  Rgb ShadeAt(int slot, double x, double y, std::int64_t& nCalls) {
+  // The colour at (x, y); `f`, when given, receives the fragment there (Interpolate's).
+  Rgb ShadeAt(int slot, double x, double y, std::int64_t& nCalls, Fragment* f = nullptr) {
     const Active& at = active_[slot];
     const Interpolated a = InterpolateAt(at, x, y);
+    if (f) *f = a.f;
     if (shading_ == ShadingMode::Gouraud)
       return a.b[0] * at.vertexColour[0] + a.b[1] * at.vertexColour[1] + a.b[2] * at.vertexColour[2];
     ++nCalls;

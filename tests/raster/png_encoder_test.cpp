@@ -58,11 +58,12 @@ std::vector<unsigned char> ReadFile(const std::string& path) {
   return bytes;
 }
 
-std::string Encode(const std::vector<float>& px, int width, int height, int threads, const std::string& path) {
+std::string Encode(const std::vector<float>& px, int width, int height, int threads, const std::string& path,
+                   bool runLength = false) {
   std::FILE* f = std::fopen(path.c_str(), "wb");
   EXPECT_NE(f, nullptr);
   {
-    PngEncoder enc(f, width, height, PngEncoder::Options{6, threads});
+    PngEncoder enc(f, width, height, PngEncoder::Options{6, threads, runLength});
     for (int y = 0; y < height; ++y)
       EXPECT_TRUE(enc.WriteRow(&px[static_cast<std::size_t>(y) * width * kStride], kStride));
     EXPECT_TRUE(enc.Finish());
@@ -162,15 +163,17 @@ class PngEncoderTest : public ::testing::Test {
 };
 
 TEST_F(PngEncoderTest, SrgbOfItsInputAndSameBytesForAnyThreads) {
-  // Band edges everywhere they can fall: one row, a band less one, a band, several and a bit.
+  // Band edges everywhere they can fall: one row, a band less one, a band, several and a bit;
+  // deflate's default matching and zlib's runs alike.
+  for (const bool runLength : {false, true})
   for (const int width : {1, 5, 333, 1500}) {
     const int band = PngEncoder::RowsPerBand(width);
     for (const int height : {1, band - 1, band, 3 * band + 1}) {
       if (height < 1 || static_cast<long>(width) * height > 4'000'000) continue;
-      SCOPED_TRACE("image " + std::to_string(width) + "x" + std::to_string(height));
+      SCOPED_TRACE("image " + std::to_string(width) + "x" + std::to_string(height) + (runLength ? " runs" : ""));
       const auto px = TestImage(width, height, static_cast<unsigned>(width * 7 + height));
       const auto expected = ExpectedBytes(px, width, height);
-      const auto one = ReadFile(Encode(px, width, height, 1, Path("t1.png")));
+      const auto one = ReadFile(Encode(px, width, height, 1, Path("t1.png"), runLength));
       int idats = 0;
       const auto filtered = CheckChunks(one, &idats);
       ASSERT_EQ(filtered.size(), static_cast<std::size_t>(height) * (width * 4 + 1));
@@ -178,7 +181,7 @@ TEST_F(PngEncoderTest, SrgbOfItsInputAndSameBytesForAnyThreads) {
       // One code: the encoder's table steps linear values by 1/65535 (and rounds halves its way).
       EXPECT_LE(MaxByteDifference(Decode(Path("t1.png"), width, height), expected), 1);
       for (const int threads : {2, 3, 7})
-        EXPECT_EQ(ReadFile(Encode(px, width, height, threads, Path("tn.png"))), one) << threads << " threads";
+        EXPECT_EQ(ReadFile(Encode(px, width, height, threads, Path("tn.png"), runLength)), one) << threads << " threads";
     }
   }
 }

@@ -662,10 +662,14 @@ TEST(ImageWriter, CompressionByFormat) {
   };
   const auto stored = std::filesystem::file_size(write("stored.png", "none"));
   const auto fast = std::filesystem::file_size(write("fast.png", "zip:1"));
-  const auto normal = std::filesystem::file_size(write("normal.png", ""));
+  const auto small = std::filesystem::file_size(write("small.png", "zip:9"));
+  const auto runs = std::filesystem::file_size(write("runs.png", "rle"));
+  EXPECT_EQ(std::filesystem::file_size(write("default.png", "")), runs);  // the default is rle
   EXPECT_GT(stored, fast);
-  EXPECT_GE(fast, normal);
-  EXPECT_EQ(pixels((dir / "stored.png").string()).second, pixels((dir / "normal.png").string()).second);
+  EXPECT_GE(fast, small);
+  EXPECT_GT(stored, runs);
+  for (const char* name : {"fast.png", "small.png", "runs.png"})
+    EXPECT_EQ(pixels((dir / "stored.png").string()).second, pixels((dir / name).string()).second) << name;
   for (const auto& [name, compression, recorded] :
        std::vector<std::tuple<std::string, std::string, std::string>>{
            {"d.tif", "", "zip"}, {"l.tif", "lzw", "lzw"}, {"p.tif", "packbits", "packbits"}, {"n.tif", "none", "none"},
@@ -680,7 +684,7 @@ TEST(ImageWriter, CompressionByFormat) {
     }
   }
   for (const auto& [name, compression] : std::vector<std::pair<std::string, std::string>>{
-           {"a.png", "lzw"}, {"a.png", "zip:10"}, {"a.png", "zip:"}, {"a.tif", "piz"}, {"a.tif", "zip:0"},
+           {"a.png", "lzw"}, {"a.png", "zip:10"}, {"a.png", "zip:"}, {"a.png", "rle:3"}, {"a.tif", "piz"}, {"a.tif", "zip:0"},
            {"a.exr", "lzw"}, {"a.exr", "zip:3"}, {"a.jpg", "zip"}, {"a.jpg", "jpeg:0"}, {"a.jpg", "jpeg:x"}}) {
     const auto why = ImageWriter::CheckFormat((dir / name).string(), false, compression);
     ASSERT_TRUE(why) << name << " " << compression;
