@@ -106,6 +106,7 @@ struct Band {
   z_stream zs{};
   bool zsReady = false;
   bool pending = false;             // submitted and not yet written
+  bool claimed = true;              // a thread has taken up its deflate (or it is not submitted)
   bool done = false;                // deflated
 };
 
@@ -119,6 +120,7 @@ struct PngEncoder::Impl {
   std::vector<std::uint8_t> history;  // the last dictRows + 1 raw rows, a ring by row
   std::vector<std::uint8_t> zeroRow;  // the row above the first
   int nextRow = 0, filling = -1, nextBand = 0, written = 0;
+  int tasks = 0;                    // deflate tasks enqueued and not yet finished
   uLong adler = 1;
   bool failed = false, finished = false;
   std::unique_ptr<tbb::task_arena> arena;
@@ -206,6 +208,9 @@ void PngEncoder::Impl::Deflate(Band& b) {
   b.length = static_cast<uLong>(size);
 }
 
+// A band is deflated by whichever thread takes it up first: a task on the encoder's arena,
+// or the thread that needs it written (WriteDone), which so never waits for a task that no
+// thread is free to run (the rows may come from a task of another arena).
 void PngEncoder::Impl::Submit(Band& b) {
   b.pending = true;
   b.done = false;
@@ -215,12 +220,26 @@ void PngEncoder::Impl::Submit(Band& b) {
     WriteDone(false);
     return;
   }
+  {
+    std::lock_guard lock(m);
+    b.claimed = false;
+    ++tasks;
+  }
   arena->enqueue([this, &b] {
-    Deflate(b);
+    // The slot may hold a later band by now, or one taken up already: either way the task
+    // deflates what is submitted and unclaimed there.
+    bool mine = false;
+    {
+      std::lock_guard lock(m);
+      mine = !b.claimed;
+      b.claimed = true;
+    }
+    if (mine) Deflate(b);
     // Notified under the lock: once the lock is released this task touches nothing of the
     // encoder, which its destructor may then free.
     std::lock_guard lock(m);
-    b.done = true;
+    if (mine) b.done = true;
+    --tasks;
     cv.notify_all();
   });
   WriteDone(false);
@@ -232,8 +251,15 @@ void PngEncoder::Impl::WriteDone(bool wait) {
     Band& b = Slot(written);
     {
       std::unique_lock lock(m);
-      if (wait) cv.wait(lock, [&] { return b.done; });
-      else if (!b.done) return;
+      if (!wait && !b.done) return;
+      if (!b.claimed) {
+        b.claimed = true;
+        lock.unlock();
+        Deflate(b);
+        lock.lock();
+        b.done = true;
+      }
+      cv.wait(lock, [&] { return b.done; });
     }
     adler = written == 0 ? b.adler : adler32_combine(adler, b.adler, static_cast<z_off_t>(b.length));
     const std::size_t dataSize = b.chunk.size() - 12;
@@ -315,11 +341,7 @@ PngEncoder::~PngEncoder() {
   Impl& s = *impl_;
   {
     std::unique_lock lock(s.m);
-    s.cv.wait(lock, [&] {
-      for (int k = s.written; k < s.nextBand; ++k)
-        if (!s.Slot(k).done) return false;
-      return true;
-    });
+    s.cv.wait(lock, [&] { return s.tasks == 0; });
   }
   for (Band& b : s.bands)
     if (b.zsReady) deflateEnd(&b.zs);

@@ -5,13 +5,11 @@
 #include <array>
 #include <cmath>
 #include <memory>
-#include <mutex>
 #include <numeric>
 
-#include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/info.h>
-#include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/task_arena.h>
+#include <oneapi/tbb/task_group.h>
 
 #include "raster/triangle_store.h"
 
@@ -44,12 +42,18 @@ class TriangleGeometry {
                      [](const YEntry& p, const YEntry& q) { return p.first < q.first; });
   }
 
+  // What a pixel row's samples refer to beyond the store: nothing.
+  struct Rows {
+    int j0 = 0;
+  };
+  Rows MakeRows() const { return {}; }
+
   bool Failed() const { return store_.Failed(); }
-  void BeginPixelRow(int j0) { store_.BeginPixelRow(j0); }
-  void SwapRows(int, int) {}
+  void BeginPixelRow(int j0, int oldestInUse) { store_.BeginPixelRow(j0, oldestInUse); }
+  void CopySampleRow(const Rows&, int, Rows&, int) {}
 
   // Resolves sample row j: the nearest triangles per sample.
-  void ScanRow(int j, int /*r*/, double y, Sample* row) {
+  void ScanRow(int j, int /*r*/, double y, Sample* row, Rows& /*rows*/) {
     for (; nextY_ < ySorted_.size() && ySorted_[nextY_].first <= j; ++nextY_) {
       const YEntry& e = ySorted_[nextY_];
       const RasterTriangle& t = mesh_.triangles[e.index];
@@ -58,19 +62,20 @@ class TriangleGeometry {
     store_.ScanRow(j, y, row, 0);
   }
 
-  std::uint32_t SurfaceOf(int /*r*/, const Sample& smp) const { return store_.SurfaceOf(smp.handle); }
-  double EdgeDistance(int /*r*/, const Sample& smp, double x, double y) const {
+  std::uint32_t SurfaceOf(const Rows&, int /*r*/, const Sample& smp) const { return store_.SurfaceOf(smp.handle); }
+  double EdgeDistance(const Rows&, int /*r*/, const Sample& smp, double x, double y) const {
     return store_.EdgeDistance(smp.handle, x, y);
   }
-  Rgb ShadeSample(int /*r*/, const Sample& smp, double x, double y, std::int64_t& nCalls) {
+  Rgb ShadeSample(const Rows&, int /*r*/, const Sample& smp, double x, double y, std::int64_t& nCalls) const {
     return store_.ShadeAt(smp.handle, x, y, nCalls);
   }
   // A group of samples of one triangle-meshed surface is shaded once, at its centroid;
   // `f` receives the fragment shaded (GroupFragment's).
-  Rgb ShadeGroup(const Member* m, int /*n*/, double cx, double cy, std::int64_t& nCalls, Fragment* f) {
+  Rgb ShadeGroup(const Rows&, const Member* m, int /*n*/, double cx, double cy, std::int64_t& nCalls,
+                 Fragment* f) const {
     return store_.ShadeAt(m[0].smp.handle, cx, cy, nCalls, f);
   }
-  Fragment GroupFragment(const Member* m, int /*n*/, double cx, double cy) const {
+  Fragment GroupFragment(const Rows&, const Member* m, int /*n*/, double cx, double cy) const {
     return store_.Interpolate(m[0].smp.handle, cx, cy);
   }
 
@@ -99,20 +104,30 @@ class FragmentGeometry final : public FragmentRow {
  public:
   FragmentGeometry(FragmentSource& source, const RenderSettings& s, const Lattice& lat,
                    int layers, Counters& stats)
-      : source_(source), s_(s), lat_(lat), layers_(layers), stats_(stats), pools_(s.aa),
-        store_(s, lat, layers, ShadingMode::Phong, stats) {
-    for (auto& p : pools_) p.reserve(static_cast<size_t>(lat.nx) * layers);
+      : source_(source), s_(s), lat_(lat), layers_(layers), stats_(stats),
+        store_(s, lat, layers, ShadingMode::Phong, stats) {}
+
+  // What a pixel row's samples refer to beyond the store: the fragments of each of its
+  // sample rows (a sample's handle below kTriangleHandle indexes its row's pool).
+  struct Rows {
+    int j0 = 0;  // the pixel row's first sample row
+    std::vector<std::vector<Fragment>> pools;
+  };
+  Rows MakeRows() const {
+    Rows rows;
+    rows.pools.resize(static_cast<size_t>(s_.aa));
+    for (auto& p : rows.pools) p.reserve(static_cast<size_t>(lat_.nx) * layers_);
+    return rows;
   }
 
   bool Failed() const { return failed_ || store_.Failed(); }
-  void BeginPixelRow(int j0) {
-    j0_ = j0;
-    store_.BeginPixelRow(j0);
+  void BeginPixelRow(int j0, int oldestInUse) { store_.BeginPixelRow(j0, oldestInUse); }
+  void CopySampleRow(const Rows& from, int rFrom, Rows& to, int rTo) {
+    to.pools[static_cast<size_t>(rTo)] = from.pools[static_cast<size_t>(rFrom)];  // within the reserve
   }
-  void SwapRows(int a, int b) { std::swap(pools_[a], pools_[b]); }
 
-  void ScanRow(int j, int r, double y, Sample* row) {
-    pool_ = &pools_[r];
+  void ScanRow(int j, int r, double y, Sample* row, Rows& rows) {
+    pool_ = &rows.pools[static_cast<size_t>(r)];
     pool_->clear();
     row_ = row;
     const SampleColumns columns{lat_.offset, lat_.spacing, lat_.nx};
@@ -140,36 +155,38 @@ class FragmentGeometry final : public FragmentRow {
     store_.Add(a, b, c, surfaceId, lat_.Floor(yMax, lat_.ny));
   }
 
-  std::uint32_t SurfaceOf(int r, const Sample& smp) const {
+  std::uint32_t SurfaceOf(const Rows& rows, int r, const Sample& smp) const {
     return smp.handle >= kTriangleHandle ? store_.SurfaceOf(smp.handle - kTriangleHandle)
-                                         : pools_[r][smp.handle].surfaceId;
+                                         : rows.pools[static_cast<size_t>(r)][smp.handle].surfaceId;
   }
-  double EdgeDistance(int, const Sample&, double, double) const { return INFINITY; }
-  Rgb ShadeSample(int r, const Sample& smp, double x, double y, std::int64_t& nCalls) {
+  double EdgeDistance(const Rows&, int, const Sample&, double, double) const { return INFINITY; }
+  Rgb ShadeSample(const Rows& rows, int r, const Sample& smp, double x, double y, std::int64_t& nCalls) const {
     if (smp.handle >= kTriangleHandle) return store_.ShadeAt(smp.handle - kTriangleHandle, x, y, nCalls);
     ++nCalls;
-    return ShadeFragment(pools_[r][smp.handle], s_, &failed_);
+    return ShadeFragment(rows.pools[static_cast<size_t>(r)][smp.handle], s_, &failed_);
   }
-  Rgb ShadeGroup(const Member* m, int n, double cx, double cy, std::int64_t& nCalls, Fragment* f) {
+  Rgb ShadeGroup(const Rows& rows, const Member* m, int n, double cx, double cy, std::int64_t& nCalls,
+                 Fragment* f) const {
     ++nCalls;
-    *f = GroupFragment(m, n, cx, cy);
+    *f = GroupFragment(rows, m, n, cx, cy);
     return ShadeFragment(*f, s_, &failed_);
   }
   // A group of exact samples of one surface is shaded once, with its samples' attributes
   // averaged: the surface at their centroid to second order. A group with slab samples
   // takes the slab triangle of the sample nearest the centroid, at the centroid.
-  Fragment GroupFragment(const Member* m, int n, double cx, double cy) const {
+  Fragment GroupFragment(const Rows& rows, const Member* m, int n, double cx, double cy) const {
     int nearest = -1;
     double best = INFINITY;
     for (int k = 0; k < n; ++k) {
       if (m[k].smp.handle < kTriangleHandle) continue;
-      const double d = std::hypot(lat_.At(m[k].i) - cx, lat_.At(j0_ + m[k].r) - cy);
+      const double d = std::hypot(lat_.At(m[k].i) - cx, lat_.At(rows.j0 + m[k].r) - cy);
       if (d < best) best = d, nearest = k;
     }
     if (nearest >= 0) return store_.Interpolate(m[nearest].smp.handle - kTriangleHandle, cx, cy);
-    Fragment f = pools_[m[0].r][m[0].smp.handle];
+    auto fragment = [&](const Member& x) -> const Fragment& { return rows.pools[static_cast<size_t>(x.r)][x.smp.handle]; };
+    Fragment f = fragment(m[0]);
     for (int k = 1; k < n; ++k) {
-      const Fragment& g = pools_[m[k].r][m[k].smp.handle];
+      const Fragment& g = fragment(m[k]);
       f.w += g.w;
       f.position += g.position;
       f.normal += g.normal;
@@ -193,20 +210,32 @@ class FragmentGeometry final : public FragmentRow {
   const Lattice& lat_;
   int layers_;
   Counters& stats_;
-  std::atomic<bool> failed_ = false;  // the source failed, or a texture (set while shading, on any thread)
-  std::vector<std::vector<Fragment>> pools_;  // per sample row of the pixel row
-  std::vector<Fragment>* pool_ = nullptr;    // the row being scanned
+  // The source failed, or a texture (set while shading, on any thread).
+  mutable std::atomic<bool> failed_ = false;
+  std::vector<Fragment>* pool_ = nullptr;  // the pool of the sample row being scanned
   Sample* row_ = nullptr;
   TriangleStore store_;
-  int j0_ = 0;  // the pixel row's first sample row
 };
 
-// The pixel rows, for either geometry: sample rows resolved, samples grouped by surface
-// per pixel, one shading call per group plus the adaptive-stochastic extra calls, and
-// the finished row handed to the sink.
-// A task shades at least this many pixels of a row: enough that a task's overhead (a few
-// microseconds) is small against its shading calls.
-constexpr int kPixelsPerTask = 32;
+// A pixel no surface covers: no colour, no coverage, depth +inf (OpenEXR's and prman's
+// background), the other AOVs 0 and surface id -1.
+constexpr std::array<float, kChannels> Background() {
+  std::array<float, kChannels> b{};
+  b[kChannelZ] = std::numeric_limits<float>::infinity();
+  b[kChannelId] = -1.0f;
+  return b;
+}
+
+// One pixel row on its way through the back end: its sample rows resolved, what their
+// samples refer to (the geometry's Rows), its pixels, and the counts of its shading.
+template <class Geometry>
+struct PixelRow {
+  int py = 0, j0 = 0;
+  std::vector<std::vector<Sample>> samples;  // aa sample rows of nx * layers
+  typename Geometry::Rows refs;
+  std::vector<float> pixels;                 // width * kChannels
+  Counters stats;
+};
 
 // Whether any of the aa x aa samples of the pixel whose first sample column is i0 holds a
 // fragment.
@@ -217,182 +246,235 @@ bool AnyCovered(const std::vector<std::vector<Sample>>& rows, int i0, int aa, in
   return false;
 }
 
+// Pixel px of a resolved row: its samples grouped by surface and layer, one shading call
+// per group plus the adaptive-stochastic extra calls, and the AOVs. Reads the row and the
+// geometry only, so rows are shaded on any thread in any order.
 template <class Geometry>
-std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const Lattice& lat,
-                                      int layers, Counters& stats, RowSink& sink) {
-  std::vector<std::vector<Sample>> rows(s.aa, std::vector<Sample>(static_cast<size_t>(lat.nx) * layers));
-  std::vector<float> pixels(static_cast<size_t>(s.width) * kChannels);
+void ShadePixel(const Geometry& geo, const RenderSettings& s, const Lattice& lat, int layers,
+                PixelRow<Geometry>& pr, int px) {
+  static constexpr std::array<float, kChannels> background = Background();
   const int perPixel = s.aa * s.aa;
   // Paper 000 §3.4.2: each covered sample is shaded on its own with probability
   // P = (l - 1) / (l^2 - 1) = 1 / (l + 1); a colour that differs from the pixel's one
   // shading call by more than kShadeDiscrepancy makes the pixel shade every sample.
   const double extraP = s.aa > 1 ? 1.0 / (s.aa + 1) : 0.0;
-  std::unique_ptr<tbb::task_arena> arena;
-  if (s.threads > 1) arena = std::make_unique<tbb::task_arena>(std::min(s.threads, tbb::info::default_concurrency()));
-  std::mutex merge;
-  // A pixel no surface covers: no colour, no coverage, depth +inf (OpenEXR's and prman's
-  // background), the other AOVs 0 and surface id -1.
-  std::array<float, kChannels> background{};
-  background[kChannelZ] = std::numeric_limits<float>::infinity();
-  background[kChannelId] = -1.0f;
-  bool previous = false;  // the pixel row above was rendered: its last sample row is this one's first
-  for (int py = 0; py < s.height; ++py) {
-    if (s.ownsRow && !s.ownsRow(py)) {
-      previous = false;
-      continue;
-    }
-    const int j0 = lat.FirstOfPixel(py);
-    geo.BeginPixelRow(j0);
-    for (int r = 0; r < s.aa; ++r) {
-      if (r == 0 && previous && s.aa > 1) {
-        std::swap(rows[0], rows[s.aa - 1]);  // the shared edge row, already resolved
-        geo.SwapRows(0, s.aa - 1);
-        continue;
-      }
-      std::fill(rows[r].begin(), rows[r].end(), Sample{0.0, -1});
-      geo.ScanRow(j0 + r, r, lat.At(j0 + r), rows[r].data());
-    }
-    // The pixels of the row, each on its own: in chunks over the back end's threads, each
-    // chunk counting into its own counts (added up in any order: sums).
-    auto shadePixels = [&](int pxBegin, int pxEnd, Counters& stats) {
-    for (int px = pxBegin; px < pxEnd; ++px) {
-      float* out = &pixels[static_cast<size_t>(px) * kChannels];
-      if (!AnyCovered(rows, lat.FirstOfPixel(px), s.aa, layers)) {
-        std::copy(background.begin(), background.end(), out);  // most pixels of most frames
-        continue;
-      }
-      // Group the pixel's samples by surface and layer: one shading call per group.
-      struct Group {
-        std::uint32_t surface;
-        int layer;
-        int count;
-        double sx, sy;
-        double weight;  // summed over its samples: opacity times the light the layers in front pass
-        Rgb rgb;
-      };
-      std::array<Group, kMaxAa * kMaxAa * kMaxLayers> groups;
-      std::array<Member, kMaxAa * kMaxAa * kMaxLayers> members;
-      std::array<int, kMaxAa * kMaxAa * kMaxLayers> memberGroup;
-      std::array<int, kMaxAa * kMaxAa> groupOf;  // per sample, its nearest layer's; -1: none
-      int nGroups = 0, nMembers = 0, covered = 0, onLines = 0;
-      double alpha = 0.0;  // summed over samples: 1 - (1 - opacity)^(fragments)
-      const int i0 = lat.FirstOfPixel(px);
-      for (int r = 0; r < s.aa; ++r)
-        for (int c = 0; c < s.aa; ++c) {
-          const Sample* keep = &rows[r][static_cast<size_t>(i0 + c) * layers];
-          groupOf[r * s.aa + c] = -1;
-          if (keep[0].handle < 0) continue;
-          ++covered;
-          const double x = lat.At(i0 + c), y = lat.At(j0 + r);
-          if (s.hiddenLine && geo.EdgeDistance(r, keep[0], x, y) < kLineHalfWidth) ++onLines;
-          double through = 1.0;  // light passing the layers in front
-          for (int layer = 0; layer < layers && keep[layer].handle >= 0; ++layer) {
-            const std::uint32_t surface = geo.SurfaceOf(r, keep[layer]);
-            int g = 0;
-            while (g < nGroups && (groups[g].surface != surface || groups[g].layer != layer)) ++g;
-            if (g == nGroups) groups[nGroups++] = {surface, layer, 0, 0.0, 0.0, 0.0, Rgb::Zero()};
-            if (layer == 0) groupOf[r * s.aa + c] = g;
-            const double opacity = s.opacity * s.MaterialOf(surface).opacity;
-            ++groups[g].count;
-            groups[g].sx += x;
-            groups[g].sy += y;
-            groups[g].weight += opacity * through;
-            members[nMembers] = {r, i0 + c, keep[layer]};
-            memberGroup[nMembers++] = g;
-            through *= 1.0 - opacity;
-          }
-          alpha += 1.0 - through;
-        }
-      // The members of group g, gathered in place at the front of `gathered`.
-      std::array<Member, kMaxAa * kMaxAa> gathered;
-      auto gather = [&](int g) {
-        int n = 0;
-        for (int k = 0; k < nMembers; ++k)
-          if (memberGroup[k] == g) gathered[n++] = members[k];
-        return n;
-      };
-      stats[Counter::SamplesCovered] += covered;
-      // The AOVs are of the surface that covers most of the pixel, at its samples' centroid:
-      // the fragment its shading call takes (hidden-line mode, which shades none, asks for it).
-      int major = -1;
-      for (int g = 0; g < nGroups; ++g)
-        if (groups[g].layer == 0 && (major < 0 || groups[g].count > groups[major].count)) major = g;
-      Fragment majorFragment, shaded;
-      bool haveMajor = false;
-      Rgb colour = Rgb::Zero();
-      if (s.hiddenLine) {
-        // White surfaces, black triangle edges, no shading.
-        colour = Rgb::Constant(static_cast<double>(covered - onLines) / perPixel);
-        alpha = covered;
-      } else {
-        bool superSample = false;
-        for (int g = 0; g < nGroups; ++g) {
-          // Linear transparency: a layer of opacity a seen through layers of opacities
-          // a_j contributes a prod (1 - a_j) of its colour at each sample.
-          Group& gr = groups[g];
-          const int n = gather(g);
-          gr.rgb = geo.ShadeGroup(gathered.data(), n, gr.sx / gr.count, gr.sy / gr.count,
-                                  stats[Counter::ShadingCalls], g == major ? &majorFragment : &shaded);
-          colour += (gr.weight / perPixel) * gr.rgb;
-          haveMajor |= g == major;
-        }
-        // Only the (l-1) x (l-1) samples a pixel owns (not its right and bottom edges, which
-        // belong to the neighbours) draw, so each sample draws once.
-        // With transparency the extra calls are not made (one call per surface and layer).
-        for (int k = 0; k < perPixel && !superSample && extraP > 0 && layers == 1; ++k) {
-          const int r = k / s.aa, c = k % s.aa;
-          if (r == s.aa - 1 || c == s.aa - 1 || groupOf[k] < 0 ||
-              UnitHash(s.seed, j0 + r, i0 + c) >= extraP)
-            continue;
-          const Sample& smp = rows[r][static_cast<size_t>(i0 + c) * layers];
-          const Rgb rgb = geo.ShadeSample(r, smp, lat.At(i0 + c), lat.At(j0 + r), stats[Counter::ExtraShadingCalls]);
-          superSample = (rgb - groups[groupOf[k]].rgb).cwiseAbs().maxCoeff() > kShadeDiscrepancy;
-        }
-        if (superSample) {
-          ++stats[Counter::SuperSampledPixels];
-          colour = Rgb::Zero();
-          for (int k = 0; k < perPixel; ++k) {
-            if (groupOf[k] < 0) continue;
-            const int r = k / s.aa;
-            const Sample& smp = rows[r][static_cast<size_t>(i0 + k % s.aa) * layers];
-            colour += geo.ShadeSample(r, smp, lat.At(i0 + k % s.aa), lat.At(j0 + r),
-                                      stats[Counter::ExtraShadingCalls]) / perPixel;
-          }
-        }
-      }
-      for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(colour[k]);
-      out[3] = static_cast<float>(alpha / perPixel);
-      if (major < 0) {
-        std::copy(background.begin() + 4, background.end(), out + 4);
-      } else {
-        const Group& gr = groups[major];
-        if (!haveMajor)
-          majorFragment = geo.GroupFragment(gathered.data(), gather(major), gr.sx / gr.count, gr.sy / gr.count);
-        const Fragment& a = majorFragment;
-        const Vec3 nrm = a.normal.normalized();
-        out[kChannelZ] = static_cast<float>(a.w);
-        for (int k = 0; k < 3; ++k) out[kChannelN + k] = static_cast<float>(nrm.allFinite() ? nrm[k] : 0.0);
-        out[kChannelUv] = static_cast<float>(a.uv.x());
-        out[kChannelUv + 1] = static_cast<float>(a.uv.y());
-        out[kChannelId] = static_cast<float>(gr.surface);
-      }
-    }
-    };
-    if (arena) {
-      arena->execute([&] {
-        tbb::parallel_for(tbb::blocked_range<int>(0, s.width, kPixelsPerTask), [&](const tbb::blocked_range<int>& range) {
-          Counters local;
-          shadePixels(range.begin(), range.end(), local);
-          std::lock_guard lock(merge);
-          stats.Merge(local);
-        });
-      });
-    } else {
-      shadePixels(0, s.width, stats);
-    }
-    if (geo.Failed() || !sink.WriteRow(py, pixels.data())) return std::nullopt;
-    previous = true;
+  Counters& stats = pr.stats;
+  float* out = &pr.pixels[static_cast<size_t>(px) * kChannels];
+  const int i0 = lat.FirstOfPixel(px);
+  if (!AnyCovered(pr.samples, i0, s.aa, layers)) {
+    std::copy(background.begin(), background.end(), out);  // most pixels of most frames
+    return;
   }
+  // Group the pixel's samples by surface and layer: one shading call per group.
+  struct Group {
+    std::uint32_t surface;
+    int layer;
+    int count;
+    double sx, sy;
+    double weight;  // summed over its samples: opacity times the light the layers in front pass
+    Rgb rgb;
+  };
+  std::array<Group, kMaxAa * kMaxAa * kMaxLayers> groups;
+  std::array<Member, kMaxAa * kMaxAa * kMaxLayers> members;
+  std::array<int, kMaxAa * kMaxAa * kMaxLayers> memberGroup;
+  std::array<int, kMaxAa * kMaxAa> groupOf;  // per sample, its nearest layer's; -1: none
+  int nGroups = 0, nMembers = 0, covered = 0, onLines = 0;
+  double alpha = 0.0;  // summed over samples: 1 - (1 - opacity)^(fragments)
+  for (int r = 0; r < s.aa; ++r)
+    for (int c = 0; c < s.aa; ++c) {
+      const Sample* keep = &pr.samples[r][static_cast<size_t>(i0 + c) * layers];
+      groupOf[r * s.aa + c] = -1;
+      if (keep[0].handle < 0) continue;
+      ++covered;
+      const double x = lat.At(i0 + c), y = lat.At(pr.j0 + r);
+      if (s.hiddenLine && geo.EdgeDistance(pr.refs, r, keep[0], x, y) < kLineHalfWidth) ++onLines;
+      double through = 1.0;  // light passing the layers in front
+      for (int layer = 0; layer < layers && keep[layer].handle >= 0; ++layer) {
+        const std::uint32_t surface = geo.SurfaceOf(pr.refs, r, keep[layer]);
+        int g = 0;
+        while (g < nGroups && (groups[g].surface != surface || groups[g].layer != layer)) ++g;
+        if (g == nGroups) groups[nGroups++] = {surface, layer, 0, 0.0, 0.0, 0.0, Rgb::Zero()};
+        if (layer == 0) groupOf[r * s.aa + c] = g;
+        const double opacity = s.opacity * s.MaterialOf(surface).opacity;
+        ++groups[g].count;
+        groups[g].sx += x;
+        groups[g].sy += y;
+        groups[g].weight += opacity * through;
+        members[nMembers] = {r, i0 + c, keep[layer]};
+        memberGroup[nMembers++] = g;
+        through *= 1.0 - opacity;
+      }
+      alpha += 1.0 - through;
+    }
+  // The members of group g, gathered in place at the front of `gathered`.
+  std::array<Member, kMaxAa * kMaxAa> gathered;
+  auto gather = [&](int g) {
+    int n = 0;
+    for (int k = 0; k < nMembers; ++k)
+      if (memberGroup[k] == g) gathered[n++] = members[k];
+    return n;
+  };
+  stats[Counter::SamplesCovered] += covered;
+  // The AOVs are of the surface that covers most of the pixel, at its samples' centroid:
+  // the fragment its shading call takes (hidden-line mode, which shades none, asks for it).
+  int major = -1;
+  for (int g = 0; g < nGroups; ++g)
+    if (groups[g].layer == 0 && (major < 0 || groups[g].count > groups[major].count)) major = g;
+  Fragment majorFragment, shaded;
+  bool haveMajor = false;
+  Rgb colour = Rgb::Zero();
+  if (s.hiddenLine) {
+    // White surfaces, black triangle edges, no shading.
+    colour = Rgb::Constant(static_cast<double>(covered - onLines) / perPixel);
+    alpha = covered;
+  } else {
+    bool superSample = false;
+    for (int g = 0; g < nGroups; ++g) {
+      // Linear transparency: a layer of opacity a seen through layers of opacities
+      // a_j contributes a prod (1 - a_j) of its colour at each sample.
+      Group& gr = groups[g];
+      const int n = gather(g);
+      gr.rgb = geo.ShadeGroup(pr.refs, gathered.data(), n, gr.sx / gr.count, gr.sy / gr.count,
+                              stats[Counter::ShadingCalls], g == major ? &majorFragment : &shaded);
+      colour += (gr.weight / perPixel) * gr.rgb;
+      haveMajor |= g == major;
+    }
+    // Only the (l-1) x (l-1) samples a pixel owns (not its right and bottom edges, which
+    // belong to the neighbours) draw, so each sample draws once.
+    // With transparency the extra calls are not made (one call per surface and layer).
+    for (int k = 0; k < perPixel && !superSample && extraP > 0 && layers == 1; ++k) {
+      const int r = k / s.aa, c = k % s.aa;
+      if (r == s.aa - 1 || c == s.aa - 1 || groupOf[k] < 0 ||
+          UnitHash(s.seed, pr.j0 + r, i0 + c) >= extraP)
+        continue;
+      const Sample& smp = pr.samples[r][static_cast<size_t>(i0 + c) * layers];
+      const Rgb rgb = geo.ShadeSample(pr.refs, r, smp, lat.At(i0 + c), lat.At(pr.j0 + r), stats[Counter::ExtraShadingCalls]);
+      superSample = (rgb - groups[groupOf[k]].rgb).cwiseAbs().maxCoeff() > kShadeDiscrepancy;
+    }
+    if (superSample) {
+      ++stats[Counter::SuperSampledPixels];
+      colour = Rgb::Zero();
+      for (int k = 0; k < perPixel; ++k) {
+        if (groupOf[k] < 0) continue;
+        const int r = k / s.aa;
+        const Sample& smp = pr.samples[r][static_cast<size_t>(i0 + k % s.aa) * layers];
+        colour += geo.ShadeSample(pr.refs, r, smp, lat.At(i0 + k % s.aa), lat.At(pr.j0 + r),
+                                  stats[Counter::ExtraShadingCalls]) / perPixel;
+      }
+    }
+  }
+  for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(colour[k]);
+  out[3] = static_cast<float>(alpha / perPixel);
+  if (major < 0) {
+    std::copy(background.begin() + 4, background.end(), out + 4);
+  } else {
+    const Group& gr = groups[major];
+    if (!haveMajor)
+      majorFragment = geo.GroupFragment(pr.refs, gathered.data(), gather(major), gr.sx / gr.count, gr.sy / gr.count);
+    const Fragment& a = majorFragment;
+    const Vec3 nrm = a.normal.normalized();
+    out[kChannelZ] = static_cast<float>(a.w);
+    for (int k = 0; k < 3; ++k) out[kChannelN + k] = static_cast<float>(nrm.allFinite() ? nrm[k] : 0.0);
+    out[kChannelUv] = static_cast<float>(a.uv.x());
+    out[kChannelUv + 1] = static_cast<float>(a.uv.y());
+    out[kChannelId] = static_cast<float>(gr.surface);
+  }
+}
+
+// The pixel rows, for either geometry, in three stages: each row's sample rows resolved
+// (in order: the scan and the active triangles move down the image), its pixels shaded
+// (any row, on any thread), and the row handed to the sink (in order). Resolving and
+// handing over stay on the calling thread (a source or sink may be bound to it, as MPI's
+// are); with threads, each row is shaded as a task while the next rows are resolved, a few
+// rows in flight, so memory stays O(width x threads).
+template <class Geometry>
+std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const Lattice& lat,
+                                      int layers, Counters& stats, RowSink& sink) {
+  const int threads = s.threads > 1 ? std::min(s.threads, tbb::info::default_concurrency()) : 1;
+  const int inFlight = threads > 1 ? 2 * threads : 1;
+  // One row more than may be in flight: the row being resolved reads the one above it.
+  std::vector<PixelRow<Geometry>> ring(static_cast<size_t>(inFlight + 1));
+  for (auto& pr : ring) {
+    pr.samples.assign(static_cast<size_t>(s.aa), std::vector<Sample>(static_cast<size_t>(lat.nx) * layers));
+    pr.refs = geo.MakeRows();
+    pr.pixels.resize(static_cast<size_t>(s.width) * kChannels);
+  }
+  Counters shaded;           // the rows' shading counts, added up in row order
+  int written = 0;           // rows handed to the sink: every row above is done with
+  bool stopped = false;      // the sink or the geometry failed
+  int next = 0;              // the next pixel row to resolve
+  std::size_t resolved = 0;  // rows resolved: the next one goes to ring[resolved % size]
+  const PixelRow<Geometry>* above = nullptr;  // the row resolved last, if it was the one above
+
+  // Resolves the next pixel row this render owns; null when none is left or it stopped.
+  auto resolve = [&]() -> PixelRow<Geometry>* {
+    while (next < s.height && s.ownsRow && !s.ownsRow(next)) ++next, above = nullptr;
+    if (next >= s.height || stopped) return nullptr;
+    PixelRow<Geometry>& pr = ring[resolved++ % ring.size()];
+    pr.py = next++;
+    pr.j0 = lat.FirstOfPixel(pr.py);
+    pr.refs.j0 = pr.j0;
+    pr.stats = Counters();
+    geo.BeginPixelRow(pr.j0, lat.FirstOfPixel(written));
+    for (int r = 0; r < s.aa; ++r) {
+      if (r == 0 && above && s.aa > 1) {
+        // The shared edge row, resolved with the row above (which may still be shading).
+        pr.samples[0] = above->samples[static_cast<size_t>(s.aa - 1)];
+        geo.CopySampleRow(above->refs, s.aa - 1, pr.refs, 0);
+        continue;
+      }
+      std::fill(pr.samples[r].begin(), pr.samples[r].end(), Sample{0.0, -1});
+      geo.ScanRow(pr.j0 + r, r, lat.At(pr.j0 + r), pr.samples[r].data(), pr.refs);
+    }
+    above = &pr;
+    return &pr;
+  };
+  auto shade = [&](PixelRow<Geometry>& pr) {
+    for (int px = 0; px < s.width; ++px) ShadePixel(geo, s, lat, layers, pr, px);
+  };
+  auto emit = [&](PixelRow<Geometry>& pr) {
+    shaded.Merge(pr.stats);
+    // Rows still in flight when the render stopped are dropped.
+    if (stopped || geo.Failed() || !sink.WriteRow(pr.py, pr.pixels.data())) stopped = true;
+    written = pr.py + 1;
+  };
+
+  if (threads <= 1) {
+    while (PixelRow<Geometry>* pr = resolve()) {
+      shade(*pr);
+      emit(*pr);
+    }
+  } else {
+    tbb::task_arena arena(threads);
+    std::vector<tbb::task_group> shading(ring.size());  // per ring slot, its row's task
+    std::size_t oldest = 0;                             // rows handed over: the oldest in flight
+    // Waits for the oldest row in flight (running other rows' tasks meanwhile) and hands it over.
+    auto finishOldest = [&] {
+      const std::size_t k = oldest++ % ring.size();
+      arena.execute([&] { shading[k].wait(); });
+      emit(ring[k]);
+    };
+    try {
+      while (PixelRow<Geometry>* pr = resolve()) {
+        const std::size_t k = (resolved - 1) % ring.size();
+        arena.execute([&] { shading[k].run([&shade, pr] { shade(*pr); }); });
+        while (resolved - oldest >= static_cast<std::size_t>(inFlight)) finishOldest();
+      }
+      while (oldest < resolved) finishOldest();
+    } catch (...) {
+      // No task may outlive the rows it shades.
+      for (auto& g : shading) {
+        g.cancel();
+        try {
+          arena.execute([&] { g.wait(); });
+        } catch (...) {
+        }
+      }
+      throw;
+    }
+  }
+  if (stopped) return std::nullopt;
+  stats.Merge(shaded);
   return stats;
 }
 

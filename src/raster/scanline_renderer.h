@@ -36,7 +36,7 @@ struct RenderSettings {
   double opacity = 1.0;     // (0, 1]: below 1, linear transparency over kMaxLayers layers
   bool hiddenLine = false;  // white surfaces with their triangle edges in black, unshaded
   std::uint64_t seed = 1;   // of the stochastic extra shading calls (paper 000 §3.4.2)
-  int threads = 1;          // the pixels of each row are shaded on this many threads (same image for any)
+  int threads = 1;          // rows are shaded on this many threads, a few in flight (same image for any)
   Vec3 eye = Vec3::Zero();
   // Orthographic: view rays all run along `forward`; triangles carry their depth in their
   // vertices (W = 1), and fragments' w is that depth.

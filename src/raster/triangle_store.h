@@ -10,6 +10,8 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <memory>
+#include <stdexcept>
 #include <vector>
 
 #include "raster/scanline_renderer.h"
@@ -102,15 +104,17 @@ constexpr double kShadeDiscrepancy = 0.08;
 constexpr double kLevelEdgeRel = 1e-9;
 
 // Triangles being scanned: the active store whose slots do not move while a sample
-// refers to them (a triangle is retired at the start of the first pixel row none of whose
-// sample rows it reaches). A slot keeps its own copy of the vertices, so triangles may come
-// from a mesh's y-sorted list or arrive while the rows are scanned (θ slabs).
+// refers to them. A triangle leaves the scan at the start of the first pixel row none of
+// whose sample rows it reaches, and its slot is reused once no pixel row still being shaded
+// can refer to it: the back end shades earlier rows while it resolves later ones, reading
+// slots while others are added. A slot keeps its own copy of the vertices, so triangles may
+// come from a mesh's y-sorted list or arrive while the rows are scanned (θ slabs).
 class TriangleStore {
  public:
   TriangleStore(const RenderSettings& s, const Lattice& lat, int layers, ShadingMode shading, Counters& stats)
       : s_(s), lat_(lat), layers_(layers), shading_(shading), invHither_(1.0 / s.hither), stats_(stats) {
-    active_.reserve(1024);
     live_.reserve(1024);
+    retired_.reserve(1024);
     freeSlots_.reserve(1024);
   }
 
@@ -150,18 +154,25 @@ class TriangleStore {
     if (!freeSlots_.empty()) {
       slot = freeSlots_.back();
       freeSlots_.pop_back();
-      active_[slot] = at;
     } else {
-      slot = static_cast<int>(active_.size());
-      active_.push_back(at);
+      slot = active_.Grow();
     }
+    active_[slot] = at;
     live_.push_back(slot);
   }
 
-  void BeginPixelRow(int j0) {
+  // Before the pixel row whose first sample row is j0: triangles ending above it leave the
+  // scan; the slots of those ending above `oldestInUse` (the first sample row of the oldest
+  // pixel row still being shaded, j0 when rows are shaded as they are resolved) are free.
+  void BeginPixelRow(int j0, int oldestInUse) {
+    std::erase_if(retired_, [&](int k) {
+      if (active_[k].lastRow >= oldestInUse) return false;
+      freeSlots_.push_back(k);
+      return true;
+    });
     std::erase_if(live_, [&](int k) {
       if (active_[k].lastRow >= j0) return false;
-      freeSlots_.push_back(k);
+      (active_[k].lastRow < oldestInUse ? freeSlots_ : retired_).push_back(k);
       return true;
     });
   }
@@ -223,7 +234,7 @@ class TriangleStore {
   Fragment Interpolate(int slot, double x, double y) const { return InterpolateAt(active_[slot], x, y).f; }
 
   // The colour at (x, y); `f`, when given, receives the fragment there (Interpolate's).
-  Rgb ShadeAt(int slot, double x, double y, std::int64_t& nCalls, Fragment* f = nullptr) {
+  Rgb ShadeAt(int slot, double x, double y, std::int64_t& nCalls, Fragment* f = nullptr) const {
     const Active& at = active_[slot];
     const Interpolated a = InterpolateAt(at, x, y);
     if (f) *f = a.f;
@@ -296,9 +307,30 @@ class TriangleStore {
   ShadingMode shading_;
   double invHither_;
   Counters& stats_;
-  std::atomic<bool> failed_ = false;  // a texture could not be read (set while shading, on any thread)
-  std::vector<Active> active_;  // the slots
-  std::vector<int> live_, freeSlots_;
+  mutable std::atomic<bool> failed_ = false;  // a texture could not be read (set while shading, on any thread)
+  // Slots in chunks that never move: one may be added while others are read.
+  class Slots {
+   public:
+    Active& operator[](int k) { return chunks_[static_cast<std::size_t>(k) >> kChunkBits][k & kChunkMask]; }
+    const Active& operator[](int k) const {
+      return chunks_[static_cast<std::size_t>(k) >> kChunkBits][k & kChunkMask];
+    }
+    // A new slot's index; the chunk table is sized once, so reading never races a resize.
+    int Grow() {
+      const std::size_t c = static_cast<std::size_t>(size_) >> kChunkBits;
+      if (c >= chunks_.size()) throw std::length_error("more than 2^24 triangles active at once");
+      if (!chunks_[c]) chunks_[c] = std::make_unique_for_overwrite<Active[]>(std::size_t{1} << kChunkBits);
+      return size_++;
+    }
+
+   private:
+    static constexpr int kChunkBits = 10;
+    static constexpr int kChunkMask = (1 << kChunkBits) - 1;
+    std::vector<std::unique_ptr<Active[]>> chunks_ = std::vector<std::unique_ptr<Active[]>>(std::size_t{1} << 14);
+    int size_ = 0;
+  };
+  Slots active_;
+  std::vector<int> live_, retired_, freeSlots_;  // scanned; out of the scan, maybe in use; free
 };
 
 }  // namespace patchscan::raster
