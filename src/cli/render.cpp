@@ -309,8 +309,11 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   }
   raster::ImageWriter::Window placement;
   if (cropNdc) placement = {window.x0, window.y0, camera.width, camera.height};
+  // Opening the output is output time: for a format other than PNG it loads OpenImageIO.
+  const auto tOpen = Clock::now();
   auto opened = depthMap ? raster::ImageWriter::OpenDepthMap(output, outWidth, outHeight, LightCamera(camera))
                          : raster::ImageWriter::Open(output, outWidth, outHeight, o.aov, threads, placement, compression);
+  const double openSeconds = Seconds(tOpen, Clock::now());
   if (auto* why = std::get_if<std::string>(&opened)) {
     err << "patchscan: " << *why << '\n';
     return kExitOutputError;
@@ -397,7 +400,7 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   report.setUp = Seconds(tLoaded, tSetUp);
   report.render = Seconds(tSetUp, tDone);
   // Encoding and writing, inside the render (on the writer's thread: overlapping it).
-  report.output = (async ? async->WriterSeconds() : progress.OutputSeconds()) + Seconds(tCommit, tDone);
+  report.output = openSeconds + (async ? async->WriterSeconds() : progress.OutputSeconds()) + Seconds(tCommit, tDone);
   report.peakKiB = PeakResidentKiB();
   report.texture = backEnd.TextureReport();
   report.imageLibrary = raster::imageio::Loaded();

@@ -6,8 +6,12 @@
 #include <zlib.h>
 
 #include <OpenImageIO/imageio.h>
+#include <oneapi/tbb/global_control.h>
+#include <oneapi/tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -15,6 +19,7 @@
 #include <filesystem>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "raster/png_encoder.h"
@@ -198,6 +203,38 @@ TEST_F(PngEncoderTest, AsSmallAsOneDeflate) {
   const auto theirs = ReadFile(Path("libpng.png"));
   EXPECT_LE(static_cast<double>(ours.size()), (1.0 + kGrowthTol) * static_cast<double>(theirs.size()))
       << "ours " << ours.size() << " bytes, libpng " << theirs.size();
+}
+
+TEST_F(PngEncoderTest, WritesWhenNoThreadIsFreeToDeflate) {
+  // The back end hands rows over from a thread that may hold the only worker busy: a band
+  // no task has taken up is deflated by the thread that needs it written. Here the one
+  // worker is held by a task of another arena until the image is written (or, were the
+  // encoder to wait for its tasks, until kPatience runs out, which the test then reports).
+  constexpr auto kPatience = std::chrono::seconds(20);
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 2);  // one worker
+  tbb::task_arena other(1, 0);
+  std::atomic<bool> held = false, written = false, outwaited = false;
+  other.enqueue([&] {
+    held = true;
+    const auto until = std::chrono::steady_clock::now() + kPatience;
+    while (!written && std::chrono::steady_clock::now() < until) std::this_thread::yield();
+    outwaited = !written;
+  });
+  while (!held) std::this_thread::yield();
+  const int width = 400, height = 6 * PngEncoder::RowsPerBand(400);
+  const auto px = TestImage(width, height, 21);
+  std::FILE* f = std::fopen(Path("busy.png").c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  {
+    PngEncoder enc(f, width, height, PngEncoder::Options{6, 2, true});
+    for (int y = 0; y < height; ++y)
+      EXPECT_TRUE(enc.WriteRow(&px[static_cast<std::size_t>(y) * width * kStride], kStride));
+    EXPECT_TRUE(enc.Finish());
+    written = true;  // the tasks still queued run now, finding their bands taken up
+  }
+  std::fclose(f);
+  EXPECT_FALSE(outwaited) << "the encoder waited for a thread to deflate";
+  EXPECT_EQ(ReadFile(Path("busy.png")), ReadFile(Encode(px, width, height, 1, Path("one.png"), true)));
 }
 
 TEST_F(PngEncoderTest, AFailedWriteIsReported) {
