@@ -313,7 +313,7 @@ def main():
                              "rmse": float("nan"), "psnr_db": float("nan")})
                 print(f"{name} aa {aa} povray: {secs:.3f} s, silhouette {fmt(rows[-1]['silhouette_max_px'])} px",
                       file=sys.stderr)
-            elif args.povray_steps > 0:
+            elif args.povray_steps > 0 and not shutil.which("povray"):
                 povray_missing = True
 
     csv_path = os.path.join(args.out, "accuracy.csv")
