@@ -1,4 +1,5 @@
 """Helpers shared by the bench scripts."""
+import os
 import subprocess
 import sys
 
@@ -26,3 +27,9 @@ def run(cmd):
     return r.returncode, r.stdout, r.stderr
 
 
+def publish(out_dir, name, lines):
+    """Writes a report's lines as out_dir/name (a Markdown file) and prints them."""
+    text = "\n".join(lines) + "\n"
+    with open(os.path.join(out_dir, name), "w") as f:
+        f.write(text)
+    print(text, end="")

@@ -11,7 +11,7 @@ import sys
 import tempfile
 
 sys.path.insert(0, os.path.dirname(__file__))
-from common import run  # noqa: E402
+from common import publish, run  # noqa: E402
 
 # (extension, compression or "" for the format's default): each format's default first.
 SETTINGS = [
@@ -59,10 +59,7 @@ def main():
              "| format | compression | bytes | seconds writing | seconds rest | writing / rest |", "|---|---|---|---|---|---|"]
     for (ext, compression), (out_s, rest_s, size) in best.items():
         lines.append(f"| .{ext} | {compression or 'default'} | {size:,} | {out_s:.3f} | {rest_s:.3f} | {out_s / rest_s:.2f} |")
-    text = "\n".join(lines) + "\n"
-    with open(os.path.join(args.out, "encode.md"), "w") as f:
-        f.write(text)
-    print(text, end="")
+    publish(args.out, "encode.md", lines)
 
 
 if __name__ == "__main__":

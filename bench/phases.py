@@ -15,7 +15,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(__file__))
-from common import camera_args, framed_camera, run  # noqa: E402
+from common import camera_args, framed_camera, publish, run  # noqa: E402
 import povray  # noqa: E402
 
 SCENE = "surfaces/teapot.bpt"
@@ -102,10 +102,7 @@ def main():
     for name, _ in builds:
         e, t = newton[(name, "exact")], newton[(name, "theta")]
         lines.append(f"| {name} | {e[0]:.3f} | {e[1]:.3f} | {t[0]:.3f} |")
-    text = "\n".join(lines) + "\n"
-    with open(os.path.join(args.out, "phases.md"), "w") as f:
-        f.write(text)
-    print(text, end="")
+    publish(args.out, "phases.md", lines)
 
 
 if __name__ == "__main__":

@@ -5,7 +5,6 @@
 #include <array>
 #include <cmath>
 #include <memory>
-#include <numeric>
 
 #include <oneapi/tbb/info.h>
 #include <oneapi/tbb/task_arena.h>
