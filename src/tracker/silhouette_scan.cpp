@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 
 namespace patchscan {
 namespace {
@@ -18,24 +19,53 @@ bool OnBoundary(const Vec2& uv) {
 constexpr double kSearchLeafPx = 2.0;
 constexpr int kSearchMaxDepth = 12;
 
+// What the search needs of the surface at one point of a cell.
+struct SearchPoint {
+  bool front;    // w > 0: in front of the eye (else no screen y)
+  double y;      // screen y
+  double bend;   // |y_uu| + 2 |y_uv| + |y_vv|
+  double slope;  // max(|dp/du|, |dp/dv|) on the screen, pixels per unit of u or v
+};
+
 template <class ShapeT>
-void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, double yScan, double u0,
-                                double v0, double h, int depth, std::vector<Vec2>* found) {
-  double lo = INFINITY, hi = -INFINITY, second = 0.0, size = 0.0;
-  for (const auto& [a, b] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}, {1.0, 1.0}, {0.5, 0.5}}) {
-    ScreenDerivs d;
-    EvaluateScreen(shape, map, u0 + a * h, v0 + b * h, DerivOrder::Second, &d);
-    if (!(d.w > 0.0)) return;  // behind the eye: no screen y
-    if (a != 0.5) lo = std::min(lo, d.p.y()), hi = std::max(hi, d.p.y());
-    second = std::max(second, std::abs(d.d2pdu2.y()) + 2.0 * std::abs(d.d2pduv.y()) + std::abs(d.d2pdv2.y()));
-    size = std::max(size, h * std::max(d.dpdu.head<2>().norm(), d.dpdv.head<2>().norm()));
+SearchPoint EvalSearchPoint(const ShapeT& shape, const ScreenMap& map, double u, double v) {
+  ScreenDerivs d;
+  EvaluateScreen(shape, map, u, v, DerivOrder::Second, &d);
+  return {d.w > 0.0, d.p.y(), std::abs(d.d2pdu2.y()) + 2.0 * std::abs(d.d2pduv.y()) + std::abs(d.d2pdv2.y()),
+          std::max(d.dpdu.head<2>().norm(), d.dpdv.head<2>().norm())};
+}
+
+// One cell [u0, u0 + h] x [v0, v0 + h], its corners (0,0), (1,0), (0,1), (1,1) already
+// evaluated. Its four children share their corners with it and with each other (the
+// cell's corners, centre and edge midpoints), so each split evaluates the four midpoints
+// and each cell its centre. Cell coordinates are multiples of 2^-13 (kSearchMaxDepth),
+// exact in double, so a shared point is the very point each child would evaluate.
+template <class ShapeT>
+void FindCrossingsInCell(const ShapeT& shape, const ScreenMap& map, double yScan, double u0, double v0, double h,
+                         int depth, const std::array<SearchPoint, 4>& corner, std::vector<Vec2>* found) {
+  const SearchPoint centre = EvalSearchPoint(shape, map, u0 + 0.5 * h, v0 + 0.5 * h);
+  double lo = INFINITY, hi = -INFINITY, second = 0.0, slope = 0.0;
+  for (int k = 0; k < 5; ++k) {
+    const SearchPoint& c = k < 4 ? corner[static_cast<std::size_t>(k)] : centre;
+    if (!c.front) return;  // behind the eye: no screen y
+    if (k < 4) lo = std::min(lo, c.y), hi = std::max(hi, c.y);
+    second = std::max(second, c.bend);
+    slope = std::max(slope, c.slope);
   }
+  const double size = h * slope;
   const double margin = 2.0 * h * h / 8.0 * second;
   if (!std::isfinite(lo) || yScan < lo - margin || yScan > hi + margin) return;
   if (size > kSearchLeafPx && depth < kSearchMaxDepth) {
     const double g = 0.5 * h;
-    for (const auto& [a, b] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}, {1.0, 1.0}})
-      FindCrossingsBySubdivision(shape, map, yScan, u0 + a * g, v0 + b * g, g, depth + 1, found);
+    // The 3 x 3 grid of the children's corners, (i, j) at (u0 + i g, v0 + j g).
+    std::array<SearchPoint, 9> grid;
+    auto at = [&](int i, int j) -> SearchPoint& { return grid[static_cast<std::size_t>(3 * j + i)]; };
+    at(0, 0) = corner[0], at(2, 0) = corner[1], at(0, 2) = corner[2], at(2, 2) = corner[3], at(1, 1) = centre;
+    for (const auto& [i, j] : {std::pair{1, 0}, {0, 1}, {2, 1}, {1, 2}})
+      at(i, j) = EvalSearchPoint(shape, map, u0 + i * g, v0 + j * g);
+    for (const auto& [a, b] : {std::pair{0, 0}, {1, 0}, {0, 1}, {1, 1}})
+      FindCrossingsInCell(shape, map, yScan, u0 + a * g, v0 + b * g, g, depth + 1,
+                          {at(a, b), at(a + 1, b), at(a, b + 1), at(a + 1, b + 1)}, found);
     return;
   }
   const auto r = SolveNewton2(
@@ -54,6 +84,14 @@ void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, doubl
   for (const Vec2& q : *found)
     if ((q - r.uv).norm() < kSameTrackerUv) return;
   found->push_back(r.uv);
+}
+
+template <class ShapeT>
+void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, double yScan, std::vector<Vec2>* found) {
+  FindCrossingsInCell(shape, map, yScan, 0.0, 0.0, 1.0, 0,
+                      {EvalSearchPoint(shape, map, 0.0, 0.0), EvalSearchPoint(shape, map, 1.0, 0.0),
+                       EvalSearchPoint(shape, map, 0.0, 1.0), EvalSearchPoint(shape, map, 1.0, 1.0)},
+                      found);
 }
 
 // Convergence in y: as for the edge trackers.
@@ -180,7 +218,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     ++counters_[Counter::RepairSearches];
     ++events_;
     searchFound_.clear();
-    FindCrossingsBySubdivision(shape, map_, yScan, 0.0, 0.0, 1.0, 0, &searchFound_);
+    FindCrossingsBySubdivision(shape, map_, yScan, &searchFound_);
     for (const Vec2& uv : searchFound_) {
       bool tracked = false;
       for (const SilhouetteTracker& t : trackers_) tracked = tracked || (t.uv - uv).norm() < kSameTrackerUv;
@@ -216,7 +254,7 @@ void SilhouetteScan::Advance(double yScan, const EdgeScan& edges) {
 
 std::vector<Vec2> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan) {
   std::vector<Vec2> found;
-  VisitShape(s, [&](const auto& shape) { FindCrossingsBySubdivision(shape, map, yScan, 0.0, 0.0, 1.0, 0, &found); });
+  VisitShape(s, [&](const auto& shape) { FindCrossingsBySubdivision(shape, map, yScan, &found); });
   return found;
 }
 
