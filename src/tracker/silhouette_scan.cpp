@@ -11,6 +11,12 @@ bool OnBoundary(const Vec2& uv) {
   return uv.x() <= 0.0 || uv.x() >= 1.0 || uv.y() <= 0.0 || uv.y() >= 1.0;
 }
 
+// The boundary edges a point lies on, one bit each (u = 0, u = 1, v = 0, v = 1).
+unsigned BoundarySides(const Vec2& uv) {
+  return (uv.x() <= 0.0 ? 1u : 0u) | (uv.x() >= 1.0 ? 2u : 0u) | (uv.y() <= 0.0 ? 4u : 0u) |
+         (uv.y() >= 1.0 ? 8u : 0u);
+}
+
 // The repair search: cells of the domain are split while the scan line can cross them
 // (the cell's y range, from its corners grown by the second-order deviation of y from
 // their interpolation, h^2/8 max|y''| doubled for safety, holds yScan); a cell under
@@ -132,6 +138,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   // Step 1: move the existing trackers; a failure is a minimum or an exit (§3.2.3).
   deaths_.clear();
   births_.clear();
+  exits_.clear();
   bool search = false;  // an event no tracker explains: look for the crossings again
   std::erase_if(trackers_, [&](SilhouetteTracker& t) {
     const Vec2 start = extrapolate_ ? ExtrapolatedStart(t.uv, t.uvPrev, t.uvPrev2, t.nSolved,
@@ -145,8 +152,11 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
       ++events_;
       deaths_.push_back(t.uv);
       // A death inside the domain is a minimum of the curve, or a lost tracker: only a
-      // search can tell.
-      if (!OnBoundary(uv)) search = true;
+      // search can tell. One on the boundary is the curve leaving the patch.
+      if (OnBoundary(uv))
+        exits_.push_back(BoundarySides(uv));
+      else
+        search = true;
       return true;
     }
     t.uvPrev2 = t.uvPrev;
@@ -207,11 +217,19 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   // Step 3: folds: J changed sign at a boundary-edge tracker (§3.2.2.3).
   // The crossing may have run well inside since it crossed the edge: when Newton from
   // the edge point fails, start again a quarter and half way towards the domain's centre.
+  // A fold where no crossing is born is explained when a tracker left the patch across the
+  // same edge on this line (J changes sign where the curve leaves as where it enters);
+  // each exit explains one fold. Any other is an event the trackers missed.
   for (const Vec2& uv : edges.Folds()) {
     bool born = false;
     for (double towards : {0.0, 0.25, 0.5})
       if ((born = add(uv + towards * (Vec2(0.5, 0.5) - uv), Counter::SilhouettesBornAtFolds))) break;
-    if (!born) search = true;
+    if (born) continue;
+    const auto exit = std::find_if(exits_.begin(), exits_.end(), [&](unsigned sides) { return (sides & BoundarySides(uv)) != 0; });
+    if (exit != exits_.end())
+      *exit = 0;  // used
+    else
+      search = true;
   }
   // Step 3b: repair by subdivision (when an event is not explained by the trackers).
   if (search) {

@@ -88,6 +88,7 @@ class SilhouetteScan {
   bool extrapolate_;
   std::vector<SilhouetteTracker> trackers_;
   std::vector<Vec2> births_, deaths_, searchFound_;
+  std::vector<unsigned> exits_;  // the latest Advance's trackers that left: their boundary edges
   Counters& counters_;
   long events_ = 0;
 };

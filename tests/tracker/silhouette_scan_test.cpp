@@ -82,6 +82,20 @@ TEST(SilhouetteScan, TorusWithSaddlesAndAnInnerSilhouette) {
   EXPECT_EQ(st[Counter::SilhouettesBornAtMaxima], 2);
 }
 
+TEST(SilhouetteScan, ACurveLeavingAcrossAnEdgeNeedsNoSearch) {
+  // A tilted cylinder: its two silhouette rulings enter across one end (folds: trackers
+  // born there) and leave across the other, where J changes sign on that end's edge
+  // trackers too. A fold where a tracker left across the same edge is explained: no
+  // subdivision search runs (one did for every exit, the most costly step of the scan).
+  Surface cylinder{Cylinder(1, -1, 1, 360), Affine3(Eigen::AngleAxisd(0.6, Vec3::UnitX()))};
+  cylinder.worldFromObject.prerotate(Eigen::AngleAxisd(0.35, Vec3::UnitZ()));
+  Counters st;
+  ExpectTracksMatch(cylinder, View(Vec3(0.5, -6, 1.0)), "cylinder", &st);
+  EXPECT_GE(st[Counter::SilhouettesBornAtFolds], 2);
+  EXPECT_GE(st[Counter::SilhouettesDied], 2);
+  EXPECT_EQ(st[Counter::RepairSearches], 0);
+}
+
 TEST(SilhouetteScan, RepairSearchFindsWhatManyStartsFind) {
   // The subdivision search of the repairs against the many-start solve, row by row.
   Surface torus{Torus(1.5, 0.5, 0, 360, 360), Affine3(Eigen::AngleAxisd(0.4, Vec3::UnitZ()))};
