@@ -93,6 +93,8 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(Theta, ThetaLineRepairs, "theta_line_repairs", "quiet lines crawled afresh (a chain could not be advanced)", "lines", Sum) \
   X(Slabs, SlabIntervals, "slab_intervals", "intervals between two lines taken as slabs", "intervals", Max)        \
   X(Slabs, RowIntervals, "row_intervals", "intervals taken row by row", "intervals", Max)                          \
+  X(Slabs, EventIntervals, "event_intervals", "of those, with an event of the Y scan (no line walked)", "intervals", Max) \
+  X(Slabs, SlabLines, "slab_lines", "surface lines whose chains were walked or advanced", "lines", Sum)            \
   X(Slabs, SlabTriangles, "slab_triangles", "slab triangles made", "triangles", Sum)                               \
   X(BackEnd, Triangles, "triangles", "triangles (n)", "triangles", Sum)                                            \
   X(BackEnd, TrianglesSetUp, "triangles_set_up", "triangles set up", "triangles", Sum)                              \

@@ -498,15 +498,16 @@ class Band final : public DirectScanSource {
   // Scans sample row j (a failed process: nothing) and sends each owner its part.
   void ScanOne(int j) {
     const double y = layout_.y0 + j * layout_.dy;
-    // Step 1: a θ slab interval begins every slabRows rows; every process votes, process
-    // 0 counts the votes.
-    bool slab = true, localInterval = false;
+    // Step 1: a θ slab interval begins every slabRows rows; every process votes on whether
+    // its surfaces have no event in it, and then on whether they allow a slab; process 0
+    // counts the votes.
+    bool quiet = true, slab = true, localInterval = false;
     encoder_->Begin(j);
     bool ok = true;
     if (why_.empty() && j == failAt_) Fail("a fault injected at row " + std::to_string(j));
     if (why_.empty()) {
       try {
-        localInterval = local_->PrepareRow(y, columns_, &slab);
+        localInterval = local_->PrepareRow(y, columns_, &quiet);
       } catch (const std::exception& e) {
         Fail(e.what());
       }
@@ -515,7 +516,18 @@ class Band final : public DirectScanSource {
     const bool interval =
         why_.empty() ? localInterval : options_.thetaSteps > 0 && options_.slabRows > 0 && j >= intervalEnd_;
     if (interval) intervalEnd_ = j + options_.slabRows;
-    if (interval) slab = Vote(slab && why_.empty());
+    if (interval) {
+      quiet = Vote(quiet && why_.empty());
+      if (why_.empty()) {
+        try {
+          local_->PairRow(quiet, columns_, &slab);
+        } catch (const std::exception& e) {
+          Fail(e.what());
+        }
+      }
+      // With an event nobody pairs chains: the verdict is known without a vote.
+      slab = quiet && Vote(slab && why_.empty());
+    }
     if (why_.empty()) {
       try {
         ok = local_->FinishRow(slab, y, columns_, *encoder_);

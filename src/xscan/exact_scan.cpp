@@ -20,6 +20,10 @@ struct ExactScan::Active {
   // and when it is taken row by row each row's chains.
   ChainSet line, next;
   bool lineBroken = false, nextBroken = false;
+  // Whether those lines were walked (an interval taken row by row walks neither), and
+  // the trackers on a top line not walked yet.
+  bool lineWalked = false, nextWalked = false;
+  RowTrackers topTrackers;
   std::vector<RowTrackers> rowTrackers;
   std::vector<ChainSet> rows;
   std::vector<ChainPair> pairs;
@@ -204,6 +208,14 @@ bool ExactScan::BeginsInterval(double y, const raster::SampleColumns& columns) c
   return j < intervalStart_ || j >= intervalEnd_;
 }
 
+void ExactScan::WalkLine(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
+                         raster::FragmentRow& out, ChainSet* set, bool* broken) {
+  ++counters_[Counter::SlabLines];
+  set->Clear();
+  WalkSurface(a, y, t, columns, out, [&](std::span<const ThetaVertex> chain, bool closed) { set->Add(chain, closed); });
+  *broken = WalkBroken();
+}
+
 bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   const long j = RowIndex(y, columns);
   const int m = options_.slabRows;
@@ -219,21 +231,19 @@ bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
     return active_.size();
   }();
   UpdateActive(yTop, yBottom, dy);
-  auto walkLine = [&](Active& a, double y, ChainSet* set, bool* broken) {
-    set->Clear();
-    WalkSurface(a, y, a.scan->Trackers(), columns, out,
-                [&](std::span<const ThetaVertex> chain, bool closed) { set->Add(chain, closed); });
-    *broken = WalkBroken();
-  };
   for (std::size_t k = firstNew; k < active_.size(); ++k) {
-    AdvanceTo(*active_[k], yTop);
-    walkLine(*active_[k], yTop, &active_[k]->line, &active_[k]->lineBroken);
+    Active& a = *active_[k];
+    AdvanceTo(a, yTop);
+    WalkLine(a, yTop, a.scan->Trackers(), columns, out, &a.line, &a.lineBroken);
+    a.lineWalked = true;
   }
-  // The trackers on every sample row of the interval and on its bottom line, and the
-  // chains there; a slab wants no event of the Y scan between the lines.
-  bool slab = true;
+  // The trackers on every sample row of the interval and on its bottom line; a slab wants
+  // no event of the Y scan between the lines. A top line not walked (the interval above
+  // was taken row by row) keeps its trackers, for the second phase.
+  bool quiet = true;
   for (const auto& ap : active_) {
     Active& a = *ap;
+    if (!a.lineWalked) a.topTrackers = a.scan->Trackers();
     const long events = a.scan->Events();
     a.rowTrackers.resize(static_cast<std::size_t>(m));
     for (int r = 0; r < m; ++r) {
@@ -243,25 +253,52 @@ bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
     AdvanceTo(a, yBottom);
     // A trimmed surface's chains end on trim crossings the θ trackers do not advance, and
     // slabs would cut its trim curves by chords: taken row by row.
-    bool quiet = !a.lineBroken && a.scan->Events() == events && !a.scan->Trim();
+    bool calm = a.scan->Events() == events && !a.scan->Trim();
     for (const ScreenStationary& st : a.scan->StationaryOnScreen())
-      if (st.p.y() > yTop && st.p.y() <= yBottom) quiet = false;
+      if (st.p.y() > yTop && st.p.y() <= yBottom) calm = false;
     // A degenerate level set (a cone point, a pole, an edge seen edge-on) changes the
     // sections as an event does, and near it they bend as sharply as the line is close to
     // it: slabs zipped to such chains made slivers whose normals blend both sides of a cone
     // point (dark pixels on the rows beside it). Rows within kDegenerateSlabPx of one are
     // sampled one by one.
     for (const auto& [lo, hi] : a.scan->DegenerateRanges())
-      if (hi + kDegenerateSlabPx >= yTop && lo - kDegenerateSlabPx <= yBottom) quiet = false;
+      if (hi + kDegenerateSlabPx >= yTop && lo - kDegenerateSlabPx <= yBottom) calm = false;
+    quiet = quiet && calm;
+  }
+  return quiet;
+}
+
+bool ExactScan::PairInterval(bool quiet, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  // Some surface has an event: the interval goes row by row, and its lines are not walked
+  // (the next interval walks its top line only if it may be a slab).
+  if (!quiet) {
+    ++counters_[Counter::EventIntervals];
+    for (const auto& ap : active_) ap->nextWalked = false;
+    return false;
+  }
+  const double dy = columns.dx;
+  const double yTop = columns.x0 + (static_cast<double>(intervalStart_) - 0.5) * dy;
+  const double yBottom = yTop + options_.slabRows * dy;
+  bool slab = true;
+  for (const auto& ap : active_) {
+    Active& a = *ap;
+    if (!a.lineWalked) {
+      WalkLine(a, yTop, a.topTrackers, columns, out, &a.line, &a.lineBroken);
+      a.lineWalked = true;
+    }
+    a.nextWalked = true;
     // Between lines with no event the chains of the top line are advanced as θ trackers
-    // (§4.1); a chain that cannot be, or any event, has the bottom line crawled afresh.
-    if (quiet && AdvanceSurface(a, yBottom, columns)) {
+    // (§4.1); a chain that cannot be, or a broken top line, has the bottom line crawled
+    // afresh.
+    const bool advance = !a.lineBroken;
+    if (advance && AdvanceSurface(a, yBottom, columns)) {
+      ++counters_[Counter::SlabLines];
       a.nextBroken = WalkBroken();
     } else {
-      if (quiet) ++counters_[Counter::ThetaLineRepairs];
-      walkLine(a, yBottom, &a.next, &a.nextBroken);
+      if (advance) ++counters_[Counter::ThetaLineRepairs];
+      WalkLine(a, yBottom, a.scan->Trackers(), columns, out, &a.next, &a.nextBroken);
     }
-    slab = slab && quiet && !a.nextBroken && PairChains(a.line, a.next, &a.pairs, &a.ordered);
+    slab = slab && advance && !a.nextBroken && PairChains(a.line, a.next, &a.pairs, &a.ordered);
   }
   return slab;
 }
@@ -302,12 +339,14 @@ void ExactScan::FinishInterval(bool slab, const raster::SampleColumns& columns, 
   for (const auto& ap : active_) {
     std::swap(ap->line, ap->next);
     ap->lineBroken = ap->nextBroken;
+    ap->lineWalked = ap->nextWalked;
   }
 }
 
 bool ExactScan::ScanRowSlabs(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   const long j = RowIndex(y, columns);
-  if (BeginsInterval(y, columns)) FinishInterval(PrepareInterval(y, columns, out), columns, out);
+  if (BeginsInterval(y, columns))
+    FinishInterval(PairInterval(PrepareInterval(y, columns, out), columns, out), columns, out);
   if (!byRows_) return true;
   auto emit = [&](int column, const raster::Fragment& f) {
     ++counters_[Counter::Fragments];

@@ -65,14 +65,19 @@ class ExactScan final : public raster::FragmentSource {
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 
   // θ slabs shared with other scans of the same rows (a partition of one scene's surfaces:
-  // PartitionedScan): whether sample row y begins an interval of slabRows rows; the
-  // interval's first phase (trackers and chains advanced to its lines: whether this scan's
-  // surfaces allow a slab), and its second, given whether every scan's surfaces do. A slab
-  // needs all surfaces' agreement (shared boundaries stay watertight), and ScanRow does
-  // both phases itself when the scan is alone.
+  // PartitionedScan): whether sample row y begins an interval of slabRows rows, and the
+  // interval in three phases, each given the verdict of every scan's answers to the one
+  // before. PrepareInterval advances the trackers through the interval: whether this
+  // scan's surfaces have no event there. PairInterval, given whether no surface has one,
+  // walks and pairs the chains of the interval's lines (only then: an interval with an
+  // event goes row by row, and the lines' chains would go unused): whether this scan's
+  // surfaces allow a slab. FinishInterval, given whether all do, makes the slabs or the
+  // rows' chains. A slab needs all surfaces' agreement (shared boundaries stay
+  // watertight), and ScanRow takes the phases itself when the scan is alone.
   bool SlabMode() const { return options_.thetaSteps > 0 && options_.slabRows > 0; }
   bool BeginsInterval(double y, const raster::SampleColumns& columns) const;
   bool PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  bool PairInterval(bool quiet, const raster::SampleColumns& columns, raster::FragmentRow& out);
   void FinishInterval(bool slab, const raster::SampleColumns& columns, raster::FragmentRow& out);
 
   // Marks every tracker position and event on `trace` from the next row on (null: none).
@@ -97,6 +102,10 @@ class ExactScan final : public raster::FragmentSource {
   template <class Take>
   void WalkSurface(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
                    raster::FragmentRow& out, Take&& take);
+  // θ slabs: a surface's chains on line y, from its trackers `t` there, into *set, and
+  // whether the walk failed or repaired a tracker miss.
+  void WalkLine(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
+                raster::FragmentRow& out, ChainSet* set, bool* broken);
   // θ slabs: the chains of a surface's last line advanced to line y (its trackers there
   // advanced already) as θ trackers into a.next; false if the line must be crawled afresh.
   bool AdvanceSurface(Active& a, double y, const raster::SampleColumns& columns);

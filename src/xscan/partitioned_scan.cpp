@@ -175,7 +175,7 @@ struct PartitionedScan::Worker {
       : scan(surfaces, camera, options, std::move(share)), buffer(rank) {}
   ExactScan scan;
   RowBuffer buffer;
-  bool slab = false;  // this worker's vote for the current θ slab interval
+  bool vote = false;  // this worker's answer to the current θ slab interval's phase
   bool ok = true;     // its last ScanRow's answer
   double seconds = 0.0;  // spent scanning
 };
@@ -307,23 +307,39 @@ bool PartitionedScan::Composite(double y, const raster::SampleColumns& columns, 
     workers_.front()->seconds += Now() - t0;
     return ok;
   }
-  bool vote = true;
-  PrepareRow(y, columns, &vote);
-  return FinishRow(vote, y, columns, out);
+  bool quiet = true, slab = true;
+  PrepareRow(y, columns, &quiet);
+  PairRow(quiet, columns, &slab);
+  return FinishRow(slab, y, columns, out);
 }
 
-bool PartitionedScan::PrepareRow(double y, const raster::SampleColumns& columns, bool* vote) {
-  // Step 1: a θ slab interval beginning here is a slab only if every worker's surfaces
-  // allow it; the workers vote, then all take the verdict.
+bool PartitionedScan::PrepareRow(double y, const raster::SampleColumns& columns, bool* quiet) {
+  // Step 1: a θ slab interval beginning here is a slab only if no worker's surfaces have
+  // an event in it and every worker's chains pair up: the workers vote twice, each time
+  // all taking the verdict.
   ExactScan& first = workers_.front()->scan;
   interval_ = first.SlabMode() && first.BeginsInterval(y, columns);
   ForEachWorker([&](Worker& w) {
     w.buffer.Clear();
-    if (interval_) w.slab = w.scan.PrepareInterval(y, columns, w.buffer);
+    if (interval_) w.vote = w.scan.PrepareInterval(y, columns, w.buffer);
   });
-  *vote = true;
-  for (const auto& w : workers_) *vote = *vote && w->slab;
+  *quiet = true;
+  for (const auto& w : workers_) *quiet = *quiet && w->vote;
   return interval_;
+}
+
+void PartitionedScan::PairRow(bool quiet, const raster::SampleColumns& columns, bool* slab) {
+  *slab = false;
+  if (!interval_) return;
+  // Without an event the lines' chains are walked and paired (in parallel); with one there
+  // is nothing to walk.
+  auto pair = [&](Worker& w) { w.vote = w.scan.PairInterval(quiet, columns, w.buffer); };
+  if (quiet)
+    ForEachWorker(pair);
+  else
+    for (auto& w : workers_) pair(*w);
+  *slab = true;
+  for (const auto& w : workers_) *slab = *slab && w->vote;
 }
 
 bool PartitionedScan::FinishRow(bool slab, double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {

@@ -81,12 +81,15 @@ class PartitionedScan final : public DirectScanSource {
   void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) override;
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 
-  // A row in two phases, for scans shared between processes: PrepareRow returns whether
-  // sample row y begins a θ slab interval, and if so sets *vote to whether this scan's
-  // surfaces allow a slab; FinishRow, given the verdict of every scan's votes (ignored when
-  // no interval begins), scans the row and hands it to `out` in scan order. ScanRow is
-  // both, with this scan's own vote.
-  bool PrepareRow(double y, const raster::SampleColumns& columns, bool* vote);
+  // A row in three phases, for scans shared between processes (ExactScan's phases of a θ
+  // slab interval): PrepareRow returns whether sample row y begins an interval, and if so
+  // sets *quiet to whether this scan's surfaces have no event in it; PairRow, given
+  // whether no scan's do, sets *slab to whether this scan's surfaces allow a slab;
+  // FinishRow, given whether every scan's do (ignored when no interval begins), scans the
+  // row and hands it to `out` in scan order. ScanRow is all three, with this scan's own
+  // votes.
+  bool PrepareRow(double y, const raster::SampleColumns& columns, bool* quiet);
+  void PairRow(bool quiet, const raster::SampleColumns& columns, bool* slab);
   bool FinishRow(bool slab, double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
   // The place of surface `id` in the scan order of all surfaces.
   std::uint32_t RankOf(std::uint32_t id) const { return rank_[id]; }

@@ -206,18 +206,20 @@ class LayerCounter final : public raster::FragmentRow {
 // Layers per sample on a lattice `spacing` apart, from exact mode or θ mode with slabs
 // of `slabRows` rows.
 std::vector<int> Layers(std::span<const Surface> surfaces, const Camera& camera, double spacing, int thetaSteps,
-                        int slabRows, Counters* stats) {
+                        int slabRows, Counters* stats, double origin = 0.0) {
   ExactScanOptions o;
   o.thetaSteps = thetaSteps;
   o.slabRows = slabRows;
   ExactScan scan(surfaces, camera, o);
-  const int nx = static_cast<int>(std::lround(camera.width / spacing)) + 1;
-  const int ny = static_cast<int>(std::lround(camera.height / spacing)) + 1;
-  const raster::SampleColumns cols{0.0, spacing, nx};
+  // A lattice from `origin`: (width / spacing + 1) columns from 0, or one per pixel centre.
+  const int extra = origin == 0.0 ? 1 : 0;
+  const int nx = static_cast<int>(std::lround(camera.width / spacing)) + extra;
+  const int ny = static_cast<int>(std::lround(camera.height / spacing)) + extra;
+  const raster::SampleColumns cols{origin, spacing, nx};
   LayerCounter counter(nx, ny);
   for (int j = 0; j < ny; ++j) {
-    counter.BeginRow(j, j * spacing, cols);
-    EXPECT_TRUE(scan.ScanRow(j * spacing, cols, counter));
+    counter.BeginRow(j, origin + j * spacing, cols);
+    EXPECT_TRUE(scan.ScanRow(origin + j * spacing, cols, counter));
     counter.RasterizeRow();
   }
   *stats = scan.Stats();
@@ -314,6 +316,43 @@ TEST(ThetaSlab, WatertightOnTeapotTeacupTeaspoon) {
     const Scene s = Load(file);
     ExpectLayersMatchExact({file, s.surfaces, Framed(s, up, 192), 3}, 0.5, 2);
   }
+}
+
+TEST(ThetaSlab, AnIntervalWithAnEventWalksNoLine) {
+  // An interval where some surface's Y scan has an event goes row by row whatever its
+  // lines' chains are, so the second phase walks none of them; the next interval that may
+  // be a slab walks its top line then. Driven phase by phase as a partition's worker is.
+  const Scene s = Load("teapot.bpt");
+  const Camera camera = Framed(s, Vec3(0, 0, 1), 192);
+  ExactScanOptions o;
+  o.thetaSteps = 16;
+  o.slabRows = 1;
+  ExactScan phased(s.surfaces, camera, o);
+  const raster::SampleColumns cols{0.5, 1.0, camera.width};
+  LayerCounter counter(camera.width, camera.height);
+  long walkedWithEvents = 0;
+  for (int j = 0; j < camera.height; ++j) {
+    const double y = j + 0.5;
+    counter.BeginRow(j, y, cols);
+    if (phased.BeginsInterval(y, cols)) {
+      const bool quiet = phased.PrepareInterval(y, cols, counter);
+      const long before = phased.Stats()[Counter::SlabLines];
+      const bool slab = phased.PairInterval(quiet, cols, counter);
+      if (!quiet) walkedWithEvents += phased.Stats()[Counter::SlabLines] - before;
+      EXPECT_TRUE(quiet || !slab) << "row " << j;
+      phased.FinishInterval(slab, cols, counter);
+    }
+    EXPECT_TRUE(phased.ScanRow(y, cols, counter));
+    counter.RasterizeRow();
+  }
+  const Counters& st = phased.Stats();
+  EXPECT_GT(st[Counter::EventIntervals], 10);
+  EXPECT_EQ(walkedWithEvents, 0);
+  // Slabs after intervals taken row by row: their top lines were walked when needed.
+  EXPECT_GT(st[Counter::SlabIntervals], st[Counter::RowIntervals]);
+  // The same layers as the scan taking its own phases.
+  Counters alone;
+  EXPECT_EQ(counter.Count(), Layers(s.surfaces, camera, 1.0, 16, 1, &alone, 0.5));
 }
 
 }  // namespace
