@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <span>
+#include <utility>
 
 #include <Eigen/Geometry>
 
@@ -36,17 +37,25 @@ struct ThetaFrame {
   std::span<const Vec2> angles;
   // θ of world normal n at world point p, in (-π, π].
   double Theta(const Vec3& p, const Vec3& n) const {
-    const Vec3 r = orthographic ? forward : Vec3((p - eye).normalized());
-    const Vec3 plane = right.cross(r).normalized();
-    const Vec3 side = r.cross(plane);
-    return std::atan2(-n.dot(r), n.dot(side));
+    const Vec3 r = Ray(p);
+    return ThetaOn(r, ScanPlaneNormal(r), n);
   }
   // The angle of unit normal n out of the scan plane at p, in [-π/2, π/2]: what θ does
   // not see.
-  double Tilt(const Vec3& p, const Vec3& n) const {
-    const Vec3 r = orthographic ? forward : Vec3((p - eye).normalized());
-    return std::asin(std::clamp(n.dot(right.cross(r).normalized()), -1.0, 1.0));
+  double Tilt(const Vec3& p, const Vec3& n) const { return TiltOn(ScanPlaneNormal(Ray(p)), n); }
+  // Both at once (the ray and the scan plane found once): {θ, tilt}.
+  std::pair<double, double> Angles(const Vec3& p, const Vec3& n) const {
+    const Vec3 r = Ray(p), plane = ScanPlaneNormal(r);
+    return {ThetaOn(r, plane, n), TiltOn(plane, n)};
   }
+  // The unit view ray to p, and the unit normal of the scan plane through it.
+  Vec3 Ray(const Vec3& p) const { return orthographic ? forward : Vec3((p - eye).normalized()); }
+  Vec3 ScanPlaneNormal(const Vec3& r) const { return right.cross(r).normalized(); }
+  static double ThetaOn(const Vec3& r, const Vec3& plane, const Vec3& n) {
+    const Vec3 side = r.cross(plane);
+    return std::atan2(-n.dot(r), n.dot(side));
+  }
+  static double TiltOn(const Vec3& plane, const Vec3& n) { return std::asin(std::clamp(n.dot(plane), -1.0, 1.0)); }
   const Affine3& World() const {
     static const Affine3 kIdentity = Affine3::Identity();
     return worldFromObject ? *worldFromObject : kIdentity;

@@ -15,12 +15,14 @@ bool ThetaWalker<ShapeT>::Suspicious(const Vertex& A, const Vertex& B, const Ver
   // A tabulated angle strictly between the link's ends (θ is monotone along a link with
   // no turn point), or the tilt turning a table step: a vertex is missing.
   constexpr double kOnAngleRad = 1e-8;
-  const double ta = ThetaOf(a.f), d = Wrap(ThetaOf(b.f) - ta);
+  const auto [ta, tiltA] = frame_.Angles(a.f.position, a.f.normal);
+  const auto [tb, tiltB] = frame_.Angles(b.f.position, b.f.normal);
+  const double d = Wrap(tb - ta);
   if (std::abs(d) > table_ + kOnAngleRad) return true;
   const double lo = std::min(ta, ta + d) + kOnAngleRad, hi = std::max(ta, ta + d) - kOnAngleRad;
   for (double i = std::floor(lo / table_) + 1.0; i * table_ < hi; i += 1.0)
     if (std::abs(std::sin(i * table_)) > 1e-12) return true;  // 0 and π are silhouettes
-  if (std::abs(frame_.Tilt(b.f.position, b.f.normal) - frame_.Tilt(a.f.position, a.f.normal)) >= table_) return true;
+  if (std::abs(tiltB - tiltA) >= table_) return true;
   // A silhouette between two vertices that are none.
   const bool silA = a.kind == ThetaVertex::Kind::Silhouette, silB = b.kind == ThetaVertex::Kind::Silhouette;
   if (!silA && !silB && (a.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(a.f.position - frame_.eye)) > 0.0) !=

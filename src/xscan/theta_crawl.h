@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <tuple>
 #include <vector>
 
 namespace patchscan {
@@ -25,8 +26,8 @@ class ThetaWalker<ShapeT>::Crawler {
     chain_.push_back(w_.MakeVertex(start, make_, closed ? ThetaVertex::Kind::Silhouette : ThetaVertex::Kind::End));
     checked_ = chain_.size();
     p_ = before_ = start;
-    th_ = w_.ThetaOf(chain_.back().f);
-    tilt_ = tiltAtVertex_ = w_.frame_.Tilt(chain_.back().f.position, chain_.back().f.normal);
+    std::tie(th_, tilt_) = w_.frame_.Angles(chain_.back().f.position, chain_.back().f.normal);
+    tiltAtVertex_ = tilt_;
     tiltCount_ = chain_.size();
     // The sense θ last moved in (0: not known); at the start θ's rate along the walk, so
     // that a turn within the first step is seen.
@@ -151,8 +152,9 @@ class ThetaWalker<ShapeT>::Crawler {
   // result, or nothing if the step turned θ too far (halved).
   std::optional<bool> AtExit(const LevelPoint& e) {
     const Vertex ve = w_.MakeVertex(e, make_);
-    const double d = Wrap(w_.ThetaOf(ve.f) - th_);
-    const double dTilt = w_.frame_.Tilt(ve.f.position, ve.f.normal) - tilt_;
+    const auto [the, tilte] = w_.frame_.Angles(ve.f.position, ve.f.normal);
+    const double d = Wrap(the - th_);
+    const double dTilt = tilte - tilt_;
     if (!((std::abs(d) <= w_.table_ && std::abs(dTilt) <= w_.table_) || h_ <= 4.0 * kWalkStepMin)) {
       h_ *= 0.5;
       return std::nullopt;
@@ -194,9 +196,8 @@ class ThetaWalker<ShapeT>::Crawler {
   // if it ends here, else nothing (the next step is tried).
   std::optional<bool> AtStep(const LevelPoint& next) {
     const raster::Fragment fn = make_(next);
-    const double thn = w_.ThetaOf(fn);
+    const auto [thn, tiltNext] = w_.frame_.Angles(fn.position, fn.normal);
     const double d = Wrap(thn - th_);
-    const double tiltNext = w_.frame_.Tilt(fn.position, fn.normal);
     // Steps turn θ, and the normal out of the scan plane, by at most half a table step.
     if ((std::abs(d) > 0.5 * w_.table_ || std::abs(tiltNext - tilt_) > 0.5 * w_.table_) && h_ > 4.0 * kWalkStepMin) {
       h_ *= 0.5;
