@@ -17,8 +17,18 @@ std::size_t CountAnchors(std::span<const ThetaVertex> c) {
 
 raster::RasterVertex SlabVertex(const ThetaVertex& v, double y, bool orthographic) {
   raster::RasterVertex r;
-  const double w = v.f.w;
-  r.h = orthographic ? Vec3(v.x, y, 1.0) : Vec3(v.x * w, y * w, w);
+  double w = v.f.w, x = v.x;
+  // A chain's end on a boundary edge is a vertex of both surfaces sharing that edge, each
+  // from its own tracker: equal to rounding, not bit for bit, and a sample lying on the
+  // edge (a boundary seen exactly vertical, as a symmetric view puts it at a sample column)
+  // fell between the two slabs' edge functions. Rounded to a grid (x to 2^-16 px, depth to
+  // float), both surfaces' vertices are the same numbers, so one slab takes that sample
+  // by the back end's tie rule; the vertex moves by under 1e-5 px.
+  if (v.kind == ThetaVertex::Kind::End) {
+    x = std::round(x * kSlabEndGrid) / kSlabEndGrid;
+    w = static_cast<double>(static_cast<float>(w));
+  }
+  r.h = orthographic ? Vec3(x, y, 1.0) : Vec3(x * w, y * w, w);
   r.position = v.f.position;
   r.normal = v.f.normal;
   r.uv = v.f.uv;

@@ -47,6 +47,8 @@ struct SlabFrame {
   Vec3 eye, forward;  // world
 };
 // A chain vertex on line y as a vertex for the back end (homogeneous screen position).
+// Chain ends (boundary points shared by two surfaces) snap to 1 / kSlabEndGrid px in x.
+constexpr double kSlabEndGrid = 65536.0;
 raster::RasterVertex SlabVertex(const ThetaVertex& v, double y, bool orthographic);
 
 // Anchors of a chain: its first and last vertices and its silhouette vertices, by index.

@@ -288,6 +288,38 @@ TEST(Cli, ExactModeIsTheDefaultAndReportsItsTrackers) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Cli, ThetaSlabsLeaveNoCrackOnASeamSeenExactlyVertical) {
+  // surfaces/nurbs.rib's ground is one NURBS surface of 4 x 4 spans, scanned as 16 patches;
+  // its camera looks straight down the middle, so the seam between the spans at x = 0 is a
+  // vertical line on screen, through a column of samples. Both patches' θ slabs end on it,
+  // each at its own tracker's point (equal to rounding): every sample the exact render
+  // covers there is covered by θ too (before the shared ends were snapped to a grid, 24
+  // pixels of the seam lost one or two of their nine samples).
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_seam";
+  std::filesystem::create_directories(dir);
+  const std::string scene = std::string(PATCHSCAN_SURFACES_DIR) + "/nurbs.rib";
+  const std::string exact = (dir / "exact.png").string(), theta = (dir / "theta.png").string();
+  ASSERT_EQ(Patchscan("render " + scene + " --size 480x360 --mode exact -o " + exact).code, 0);
+  ASSERT_EQ(Patchscan("render " + scene + " --size 480x360 --mode theta -o " + theta).code, 0);
+  const std::vector<float> a = Pixels(exact), b = Pixels(theta);
+  ASSERT_EQ(a.size(), 480u * 360u * 4u);
+  ASSERT_EQ(b.size(), a.size());
+  int cracked = 0, covered = 0;
+  for (int y = 0; y < 360; ++y)
+    for (int x = 236; x < 244; ++x) {
+      const std::size_t k = (static_cast<std::size_t>(y) * 480 + x) * 4 + 3;
+      if (a[k] < 1.0f) continue;
+      ++covered;
+      if (b[k] < 1.0f) {
+        ++cracked;
+        ADD_FAILURE() << "pixel (" << x << ", " << y << "): theta alpha " << b[k];
+      }
+    }
+  EXPECT_GT(covered, 1000);
+  EXPECT_EQ(cracked, 0);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Cli, SameBytesForAnyNumberOfThreads) {
   // --threads N deals the surfaces out to N workers and composites their rows in a fixed
   // order (tests/xscan/partition_test.cpp): the files are the same bytes for every N, in
