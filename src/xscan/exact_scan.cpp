@@ -216,15 +216,22 @@ void ExactScan::WalkLine(Active& a, double y, const RowTrackers& t, const raster
   *broken = WalkBroken();
 }
 
+std::pair<double, double> ExactScan::IntervalLines(const raster::SampleColumns& columns) const {
+  // The lattice is square: sample row j lies at y = x0 + j dy, and the lines half a row
+  // above the interval's first row and below its last.
+  const double dy = columns.dx;
+  const double yTop = columns.x0 + (static_cast<double>(intervalStart_) - 0.5) * dy;
+  return {yTop, yTop + options_.slabRows * dy};
+}
+
 bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   const long j = RowIndex(y, columns);
   const int m = options_.slabRows;
   intervalStart_ = j;
   intervalEnd_ = j + m;
   const double dy = columns.dx;
-  // The lattice is square: sample row j lies at y = x0 + j dy, and the lines half a row
-  // above the interval's first row and below its last.
-  const double yTop = columns.x0 + (static_cast<double>(j) - 0.5) * dy, yBottom = yTop + m * dy;
+  const auto lines = IntervalLines(columns);
+  const double yTop = lines.first, yBottom = lines.second;
   auto rowY = [&](int r) { return columns.x0 + static_cast<double>(j + r) * dy; };
   const std::size_t firstNew = [&] {
     std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yTop; });
@@ -276,9 +283,8 @@ bool ExactScan::PairInterval(bool quiet, const raster::SampleColumns& columns, r
     for (const auto& ap : active_) ap->nextWalked = false;
     return false;
   }
-  const double dy = columns.dx;
-  const double yTop = columns.x0 + (static_cast<double>(intervalStart_) - 0.5) * dy;
-  const double yBottom = yTop + options_.slabRows * dy;
+  const auto lines = IntervalLines(columns);
+  const double yTop = lines.first, yBottom = lines.second;
   bool slab = true;
   for (const auto& ap : active_) {
     Active& a = *ap;
@@ -307,7 +313,8 @@ void ExactScan::FinishInterval(bool slab, const raster::SampleColumns& columns, 
   const long j = intervalStart_;
   const int m = options_.slabRows;
   const double dy = columns.dx;
-  const double yTop = columns.x0 + (static_cast<double>(j) - 0.5) * dy, yBottom = yTop + m * dy;
+  const auto lines = IntervalLines(columns);
+  const double yTop = lines.first, yBottom = lines.second;
   auto rowY = [&](int r) { return columns.x0 + static_cast<double>(j + r) * dy; };
   byRows_ = !slab;
   if (slab) {

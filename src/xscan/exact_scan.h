@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "patch/camera.h"
@@ -102,6 +103,8 @@ class ExactScan final : public raster::FragmentSource {
   template <class Take>
   void WalkSurface(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
                    raster::FragmentRow& out, Take&& take);
+  // θ slabs: the current interval's top and bottom lines.
+  std::pair<double, double> IntervalLines(const raster::SampleColumns& columns) const;
   // θ slabs: a surface's chains on line y, from its trackers `t` there, into *set, and
   // whether the walk failed or repaired a tracker miss.
   void WalkLine(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
