@@ -76,7 +76,7 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(XScan, UntrackedExits, "untracked_exits", "boundary exits found with no edge tracker (repaired)", "points", Sum) \
   X(XScan, TrimCrossings, "trim_crossings", "trim-curve crossings passed by the walks", "points", Sum)         \
   X(XScan, Failures, "failures", "walks or samples given up", "failures", Sum)                                     \
-  X(XScan, Fragments, "fragments", "exact or chord fragments handed to the back end", "fragments", Sum)            \
+  X(XScan, Fragments, "fragments", "exact or chord fragments of the samples covered (made, or skipped as hidden by depth)", "fragments", Sum)            \
   X(Theta, ThetaChains, "theta_chains", "chains crawled", "chains", Sum)                                          \
   X(Theta, ThetaVertices, "theta_vertices", "chain vertices", "vertices", Sum)                                      \
   X(Theta, ThetaSteps, "theta_steps", "crawl steps", "steps", Sum)                                                 \
@@ -91,6 +91,7 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(Theta, ThetaTurnsLost, "theta_turns_lost", "turn trackers lost (the turn pair met)", "trackers", Sum)          \
   X(Theta, ThetaLinkRepairs, "theta_link_repairs", "links repaired sideways (§4.2)", "links", Sum)                 \
   X(Theta, ThetaLineRepairs, "theta_line_repairs", "quiet lines crawled afresh (a chain could not be advanced)", "lines", Sum) \
+  X(Theta, ThetaRowsAdvanced, "theta_rows_advanced", "surface rows whose chains were advanced from the row before", "rows", Sum) \
   X(Slabs, SlabIntervals, "slab_intervals", "intervals between two lines taken as slabs", "intervals", Max)        \
   X(Slabs, RowIntervals, "row_intervals", "intervals taken row by row", "intervals", Max)                          \
   X(Slabs, EventIntervals, "event_intervals", "of those, with an event of the Y scan (no line walked)", "intervals", Max) \

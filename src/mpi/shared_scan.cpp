@@ -311,7 +311,10 @@ class Band final : public DirectScanSource {
   }
 
   // The frame's rows, as the back end announces them (process 0: and the others are told).
-  void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) override {
+  void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
+                 const raster::KeptDepths& kept) override {
+    // Every process's back end keeps the same of each sample (the same settings).
+    local_->KeepDepths(kept, columns.n);
     if (started_) return;
     std::vector<double> go = {0.0, options_.extrapolate ? 1.0 : 0.0, static_cast<double>(options_.thetaSteps),
                               static_cast<double>(options_.slabRows), columns.x0, columns.dx,

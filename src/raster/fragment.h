@@ -46,11 +46,24 @@ struct SampleColumns {
 class FragmentRow {
  public:
   virtual void Add(int column, const Fragment& f) = 0;
+  // Whether Add would drop any fragment at eye distance w on `column` now (outside the
+  // row, nearer than the hither plane, or behind every layer the sample keeps), so that a
+  // front end may skip making it. False when unknown.
+  virtual bool Hidden(int /*column*/, double /*w*/) const { return false; }
   virtual void AddTriangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
                            std::uint32_t surfaceId) = 0;
 
  protected:
   ~FragmentRow() = default;
+};
+
+// What the back end keeps of a sample whatever the fragment (a front end may drop the rest
+// before handing them over): its `layers` nearest fragments at eye distance `hither` or
+// more. layers 0: unknown (some fragments are dropped for their side, so depth alone does
+// not tell), keep everything.
+struct KeptDepths {
+  double hither = 0.0;
+  int layers = 0;
 };
 
 // Produces, row by row from the top, every fragment of every surface at the samples of
@@ -59,8 +72,10 @@ class FragmentSource {
  public:
   virtual ~FragmentSource() = default;
   // Called once before the first row: the rows will be y0 + k dy for k in [0, nRows), each
-  // with `columns`. A source may scan ahead on that knowledge; the default does nothing.
-  virtual void BeginRows(const SampleColumns& /*columns*/, double /*y0*/, double /*dy*/, int /*nRows*/) {}
+  // with `columns`, and the back end will keep `kept` of each sample. A source may scan
+  // ahead on that knowledge; the default does nothing.
+  virtual void BeginRows(const SampleColumns& /*columns*/, double /*y0*/, double /*dy*/, int /*nRows*/,
+                         const KeptDepths& /*kept*/) {}
   // Sample rows come in increasing y. Returns false to stop the render (an error the
   // source reports itself).
   virtual bool ScanRow(double y, const SampleColumns& columns, FragmentRow& out) = 0;

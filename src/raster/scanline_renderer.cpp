@@ -145,6 +145,11 @@ class FragmentGeometry final : public FragmentRow {
       pool_->push_back(f);
   }
 
+  bool Hidden(int column, double w) const override {
+    return column < 0 || column >= lat_.nx || !(w >= s_.hither) ||
+           !(1.0 / w > row_[static_cast<size_t>(column) * layers_ + static_cast<size_t>(layers_ - 1)].invW);
+  }
+
   void AddTriangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
                    std::uint32_t surfaceId) override {
     ++stats_[Counter::Triangles];
@@ -502,7 +507,11 @@ std::optional<Counters> RenderFragments(FragmentSource& source, const RenderSett
   const Lattice lat(s);
   const int layers = s.AnyTransparency() ? kMaxLayers : 1;
   FragmentGeometry geo(source, s, lat, layers, stats);
-  source.BeginRows(SampleColumns{lat.offset, lat.spacing, lat.nx}, lat.At(0), lat.spacing, lat.ny);
+  // Depth alone decides what is kept unless some fragments are dropped for their side.
+  bool sided = s.cullBackFaces || !s.material.twoSided;
+  for (const Material& m : s.materials) sided = sided || !m.twoSided;
+  source.BeginRows(SampleColumns{lat.offset, lat.spacing, lat.nx}, lat.At(0), lat.spacing, lat.ny,
+                   KeptDepths{s.hither, sided ? 0 : layers});
   return RenderRows(geo, s, lat, layers, stats, sink);
 }
 

@@ -17,8 +17,10 @@ struct ExactScan::Active {
   std::size_t nextStationary = 0;  // for the trace: the next stationary point to pass
   // θ slabs: the chains on the interval's top line and on its bottom line (whether a walk
   // there failed or repaired a tracker miss), the trackers on each of its sample rows,
-  // and when it is taken row by row each row's chains.
+  // and when it is taken row by row each row's chains. θ rows: the chains of the row
+  // before (line, at lineY) and of this row (next).
   ChainSet line, next;
+  double lineY = 0.0;
   bool lineBroken = false, nextBroken = false;
   // Whether those lines were walked (an interval taken row by row walks neither), and
   // the trackers on a top line not walked yet.
@@ -168,6 +170,7 @@ void ExactScan::WalkSurface(Active& a, double y, const RowTrackers& t, const ras
       walker.SetTrim(a.scan->Trim(), &trimScratch_);
       walker.WalkAll(t, &edgeUsed_, &silUsed_, [&](int column, const LevelPoint& p) {
         ++counters_[Counter::Fragments];
+        if (out.Hidden(column, p.w)) return;  // not worth its normal and texture coordinates
         out.Add(column, FragmentAt(p, surface, a.scan->NormalFromObject(), static_cast<std::uint32_t>(a.index)));
       });
     });
@@ -190,16 +193,52 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
   if (options_.thetaSteps > 0 && options_.slabRows > 0) return ScanRowSlabs(y, columns, out);
   UpdateActive(y, y, columns.dx);
 
-  auto emit = [&](int column, const raster::Fragment& f) {
-    ++counters_[Counter::Fragments];
-    out.Add(column, f);
-  };
+  auto emit = [&](int column, const raster::Fragment& f) { out.Add(column, f); };
   for (const auto& ap : active_) {
-    AdvanceTo(*ap, y);
-    WalkSurface(*ap, y, ap->scan->Trackers(), columns, out, [&](std::span<const ThetaVertex> chain, bool) {
-      EmitThetaChain(chain, columns, camera_.orthographic, emit);
-    });
+    Active& a = *ap;
+    const long events = a.scan->Events();
+    AdvanceTo(a, y);
+    if (options_.thetaSteps == 0) {
+      WalkSurface(a, y, a.scan->Trackers(), columns, out, [](std::span<const ThetaVertex>, bool) {});
+      continue;
+    }
+    // θ rows: between two rows with no event of the Y scan the chains of the row before
+    // are advanced as θ trackers (§4.1), as slab lines are; a surface's first row, a row
+    // after an event and a chain that cannot be advanced are crawled afresh. Each surface
+    // decides alone (its chains are its own), so a partition of the scene changes nothing.
+    bool advanced = false;
+    if (a.lineWalked && !a.lineBroken && Calm(a, events, a.lineY, y)) {
+      advanced = AdvanceSurface(a, y, columns) && !WalkBroken();
+      ++counters_[advanced ? Counter::ThetaRowsAdvanced : Counter::ThetaLineRepairs];
+    }
+    if (!advanced) {
+      a.next.Clear();
+      WalkSurface(a, y, a.scan->Trackers(), columns, out,
+                  [&](std::span<const ThetaVertex> chain, bool closed) { a.next.Add(chain, closed); });
+    }
+    for (const ChainSet::Chain& c : a.next.chains)
+      counters_[Counter::Fragments] += EmitThetaChain(a.next.Of(c), columns, camera_.orthographic, out, emit);
+    std::swap(a.line, a.next);
+    a.lineBroken = !advanced && WalkBroken();
+    a.lineWalked = true;
+    a.lineY = y;
   }
+  return true;
+}
+
+bool ExactScan::Calm(const Active& a, long eventsBefore, double yTop, double yBottom) const {
+  // A trimmed surface's chains end on trim crossings the θ trackers do not advance (and
+  // slabs would cut its trim curves by chords).
+  if (a.scan->Events() != eventsBefore || a.scan->Trim()) return false;
+  for (const ScreenStationary& st : a.scan->StationaryOnScreen())
+    if (st.p.y() > yTop && st.p.y() <= yBottom) return false;
+  // A degenerate level set (a cone point, a pole, an edge seen edge-on) changes the
+  // sections as an event does, and near it they bend as sharply as the line is close to
+  // it: slabs zipped to such chains made slivers whose normals blend both sides of a cone
+  // point (dark pixels on the rows beside it). Lines within kDegenerateSlabPx of one are
+  // crawled afresh and their rows sampled one by one.
+  for (const auto& [lo, hi] : a.scan->DegenerateRanges())
+    if (hi + kDegenerateSlabPx >= yTop && lo - kDegenerateSlabPx <= yBottom) return false;
   return true;
 }
 
@@ -258,19 +297,7 @@ bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
       a.rowTrackers[static_cast<std::size_t>(r)] = a.scan->Trackers();
     }
     AdvanceTo(a, yBottom);
-    // A trimmed surface's chains end on trim crossings the θ trackers do not advance, and
-    // slabs would cut its trim curves by chords: taken row by row.
-    bool calm = a.scan->Events() == events && !a.scan->Trim();
-    for (const ScreenStationary& st : a.scan->StationaryOnScreen())
-      if (st.p.y() > yTop && st.p.y() <= yBottom) calm = false;
-    // A degenerate level set (a cone point, a pole, an edge seen edge-on) changes the
-    // sections as an event does, and near it they bend as sharply as the line is close to
-    // it: slabs zipped to such chains made slivers whose normals blend both sides of a cone
-    // point (dark pixels on the rows beside it). Rows within kDegenerateSlabPx of one are
-    // sampled one by one.
-    for (const auto& [lo, hi] : a.scan->DegenerateRanges())
-      if (hi + kDegenerateSlabPx >= yTop && lo - kDegenerateSlabPx <= yBottom) calm = false;
-    quiet = quiet && calm;
+    quiet = quiet && Calm(a, events, yTop, yBottom);
   }
   return quiet;
 }
@@ -355,14 +382,12 @@ bool ExactScan::ScanRowSlabs(double y, const raster::SampleColumns& columns, ras
   if (BeginsInterval(y, columns))
     FinishInterval(PairInterval(PrepareInterval(y, columns, out), columns, out), columns, out);
   if (!byRows_) return true;
-  auto emit = [&](int column, const raster::Fragment& f) {
-    ++counters_[Counter::Fragments];
-    out.Add(column, f);
-  };
+  auto emit = [&](int column, const raster::Fragment& f) { out.Add(column, f); };
   const auto r = static_cast<std::size_t>(j - intervalStart_);
   for (const auto& ap : active_)
     if (r < ap->rows.size())
-      for (const ChainSet::Chain& c : ap->rows[r].chains) EmitThetaChain(ap->rows[r].Of(c), columns, camera_.orthographic, emit);
+      for (const ChainSet::Chain& c : ap->rows[r].chains)
+        counters_[Counter::Fragments] += EmitThetaChain(ap->rows[r].Of(c), columns, camera_.orthographic, out, emit);
   return true;
 }
 

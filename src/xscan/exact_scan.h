@@ -117,6 +117,10 @@ class ExactScan final : public raster::FragmentSource {
   void VisitTheta(Active& a, double y, const raster::SampleColumns& columns, F&& f);
   // After a surface's X scan: silhouettes found without a tracker are adopted; the trace.
   void FinishWalk(Active& a);
+  // Whether a surface's sections keep their shape from line yTop to line yBottom, its
+  // trackers advanced there from a count of eventsBefore events: no event of the Y scan,
+  // stationary point or degenerate level set between them, and no trim.
+  bool Calm(const Active& a, long eventsBefore, double yTop, double yBottom) const;
   // Whether the last X scan of a surface gave up or repaired a tracker miss.
   bool WalkBroken() const { return !walkEvents_.failures.empty() || !walkEvents_.repairs.empty(); }
   // The sample row index of line y.

@@ -51,6 +51,40 @@ namespace {
 
 double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
+// What the back end will keep of a row's samples by depth (raster::KeptDepths), followed
+// as fragments arrive in the order the back end will take them: a fragment it would drop
+// (behind the `layers` nearest of those before it, or nearer than the hither plane) is
+// dropped here already. Dropping from the fragments of some surfaces only is safe: what
+// hides a fragment among them hides it among all, and merging keeps their order.
+class DepthFilter {
+ public:
+  void Reset(const raster::KeptDepths& kept, int columns) {
+    kept_ = kept;
+    columns_ = columns;
+    invW_.assign(static_cast<std::size_t>(kept.layers > 0 ? columns * kept.layers : 0), 0.0);
+  }
+  void ClearRow() { std::fill(invW_.begin(), invW_.end(), 0.0); }
+  bool Hidden(int column, double w) const {
+    if (kept_.layers == 0) return false;
+    return column < 0 || column >= columns_ || !(w >= kept_.hither) ||
+           !(1.0 / w > invW_[static_cast<std::size_t>(column * kept_.layers + kept_.layers - 1)]);
+  }
+  // Takes a fragment not Hidden: its depth joins the sample's nearest.
+  void Keep(int column, double w) {
+    if (kept_.layers == 0) return;
+    double* keep = invW_.data() + static_cast<std::ptrdiff_t>(column) * kept_.layers;
+    const double invW = 1.0 / w;
+    int at = kept_.layers - 1;
+    for (; at > 0 && invW > keep[at - 1]; --at) keep[at] = keep[at - 1];
+    keep[at] = invW;
+  }
+
+ private:
+  raster::KeptDepths kept_;
+  int columns_ = 0;
+  std::vector<double> invW_;  // per column its layers' 1 / w, nearest first (0: none)
+};
+
 // One worker's share of a row, as its scan handed it over: fragments and triangles, each
 // with the rank of its surface in the scan order (non-decreasing: a scan hands over its
 // surfaces one after another, in that order).
@@ -70,14 +104,21 @@ class RowBuffer final : public raster::FragmentRow {
   void Clear() {
     fragments.clear();
     triangles.clear();
+    depth.ClearRow();
   }
-  void Add(int column, const raster::Fragment& f) override { fragments.push_back({rank_[f.surfaceId], column, f}); }
+  void Add(int column, const raster::Fragment& f) override {
+    if (depth.Hidden(column, f.w)) return;
+    depth.Keep(column, f.w);
+    fragments.push_back({rank_[f.surfaceId], column, f});
+  }
+  bool Hidden(int column, double w) const override { return depth.Hidden(column, w); }
   void AddTriangle(const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c,
                    std::uint32_t surfaceId) override {
     triangles.push_back({rank_[surfaceId], a, b, c, surfaceId});
   }
   std::vector<BufferedFragment> fragments;
   std::vector<BufferedTriangle> triangles;
+  DepthFilter depth;
 
  private:
   const std::vector<std::uint32_t>& rank_;
@@ -126,12 +167,19 @@ class StoredRow final : public raster::FragmentRow {
   void Clear() {
     fragments_.clear();
     triangles_.clear();
+    depth.ClearRow();
   }
-  void Add(int column, const raster::Fragment& f) override { fragments_.push_back({column, f}); }
+  void Add(int column, const raster::Fragment& f) override {
+    if (depth.Hidden(column, f.w)) return;
+    depth.Keep(column, f.w);
+    fragments_.push_back({column, f});
+  }
+  bool Hidden(int column, double w) const override { return depth.Hidden(column, w); }
   void AddTriangle(const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c,
                    std::uint32_t surfaceId) override {
     triangles_.push_back({a, b, c, surfaceId});
   }
+  DepthFilter depth;
   // Hands everything over to `out` in the order it came.
   void Replay(raster::FragmentRow& out) const {
     for (const auto& [column, f] : fragments_) out.Add(column, f);
@@ -221,7 +269,13 @@ PartitionedScan::~PartitionedScan() {
   ahead_->producer.join();
 }
 
-void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) {
+void PartitionedScan::KeepDepths(const raster::KeptDepths& kept, int columns) {
+  for (auto& w : workers_) w->buffer.depth.Reset(kept, columns);
+}
+
+void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
+                                const raster::KeptDepths& kept) {
+  KeepDepths(kept, columns.n);
   if (!arena_ || tracing_ || ahead_) return;
   ahead_ = std::make_unique<Ahead>();
   Ahead& a = *ahead_;
@@ -231,6 +285,7 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
   a.nRows = nRows;
   a.depth = RowsAhead(dy);
   a.slots.resize(static_cast<std::size_t>(a.depth));
+  for (StoredRow& slot : a.slots) slot.depth.Reset(kept, columns.n);
   a.okOf.assign(static_cast<std::size_t>(a.depth), 1);
   a.producer = std::thread([this, &a] {
       for (int j = 0; j < a.nRows; ++j) {

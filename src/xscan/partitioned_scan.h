@@ -78,7 +78,8 @@ class PartitionedScan final : public DirectScanSource {
 
   // With more than one thread, rows are scanned and composited ahead of the back end (up
   // to two pixel rows) on a task of their own while the back end shades the rows before.
-  void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) override;
+  void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
+                 const raster::KeptDepths& kept) override;
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 
   // A row in three phases, for scans shared between processes (ExactScan's phases of a θ
@@ -91,6 +92,9 @@ class PartitionedScan final : public DirectScanSource {
   bool PrepareRow(double y, const raster::SampleColumns& columns, bool* quiet);
   void PairRow(bool quiet, const raster::SampleColumns& columns, bool* slab);
   bool FinishRow(bool slab, double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // Rows handed over leave out fragments the back end would drop by depth (`kept`, on rows
+  // of `columns` samples): what BeginRows does, for a scan whose rows go elsewhere.
+  void KeepDepths(const raster::KeptDepths& kept, int columns);
   // The place of surface `id` in the scan order of all surfaces.
   std::uint32_t RankOf(std::uint32_t id) const { return rank_[id]; }
   const std::vector<std::uint32_t>& Ranks() const { return rank_; }

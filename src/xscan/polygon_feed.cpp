@@ -43,9 +43,10 @@ PolygonQueue::PolygonQueue(raster::TriangleMesh triangles) : mesh_(std::move(tri
   for (std::size_t k = 0; k < n; ++k) top_[k] = top[order_[k]];
 }
 
-void PolygonFeed::BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) {
+void PolygonFeed::BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
+                            const raster::KeptDepths& kept) {
   dy_ = dy;
-  inner_.BeginRows(columns, y0, dy, nRows);
+  inner_.BeginRows(columns, y0, dy, nRows, kept);
 }
 
 void PolygonQueue::HandOver(double y, double dy, raster::FragmentRow& out) {

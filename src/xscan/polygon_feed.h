@@ -43,7 +43,8 @@ class PolygonFeed final : public raster::FragmentSource {
   // `inner` must outlive the feed.
   PolygonFeed(raster::FragmentSource& inner, raster::TriangleMesh triangles);
 
-  void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows) override;
+  void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
+                 const raster::KeptDepths& kept) override;
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 
  private:

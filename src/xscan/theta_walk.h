@@ -311,14 +311,20 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
 }
 
 // The fragments of a chain on its own scan line: one per sample column along its chords,
-// interpolated perspective-correctly (orthographic: linearly). Emit(column, fragment).
+// interpolated perspective-correctly (orthographic: linearly), each given to `out` unless
+// out.Hidden says it would be dropped at its depth (then it is not made). Returns the
+// number of samples covered, hidden or not.
 template <class Emit>
-void EmitThetaChain(std::span<const ThetaVertex> chain, const raster::SampleColumns& cols, bool orthographic,
-                    Emit& emit) {
-  if (chain.empty()) return;
+long EmitThetaChain(std::span<const ThetaVertex> chain, const raster::SampleColumns& cols, bool orthographic,
+                    const raster::FragmentRow& out, Emit& emit) {
+  if (chain.empty()) return 0;
+  long covered = 0;
   // A column exactly at the first vertex belongs to this chain.
   const int c0 = cols.Ceil(chain.front().x - kColumnEpsPx);
-  if (c0 < cols.n && std::abs(cols.At(c0) - chain.front().x) <= kColumnEpsPx) emit(c0, chain.front().f);
+  if (c0 < cols.n && std::abs(cols.At(c0) - chain.front().x) <= kColumnEpsPx) {
+    ++covered;
+    if (!out.Hidden(c0, chain.front().f.w)) emit(c0, chain.front().f);
+  }
   for (size_t k = 1; k < chain.size(); ++k) {
     const ThetaVertex &a = chain[k - 1], &b = chain[k];
     if (!(a.f.w > 0.0 && b.f.w > 0.0) || a.x == b.x) continue;
@@ -327,10 +333,12 @@ void EmitThetaChain(std::span<const ThetaVertex> chain, const raster::SampleColu
          c >= 0 && c < cols.n && dir * (cols.At(c) - b.x) <= kColumnEpsPx; c += dir) {
       // Along a straight chord 1/w is affine in screen x: perspective-correct weights
       // (orthographic: w itself is affine, and the weights are linear).
+      ++covered;
       const double t = std::clamp((cols.At(c) - a.x) / (b.x - a.x), 0.0, 1.0);
       const bool affine = orthographic;
       const double ia = affine ? 1.0 - t : (1.0 - t) / a.f.w, ib = affine ? t : t / b.f.w;
       const double inv = affine ? ia * a.f.w + ib * b.f.w : 1.0 / (ia + ib);
+      if (out.Hidden(c, inv)) continue;
       const double wa = affine ? ia : ia * inv, wb = affine ? ib : ib * inv;
       raster::Fragment f = a.f;
       f.w = inv;
@@ -342,6 +350,7 @@ void EmitThetaChain(std::span<const ThetaVertex> chain, const raster::SampleColu
       emit(c, f);
     }
   }
+  return covered;
 }
 
 }  // namespace patchscan
