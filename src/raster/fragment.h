@@ -3,6 +3,7 @@
 // X scan) instead of handing over triangles.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -38,6 +39,70 @@ struct SampleColumns {
   }
 };
 
+// A sample column this close to a point in x (pixels) counts as reached: ten times the
+// front end's solves' tolerance, far below the 1e-3 px within which coverage may differ.
+constexpr double kColumnEpsPx = 1e-6;
+
+// A straight chord of a surface's section along one sample row (θ mode, paper 001 §4: the
+// link between two chain vertices): the screen x and fragment of each end, in front of the
+// eye. It covers the columns past xa up to xb (within kColumnEpsPx), or, a point chord (xa
+// == xb), the one column at xa. Along it 1/w is affine in screen x (orthographic: w is),
+// so a sample's weights are perspective-correct.
+struct Chord {
+  double xa = 0.0, xb = 0.0;
+  Fragment a, b;
+  bool orthographic = false;
+
+  // Calls f(column) for each column covered, in order from xa; returns how many.
+  template <class F>
+  int ForEachColumn(const SampleColumns& cols, F&& f) const {
+    if (xa == xb) {
+      const int c = cols.Ceil(xa - kColumnEpsPx);
+      if (c >= cols.n || std::abs(cols.At(c) - xa) > kColumnEpsPx) return 0;
+      f(c);
+      return 1;
+    }
+    const int dir = xb > xa ? 1 : -1;
+    int count = 0;
+    for (int c = dir > 0 ? cols.Ceil(xa + kColumnEpsPx) : cols.Floor(xa - kColumnEpsPx);
+         c >= 0 && c < cols.n && dir * (cols.At(c) - xb) <= kColumnEpsPx; c += dir, ++count)
+      f(c);
+    return count;
+  }
+  // The eye distance at screen x (a column it covers).
+  double DepthAt(double x) const {
+    if (xa == xb) return a.w;
+    const Weights k = WeightsAt(x);
+    return k.w;
+  }
+  // The fragment at screen x (a column it covers): a point chord's own, or the ends'
+  // attributes blended (the normal renormalised; texture footprint of the nearer end).
+  Fragment At(double x) const {
+    if (xa == xb) return a;
+    const Weights k = WeightsAt(x);
+    Fragment f = a;
+    f.w = k.w;
+    f.position = k.wa * a.position + k.wb * b.position;
+    f.normal = (k.wa * a.normal + k.wb * b.normal).normalized();
+    if (!f.normal.allFinite()) f.normal = a.normal;
+    f.uv = k.wa * a.uv + k.wb * b.uv;
+    if (k.t > 0.5) f.duvdx = b.duvdx, f.duvdy = b.duvdy;
+    return f;
+  }
+
+ private:
+  struct Weights {
+    double t, w, wa, wb;
+  };
+  Weights WeightsAt(double x) const {
+    const double t = std::clamp((x - xa) / (xb - xa), 0.0, 1.0);
+    const bool affine = orthographic;
+    const double ia = affine ? 1.0 - t : (1.0 - t) / a.w, ib = affine ? t : t / b.w;
+    const double inv = affine ? ia * a.w + ib * b.w : 1.0 / (ia + ib);
+    return {t, inv, affine ? ia : ia * inv, affine ? ib : ib * inv};
+  }
+};
+
 // Receives the fragments of one sample row (implemented by the back end), and triangles:
 // the slabs of a θ scan (paper 001 §4), one-pixel-high pieces of surface between two
 // scan lines whose samples the back end finds and interpolates itself. A triangle handed
@@ -50,6 +115,14 @@ class FragmentRow {
   // row, nearer than the hither plane, or behind every layer the sample keeps), so that a
   // front end may skip making it. False when unknown.
   virtual bool Hidden(int /*column*/, double /*w*/) const { return false; }
+  // A chord's fragments on this row of `columns`: by default each made and added unless
+  // Hidden at its depth; a back end may keep the chord and make only those it shades.
+  virtual void AddChord(const Chord& c, const SampleColumns& columns) {
+    c.ForEachColumn(columns, [&](int column) {
+      const double x = columns.At(column);
+      if (!Hidden(column, c.DepthAt(x))) Add(column, c.At(x));
+    });
+  }
   virtual void AddTriangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
                            std::uint32_t surfaceId) = 0;
 

@@ -94,6 +94,9 @@ class TriangleGeometry {
 // Sample handles at or above this are triangles (handle - kTriangleHandle: the slot);
 // below, a fragment's index in its sample row's pool.
 constexpr std::int32_t kTriangleHandle = std::int32_t{1} << 30;
+// Handles from this one below kTriangleHandle are chords (handle - kChordHandle: the
+// index in their sample row's chords), below it fragments of the row's pool.
+constexpr std::int32_t kChordHandle = std::int32_t{1} << 29;
 
 // A direct render's geometry: exact per-sample fragments, each sample row's in a pool of
 // that row which lasts while the pixel row needs it, and the triangles of θ slabs the
@@ -104,18 +107,28 @@ class FragmentGeometry final : public FragmentRow {
   FragmentGeometry(FragmentSource& source, const RenderSettings& s, const Lattice& lat,
                    int layers, Counters& stats)
       : source_(source), s_(s), lat_(lat), layers_(layers), stats_(stats),
-        store_(s, lat, layers, ShadingMode::Phong, stats) {}
+        store_(s, lat, layers, ShadingMode::Phong, stats) {
+    sided_ = s.cullBackFaces || !s.material.twoSided;
+    for (const Material& m : s.materials) sided_ = sided_ || !m.twoSided;
+  }
 
-  // What a pixel row's samples refer to beyond the store: the fragments of each of its
-  // sample rows (a sample's handle below kTriangleHandle indexes its row's pool).
+  // Whether a fragment's depth alone decides whether it is kept (else its side may drop it
+  // too: culling, or a one-sided material).
+  bool DepthDecides() const { return !sided_; }
+
+  // What a pixel row's samples refer to beyond the store: the fragments and chords of each
+  // of its sample rows (a sample's handle below kTriangleHandle indexes its row's pool or
+  // chords).
   struct Rows {
     int j0 = 0;  // the pixel row's first sample row
     std::vector<std::vector<Fragment>> pools;
+    std::vector<std::vector<Chord>> chords;
   };
   Rows MakeRows() const {
     Rows rows;
     rows.pools.resize(static_cast<size_t>(s_.aa));
     for (auto& p : rows.pools) p.reserve(static_cast<size_t>(lat_.nx) * layers_);
+    rows.chords.resize(static_cast<size_t>(s_.aa));
     return rows;
   }
 
@@ -123,11 +136,14 @@ class FragmentGeometry final : public FragmentRow {
   void BeginPixelRow(int j0, int oldestInUse) { store_.BeginPixelRow(j0, oldestInUse); }
   void CopySampleRow(const Rows& from, int rFrom, Rows& to, int rTo) {
     to.pools[static_cast<size_t>(rTo)] = from.pools[static_cast<size_t>(rFrom)];  // within the reserve
+    to.chords[static_cast<size_t>(rTo)] = from.chords[static_cast<size_t>(rFrom)];
   }
 
   void ScanRow(int j, int r, double y, Sample* row, Rows& rows) {
     pool_ = &rows.pools[static_cast<size_t>(r)];
     pool_->clear();
+    chords_ = &rows.chords[static_cast<size_t>(r)];
+    chords_->clear();
     row_ = row;
     const SampleColumns columns{lat_.offset, lat_.spacing, lat_.nx};
     if (!source_.ScanRow(y, columns, *this)) failed_ = true;
@@ -150,6 +166,24 @@ class FragmentGeometry final : public FragmentRow {
            !(1.0 / w > row_[static_cast<size_t>(column) * layers_ + static_cast<size_t>(layers_ - 1)].invW);
   }
 
+  // A chord is kept whole, and a sample of it made only when shaded (a hidden one never),
+  // unless its side may drop a fragment: then each is made and added.
+  void AddChord(const Chord& c, const SampleColumns& columns) override {
+    if (sided_) {
+      FragmentRow::AddChord(c, columns);
+      return;
+    }
+    const auto handle = kChordHandle + static_cast<std::int32_t>(chords_->size());
+    bool kept = false;
+    c.ForEachColumn(columns, [&](int column) {
+      ++stats_[Counter::SamplesTested];
+      const double w = c.DepthAt(columns.At(column));
+      if (w >= s_.hither && InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / w, handle))
+        kept = true;
+    });
+    if (kept) chords_->push_back(c);
+  }
+
   void AddTriangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
                    std::uint32_t surfaceId) override {
     ++stats_[Counter::Triangles];
@@ -160,13 +194,16 @@ class FragmentGeometry final : public FragmentRow {
   }
 
   std::uint32_t SurfaceOf(const Rows& rows, int r, const Sample& smp) const {
-    return smp.handle >= kTriangleHandle ? store_.SurfaceOf(smp.handle - kTriangleHandle)
-                                         : rows.pools[static_cast<size_t>(r)][smp.handle].surfaceId;
+    if (smp.handle >= kTriangleHandle) return store_.SurfaceOf(smp.handle - kTriangleHandle);
+    if (smp.handle >= kChordHandle) return rows.chords[static_cast<size_t>(r)][smp.handle - kChordHandle].a.surfaceId;
+    return rows.pools[static_cast<size_t>(r)][smp.handle].surfaceId;
   }
   double EdgeDistance(const Rows&, int, const Sample&, double, double) const { return INFINITY; }
   Rgb ShadeSample(const Rows& rows, int r, const Sample& smp, double x, double y, std::int64_t& nCalls) const {
     if (smp.handle >= kTriangleHandle) return store_.ShadeAt(smp.handle - kTriangleHandle, x, y, nCalls);
     ++nCalls;
+    if (smp.handle >= kChordHandle)
+      return ShadeFragment(rows.chords[static_cast<size_t>(r)][smp.handle - kChordHandle].At(x), s_, &failed_);
     return ShadeFragment(rows.pools[static_cast<size_t>(r)][smp.handle], s_, &failed_);
   }
   Rgb ShadeGroup(const Rows& rows, const Member* m, int n, double cx, double cy, std::int64_t& nCalls,
@@ -187,10 +224,14 @@ class FragmentGeometry final : public FragmentRow {
       if (d < best) best = d, nearest = k;
     }
     if (nearest >= 0) return store_.Interpolate(m[nearest].smp.handle - kTriangleHandle, cx, cy);
-    auto fragment = [&](const Member& x) -> const Fragment& { return rows.pools[static_cast<size_t>(x.r)][x.smp.handle]; };
+    auto fragment = [&](const Member& x) -> Fragment {
+      if (x.smp.handle >= kChordHandle)
+        return rows.chords[static_cast<size_t>(x.r)][x.smp.handle - kChordHandle].At(lat_.At(x.i));
+      return rows.pools[static_cast<size_t>(x.r)][x.smp.handle];
+    };
     Fragment f = fragment(m[0]);
     for (int k = 1; k < n; ++k) {
-      const Fragment& g = fragment(m[k]);
+      const Fragment g = fragment(m[k]);
       f.w += g.w;
       f.position += g.position;
       f.normal += g.normal;
@@ -217,6 +258,8 @@ class FragmentGeometry final : public FragmentRow {
   // The source failed, or a texture (set while shading, on any thread).
   mutable std::atomic<bool> failed_ = false;
   std::vector<Fragment>* pool_ = nullptr;  // the pool of the sample row being scanned
+  std::vector<Chord>* chords_ = nullptr;   // and its chords
+  bool sided_ = false;                     // !DepthDecides()
   Sample* row_ = nullptr;
   TriangleStore store_;
 };
@@ -507,11 +550,8 @@ std::optional<Counters> RenderFragments(FragmentSource& source, const RenderSett
   const Lattice lat(s);
   const int layers = s.AnyTransparency() ? kMaxLayers : 1;
   FragmentGeometry geo(source, s, lat, layers, stats);
-  // Depth alone decides what is kept unless some fragments are dropped for their side.
-  bool sided = s.cullBackFaces || !s.material.twoSided;
-  for (const Material& m : s.materials) sided = sided || !m.twoSided;
   source.BeginRows(SampleColumns{lat.offset, lat.spacing, lat.nx}, lat.At(0), lat.spacing, lat.ny,
-                   KeptDepths{s.hither, sided ? 0 : layers});
+                   KeptDepths{s.hither, geo.DepthDecides() ? layers : 0});
   return RenderRows(geo, s, lat, layers, stats, sink);
 }
 

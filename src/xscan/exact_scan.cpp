@@ -193,7 +193,6 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
   if (options_.thetaSteps > 0 && options_.slabRows > 0) return ScanRowSlabs(y, columns, out);
   UpdateActive(y, y, columns.dx);
 
-  auto emit = [&](int column, const raster::Fragment& f) { out.Add(column, f); };
   for (const auto& ap : active_) {
     Active& a = *ap;
     const long events = a.scan->Events();
@@ -217,7 +216,7 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
                   [&](std::span<const ThetaVertex> chain, bool closed) { a.next.Add(chain, closed); });
     }
     for (const ChainSet::Chain& c : a.next.chains)
-      counters_[Counter::Fragments] += EmitThetaChain(a.next.Of(c), columns, camera_.orthographic, out, emit);
+      counters_[Counter::Fragments] += EmitThetaChain(a.next.Of(c), columns, camera_.orthographic, out);
     std::swap(a.line, a.next);
     a.lineBroken = !advanced && WalkBroken();
     a.lineWalked = true;
@@ -382,12 +381,11 @@ bool ExactScan::ScanRowSlabs(double y, const raster::SampleColumns& columns, ras
   if (BeginsInterval(y, columns))
     FinishInterval(PairInterval(PrepareInterval(y, columns, out), columns, out), columns, out);
   if (!byRows_) return true;
-  auto emit = [&](int column, const raster::Fragment& f) { out.Add(column, f); };
   const auto r = static_cast<std::size_t>(j - intervalStart_);
   for (const auto& ap : active_)
     if (r < ap->rows.size())
       for (const ChainSet::Chain& c : ap->rows[r].chains)
-        counters_[Counter::Fragments] += EmitThetaChain(ap->rows[r].Of(c), columns, camera_.orthographic, out, emit);
+        counters_[Counter::Fragments] += EmitThetaChain(ap->rows[r].Of(c), columns, camera_.orthographic, out);
   return true;
 }
 

@@ -48,9 +48,9 @@ constexpr double kWalkStepMin = 1e-11;
 // Largest turn of the curve's tangent over one step (radians): beyond it the predictor
 // could land on a neighbouring branch.
 constexpr double kWalkMaxTurn = 0.5;
-// A sample column this close to a walk point in x (pixels) counts as passed: ten times
-// the solves' tolerance, far below the 1e-3 px within which coverage may differ.
-constexpr double kColumnEpsPx = 1e-6;
+// A sample column this close to a walk point in x (pixels) counts as passed (the back
+// end's rule for chords too).
+using raster::kColumnEpsPx;
 // Two points of a curve this close in (u,v) are the same crossing.
 constexpr double kSameCrossingUv = 1e-6;
 // A walk longer than this many steps is lost (a curve has finitely many columns; at the

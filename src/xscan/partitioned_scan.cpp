@@ -100,11 +100,27 @@ class RowBuffer final : public raster::FragmentRow {
     raster::RasterVertex a, b, c;
     std::uint32_t surfaceId;
   };
+  struct BufferedChord {
+    std::uint32_t rank;
+    raster::Chord chord;
+  };
   explicit RowBuffer(const std::vector<std::uint32_t>& rank) : rank_(rank) {}
   void Clear() {
     fragments.clear();
     triangles.clear();
+    chords.clear();
     depth.ClearRow();
+  }
+  // A chord is kept whole (its samples are made by the back end), unless all of it is hidden.
+  void AddChord(const raster::Chord& c, const raster::SampleColumns& columns) override {
+    bool shown = false;
+    c.ForEachColumn(columns, [&](int column) {
+      const double w = c.DepthAt(columns.At(column));
+      if (depth.Hidden(column, w)) return;
+      depth.Keep(column, w);
+      shown = true;
+    });
+    if (shown) chords.push_back({rank_[c.a.surfaceId], c});
   }
   void Add(int column, const raster::Fragment& f) override {
     if (depth.Hidden(column, f.w)) return;
@@ -118,6 +134,7 @@ class RowBuffer final : public raster::FragmentRow {
   }
   std::vector<BufferedFragment> fragments;
   std::vector<BufferedTriangle> triangles;
+  std::vector<BufferedChord> chords;
   DepthFilter depth;
 
  private:
@@ -167,7 +184,14 @@ class StoredRow final : public raster::FragmentRow {
   void Clear() {
     fragments_.clear();
     triangles_.clear();
+    chords_.clear();
     depth.ClearRow();
+  }
+  // Chords come from the workers' buffers, wholly hidden ones left out already: kept as
+  // they are (the back end tests their samples).
+  void AddChord(const raster::Chord& c, const raster::SampleColumns& columns) override {
+    chords_.push_back(c);
+    columns_ = columns;
   }
   void Add(int column, const raster::Fragment& f) override {
     if (depth.Hidden(column, f.w)) return;
@@ -183,6 +207,7 @@ class StoredRow final : public raster::FragmentRow {
   // Hands everything over to `out` in the order it came.
   void Replay(raster::FragmentRow& out) const {
     for (const auto& [column, f] : fragments_) out.Add(column, f);
+    for (const raster::Chord& c : chords_) out.AddChord(c, columns_);
     for (const Triangle& t : triangles_) out.AddTriangle(t.a, t.b, t.c, t.surfaceId);
   }
 
@@ -192,6 +217,8 @@ class StoredRow final : public raster::FragmentRow {
     std::uint32_t surfaceId;
   };
   std::vector<std::pair<int, raster::Fragment>> fragments_;
+  std::vector<raster::Chord> chords_;
+  raster::SampleColumns columns_;
   std::vector<Triangle> triangles_;
 };
 
@@ -406,8 +433,11 @@ bool PartitionedScan::FinishRow(bool slab, double y, const raster::SampleColumns
   // Step 3: composite, in scan order.
   const double t0 = Now();
   const std::size_t n = workers_.size();
+  // A scan hands over fragments (exact mode) or chords (θ mode), not both.
   MergeByRank(n, [&](std::size_t w) -> const auto& { return workers_[w]->buffer.fragments; }, &next_,
               [&](const RowBuffer::BufferedFragment& e) { out.Add(e.column, e.f); });
+  MergeByRank(n, [&](std::size_t w) -> const auto& { return workers_[w]->buffer.chords; }, &next_,
+              [&](const RowBuffer::BufferedChord& e) { out.AddChord(e.chord, columns); });
   MergeByRank(n, [&](std::size_t w) -> const auto& { return workers_[w]->buffer.triangles; }, &next_,
               [&](const RowBuffer::BufferedTriangle& e) { out.AddTriangle(e.a, e.b, e.c, e.surfaceId); });
   compositeSeconds_ += Now() - t0;

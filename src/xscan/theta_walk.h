@@ -310,45 +310,28 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
   }
 }
 
-// The fragments of a chain on its own scan line: one per sample column along its chords,
-// interpolated perspective-correctly (orthographic: linearly), each given to `out` unless
-// out.Hidden says it would be dropped at its depth (then it is not made). Returns the
-// number of samples covered, hidden or not.
-template <class Emit>
-long EmitThetaChain(std::span<const ThetaVertex> chain, const raster::SampleColumns& cols, bool orthographic,
-                    const raster::FragmentRow& out, Emit& emit) {
+// The fragments of a chain on its own scan line, handed to `out` as chords (raster::Chord):
+// the first vertex's own column, then each link's columns, interpolated perspective-
+// correctly (orthographic: linearly). Returns the number of samples covered.
+inline long EmitThetaChain(std::span<const ThetaVertex> chain, const raster::SampleColumns& cols, bool orthographic,
+                           raster::FragmentRow& out) {
   if (chain.empty()) return 0;
-  long covered = 0;
-  // A column exactly at the first vertex belongs to this chain.
-  const int c0 = cols.Ceil(chain.front().x - kColumnEpsPx);
-  if (c0 < cols.n && std::abs(cols.At(c0) - chain.front().x) <= kColumnEpsPx) {
-    ++covered;
-    if (!out.Hidden(c0, chain.front().f.w)) emit(c0, chain.front().f);
-  }
+  raster::Chord c;
+  c.orthographic = orthographic;
+  c.xa = c.xb = chain.front().x;
+  c.a = chain.front().f;
+  long covered = c.ForEachColumn(cols, [](int) {});
+  if (covered > 0) out.AddChord(c, cols);
   for (size_t k = 1; k < chain.size(); ++k) {
     const ThetaVertex &a = chain[k - 1], &b = chain[k];
     if (!(a.f.w > 0.0 && b.f.w > 0.0) || a.x == b.x) continue;
-    const int dir = b.x > a.x ? 1 : -1;
-    for (int c = dir > 0 ? cols.Ceil(a.x + kColumnEpsPx) : cols.Floor(a.x - kColumnEpsPx);
-         c >= 0 && c < cols.n && dir * (cols.At(c) - b.x) <= kColumnEpsPx; c += dir) {
-      // Along a straight chord 1/w is affine in screen x: perspective-correct weights
-      // (orthographic: w itself is affine, and the weights are linear).
-      ++covered;
-      const double t = std::clamp((cols.At(c) - a.x) / (b.x - a.x), 0.0, 1.0);
-      const bool affine = orthographic;
-      const double ia = affine ? 1.0 - t : (1.0 - t) / a.f.w, ib = affine ? t : t / b.f.w;
-      const double inv = affine ? ia * a.f.w + ib * b.f.w : 1.0 / (ia + ib);
-      if (out.Hidden(c, inv)) continue;
-      const double wa = affine ? ia : ia * inv, wb = affine ? ib : ib * inv;
-      raster::Fragment f = a.f;
-      f.w = inv;
-      f.position = wa * a.f.position + wb * b.f.position;
-      f.normal = (wa * a.f.normal + wb * b.f.normal).normalized();
-      if (!f.normal.allFinite()) f.normal = a.f.normal;
-      f.uv = wa * a.f.uv + wb * b.f.uv;
-      if (t > 0.5) f.duvdx = b.f.duvdx, f.duvdy = b.f.duvdy;
-      emit(c, f);
-    }
+    c.xa = a.x;
+    c.xb = b.x;
+    c.a = a.f;
+    c.b = b.f;
+    const int n = c.ForEachColumn(cols, [](int) {});
+    covered += n;
+    if (n > 0) out.AddChord(c, cols);
   }
   return covered;
 }

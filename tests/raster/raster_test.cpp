@@ -2,6 +2,7 @@
 // areas, shared edges covered exactly once, all-or-nothing image output.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <random>
@@ -313,6 +314,86 @@ TEST(ScanlineRenderer, TrianglesHandedOverByADirectSourceRenderAsAMesh) {
     EXPECT_GT(mesh.Coverage(), 500.0);
     EXPECT_LT(worst, kColourTol) << "aa " << aa;
   }
+}
+
+// Two surfaces whose sections on every sample row are chains of chords, their depths
+// crossing: handed over as chords, or (`expand`) as one fragment per column made by the
+// chord itself (what a back end that does not keep chords does).
+class ChordSource final : public FragmentSource {
+ public:
+  explicit ChordSource(bool expand) : expand_(expand) {}
+  bool ScanRow(double y, const SampleColumns& columns, FragmentRow& out) override {
+    for (std::uint32_t id = 0; id < 2; ++id) {
+      Chord c;
+      const double xs[] = {8.3, 21.0, 40.7, 41.2, 77.9, 110.5};
+      for (std::size_t k = 0; k < std::size(xs); ++k) {
+        const double x = xs[k] + (id == 1 ? 6.0 * std::sin(0.1 * y) : 0.0);
+        Fragment f;
+        f.w = id == 0 ? 2.0 + 0.02 * x : 4.0 - 0.015 * x + 0.01 * y;
+        f.position = Vec3((x - 64) * f.w / 100, (y - 48) * f.w / 100, f.w);
+        f.normal = Vec3(std::cos(0.05 * x + id), std::sin(0.05 * x), -1.5).normalized();
+        f.uv = Vec2(x / 128, y / 96);
+        f.duvdx = Vec2(1.0 / 128, 0.0);
+        f.duvdy = Vec2(0.0, 1.0 / 96);
+        f.surfaceId = id;
+        c.a = c.b;
+        c.xa = c.xb;
+        c.b = f;
+        c.xb = x;
+        if (k == 0) {
+          c.a = f;
+          c.xa = x;
+        }
+        if (expand_)
+          c.ForEachColumn(columns, [&](int col) { out.Add(col, c.At(columns.At(col))); });
+        else
+          out.AddChord(c, columns);
+      }
+    }
+    return true;
+  }
+
+ private:
+  bool expand_;
+};
+
+// Every channel of every row.
+struct AllChannels : RowSink {
+  std::vector<float> values;
+  int width;
+  explicit AllChannels(int w) : width(w) {}
+  bool WriteRow(int, const float* row) override {
+    values.insert(values.end(), row, row + static_cast<std::ptrdiff_t>(width) * kChannels);
+    return true;
+  }
+};
+
+TEST(ScanlineRenderer, ChordsKeptWholeShadeAsTheirFragments) {
+  // The back end keeps a chord whole and makes a sample's fragment only when shading it:
+  // every channel of every pixel is the same as from the chord's fragments added one by
+  // one, with the depth test alone deciding (two-sided) and with culling (then the back
+  // end makes and adds the fragments itself).
+  for (const bool cull : {false, true})
+    for (const int aa : {1, 3}) {
+      RenderSettings s;
+      s.width = 128;
+      s.height = 96;
+      s.aa = aa;
+      s.hither = 0.01;
+      s.cullBackFaces = cull;
+      AllChannels kept(s.width), made(s.width);
+      ChordSource chords(false), fragments(true);
+      ASSERT_TRUE(RenderFragments(chords, s, kept));
+      ASSERT_TRUE(RenderFragments(fragments, s, made));
+      ASSERT_EQ(kept.values.size(), made.values.size());
+      long covered = 0, differ = 0;
+      for (std::size_t k = 0; k < kept.values.size(); ++k) {
+        if (k % kChannels == 3) covered += made.values[k] > 0.0f;
+        differ += std::memcmp(&kept.values[k], &made.values[k], sizeof(float)) != 0;
+      }
+      EXPECT_GT(covered, 5000) << "aa " << aa;
+      EXPECT_EQ(differ, 0) << "aa " << aa << (cull ? ", culling" : "");
+    }
 }
 
 // Keeps rows as they come, refusing from row `refuseAt` on.
