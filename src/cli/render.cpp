@@ -79,9 +79,12 @@ ExactScanOptions ScanOptionsFor(const RenderOptions& o, int aa) {
   xo.extrapolate = !o.noExtrapolate;
   if (o.mode == RenderMode::Theta) {
     xo.thetaSteps = o.thetaSteps;
-    // Sample rows are 1 / (aa - 1) pixels apart (aa 1: one per pixel).
+    // Sample rows are 1 / (aa - 1) pixels apart (aa 1: one per pixel). A slab one sample
+    // row high would cost two lines' trackers and a zip for the one row of samples its own
+    // chains give exactly: such a step takes chains on every row instead.
     const double spacing = aa == 1 ? 1.0 : 1.0 / (aa - 1);
-    xo.slabRows = o.yStep > 0.0 ? std::max(1, static_cast<int>(std::lround(o.yStep / spacing))) : 0;
+    const int rows = o.yStep > 0.0 ? static_cast<int>(std::lround(o.yStep / spacing)) : 0;
+    xo.slabRows = rows >= 2 ? rows : 0;
   }
   return xo;
 }
@@ -111,13 +114,14 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
       ->capture_default_str();
   cmd->add_option("--y-step", o->yStep,
                   "theta mode: pixels between the scan lines whose cross-sections are sampled "
-                  "(rounded to a whole number of sample rows, at least one); the surface between "
-                  "two such lines goes to the back end as one slab of triangles, and where the "
-                  "chains of two lines do not pair up (a curve born or gone, an event of the Y "
-                  "scan) every sample row between them is sampled instead. Silhouettes between "
-                  "the lines are chords: error about h^2 / (8 R) pixels for step h and a "
-                  "silhouette curving with radius R pixels. 0: every sample row is sampled and "
-                  "no triangles are made")
+                  "(rounded to a whole number of sample rows); the surface between two such lines "
+                  "goes to the back end as one slab of triangles, and where the chains of two "
+                  "lines do not pair up (a curve born or gone, an event of the Y scan) every "
+                  "sample row between them is sampled instead. Silhouettes between the lines are "
+                  "chords: error about h^2 / (8 R) pixels for step h and a silhouette curving with "
+                  "radius R pixels. 0, or a step of less than two sample rows (the default at "
+                  "--aa 1): every sample row is sampled, its chains advanced from the row before, "
+                  "and no triangles are made")
       ->check(CLI::Range(0.0, 64.0))
       ->capture_default_str();
   cmd->add_flag("--no-extrapolate", o->noExtrapolate,

@@ -288,6 +288,22 @@ TEST(Cli, ExactModeIsTheDefaultAndReportsItsTrackers) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Cli, ThetaStepOfOneSampleRowTakesRowsNotSlabs) {
+  // --y-step 1 is one sample row at --aa 1 (rows: chains on every row, advanced from the
+  // row before) and two at --aa 3 (slabs); --y-step 0 is rows at any --aa.
+  const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_ystep";
+  std::filesystem::create_directories(dir);
+  const std::string out = (dir / "teapot.png").string();
+  for (const auto& [args, slabs] : {std::pair{" --aa 1", false}, {" --aa 1 --y-step 1", false},
+                                    {" --aa 3", true}, {" --aa 3 --y-step 0", false}}) {
+    const Result r = Patchscan("render " + kTeapot + " -o " + out + " --size 96x72 --mode theta --stats" + args);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(StatsValue(r.err, "slab_triangles") > 0, slabs) << args << "\n" << r.err;
+    EXPECT_EQ(StatsValue(r.err, "theta_rows_advanced") > 0, !slabs) << args << "\n" << r.err;
+  }
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Cli, ThetaSlabsLeaveNoCrackOnASeamSeenExactlyVertical) {
   // surfaces/nurbs.rib's ground is one NURBS surface of 4 x 4 spans, scanned as 16 patches;
   // its camera looks straight down the middle, so the seam between the spans at x = 0 is a
