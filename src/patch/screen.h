@@ -30,6 +30,8 @@ class ScreenMap {
 
   // Distance of an object-space point along the view axis (ScreenDerivs::w).
   double ViewDepth(const Vec3& pObject) const { return depth_.head<3>().dot(pObject) + depth_[3]; }
+  // Its change along an object-space direction (a derivative of the point).
+  double ViewDepthChange(const Vec3& dObject) const { return depth_.head<3>().dot(dObject); }
 
   // Homogeneous screen point (X, Y, D, W) of an object-space point.
   Vec4 Homogeneous(const Vec3& pObject) const {

@@ -43,15 +43,35 @@ struct SampleColumns {
 // front end's solves' tolerance, far below the 1e-3 px within which coverage may differ.
 constexpr double kColumnEpsPx = 1e-6;
 
-// A straight chord of a surface's section along one sample row (θ mode, paper 001 §4: the
-// link between two chain vertices): the screen x and fragment of each end, in front of the
-// eye. It covers the columns past xa up to xb (within kColumnEpsPx), or, a point chord (xa
-// == xb), the one column at xa. Along it 1/w is affine in screen x (orthographic: w is),
-// so a sample's weights are perspective-correct.
+// A chord of a surface's section along one sample row (θ mode, paper 001 §4: the link
+// between two chain vertices): the screen x and fragment of each end, in front of the eye.
+// It covers the columns past xa up to xb (within kColumnEpsPx), or, a point chord (xa ==
+// xb), the one column at xa. Along it the attributes are blended perspective-correctly
+// (1/w affine in screen x; orthographic: w), except where the ends' slopes along the row
+// are known (SetSlopes): there the normal and the eye distance (its inverse, in
+// perspective) follow cubics in screen x with those tangents (Hermite), whose error falls
+// as the fourth power of the chord's length where the blend's falls as the square.
 struct Chord {
   double xa = 0.0, xb = 0.0;
   Fragment a, b;
   bool orthographic = false;
+
+  // The ends' unit normal and eye distance derivatives per pixel along the row (NaN:
+  // unknown). An end's are kept where its normal slope would turn the normal by at most
+  // kSlopeTurnRatio times the turn between the ends across the chord (plus kSlopeFloor
+  // radians): on a silhouette, or near one, the section turns as the square root of x and
+  // the slopes there are infinite or huge, no tangents for a cubic.
+  void SetSlopes(const Vec3& dna, double dwa, const Vec3& dnb, double dwb) {
+    const double span = xb - xa, turn = (b.normal - a.normal).norm();
+    const auto fits = [&](const Vec3& dn) { return (span * dn).norm() <= kSlopeTurnRatio * turn + kSlopeFloor; };
+    na_ = span * dna;
+    nb_ = span * dnb;
+    qa_ = span * (orthographic ? dwa : -dwa / (a.w * a.w));
+    qb_ = span * (orthographic ? dwb : -dwb / (b.w * b.w));
+    if (!fits(dna) || !std::isfinite(qa_)) na_ = Vec3::Constant(NAN), qa_ = NAN;
+    if (!fits(dnb) || !std::isfinite(qb_)) nb_ = Vec3::Constant(NAN), qb_ = NAN;
+  }
+  static constexpr double kSlopeTurnRatio = 2.0, kSlopeFloor = 1e-3;
 
   // Calls f(column) for each column covered, in order from xa; returns how many.
   template <class F>
@@ -70,36 +90,50 @@ struct Chord {
     return count;
   }
   // The eye distance at screen x (a column it covers).
-  double DepthAt(double x) const {
-    if (xa == xb) return a.w;
-    const Weights k = WeightsAt(x);
-    return k.w;
-  }
+  double DepthAt(double x) const { return xa == xb ? a.w : DepthAlong(Along(x)); }
   // The fragment at screen x (a column it covers): a point chord's own, or the ends'
-  // attributes blended (the normal renormalised; texture footprint of the nearer end).
+  // attributes blended as above (the normal renormalised; texture footprint of the nearer
+  // end).
   Fragment At(double x) const {
     if (xa == xb) return a;
-    const Weights k = WeightsAt(x);
+    const double t = Along(x);
+    const double ia = orthographic ? 1.0 - t : (1.0 - t) / a.w, ib = orthographic ? t : t / b.w;
+    const double wa = ia / (ia + ib), wb = ib / (ia + ib);
     Fragment f = a;
-    f.w = k.w;
-    f.position = k.wa * a.position + k.wb * b.position;
-    f.normal = (k.wa * a.normal + k.wb * b.normal).normalized();
+    f.w = DepthAlong(t);
+    f.position = wa * a.position + wb * b.position;
+    const Vec3 n = Known(na_) || Known(nb_) ? Cubic(t, a.normal, b.normal, na_, nb_) : Vec3(wa * a.normal + wb * b.normal);
+    f.normal = n.normalized();
     if (!f.normal.allFinite()) f.normal = a.normal;
-    f.uv = k.wa * a.uv + k.wb * b.uv;
-    if (k.t > 0.5) f.duvdx = b.duvdx, f.duvdy = b.duvdy;
+    f.uv = wa * a.uv + wb * b.uv;
+    if (t > 0.5) f.duvdx = b.duvdx, f.duvdy = b.duvdy;
     return f;
   }
 
  private:
-  struct Weights {
-    double t, w, wa, wb;
-  };
-  Weights WeightsAt(double x) const {
-    const double t = std::clamp((x - xa) / (xb - xa), 0.0, 1.0);
-    const bool affine = orthographic;
-    const double ia = affine ? 1.0 - t : (1.0 - t) / a.w, ib = affine ? t : t / b.w;
-    const double inv = affine ? ia * a.w + ib * b.w : 1.0 / (ia + ib);
-    return {t, inv, affine ? ia : ia * inv, affine ? ib : ib * inv};
+  Vec3 na_ = Vec3::Constant(NAN), nb_ = Vec3::Constant(NAN);  // normal tangents per unit t
+  double qa_ = NAN, qb_ = NAN;  // 1/w's (orthographic: w's) tangents per unit t
+
+  double Along(double x) const { return std::clamp((x - xa) / (xb - xa), 0.0, 1.0); }
+  double DepthAlong(double t) const {
+    if (orthographic) return Cubic(t, a.w, b.w, qa_, qb_);
+    return 1.0 / Cubic(t, 1.0 / a.w, 1.0 / b.w, qa_, qb_);
+  }
+  static bool Known(double v) { return std::isfinite(v); }
+  static bool Known(const Vec3& v) { return v.allFinite(); }
+  // The cubic from va at t = 0 to vb at 1 with tangents ta, tb (per unit t); with one
+  // tangent unknown the quadratic, with neither the line.
+  template <class V>
+  static V Cubic(double t, const V& va, const V& vb, const V& ta, const V& tb) {
+    const bool ka = Known(ta), kb = Known(tb);
+    if (ka && kb) {
+      const double t2 = t * t, t3 = t2 * t;
+      return (2.0 * t3 - 3.0 * t2 + 1.0) * va + (t3 - 2.0 * t2 + t) * ta + (3.0 * t2 - 2.0 * t3) * vb + (t3 - t2) * tb;
+    }
+    if (ka) return va + t * ta + t * t * (vb - va - ta);
+    const double s = 1.0 - t;
+    if (kb) return vb - s * tb + s * s * (va - vb + tb);
+    return s * va + t * vb;
   }
 };
 

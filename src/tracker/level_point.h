@@ -19,7 +19,11 @@ struct LevelPoint {
   double jn = 0.0;  // J / (|grad x| |grad y|): the sine of the angle, scale-free
   double w = 0.0;   // eye distance
   SurfaceDerivs object;  // position and first derivatives in object space (second on request)
+  bool second = false;   // `object` has its second derivatives
   bool ok = false;       // finite, in front of the eye, and y varies there
+  // The change of (u,v) per pixel along the scan line (y constant, towards +x): x_u du +
+  // x_v dv = 1, y_u du + y_v dv = 0. Infinite on the silhouette.
+  Vec2 UvPerPixelAlongRow() const { return Vec2(gradY.y(), -gradY.x()) / j; }
 };
 
 // The point of `shape` at uv through `map`. `order` Second also fills in the object-space
@@ -32,6 +36,7 @@ LevelPoint EvalLevelPoint(const ShapeT& shape, const ScreenMap& map, const Vec2&
   p.uv = uv;
   ScreenDerivs d;
   shape.Evaluate(uv.x(), uv.y(), order, &p.object);
+  p.second = Wants(order, DerivOrder::Second);
   map.FromObject(p.object, DerivOrder::First, &d);
   p.w = d.w;
   p.x = d.p.x();

@@ -2,18 +2,34 @@
 
 namespace patchscan {
 
+namespace {
+
+// The world normal n = ±(L p_u) × (L p_v) (not unit) and its (u,v) derivatives, with the
+// world tangents. (L a) × (L b) = det L · L^-T (a × b): the world normal up to the sign of
+// det L, which FragmentAt's L^-T (a × b) keeps.
+struct WorldNormal {
+  Vec3 pu, pv, n, nu, nv;
+};
+WorldNormal WorldNormalOf(const SurfaceDerivs& o, const Affine3& worldFromObject) {
+  const auto L = worldFromObject.linear();
+  WorldNormal w;
+  w.pu = L * o.dpdu;
+  w.pv = L * o.dpdv;
+  const Vec3 puu = L * o.d2pdu2, puv = L * o.d2pduv, pvv = L * o.d2pdv2;
+  const double sign = L.determinant() < 0.0 ? -1.0 : 1.0;
+  w.n = sign * w.pu.cross(w.pv);
+  w.nu = sign * (puu.cross(w.pv) + w.pu.cross(puv));
+  w.nv = sign * (puv.cross(w.pv) + w.pu.cross(pvv));
+  return w;
+}
+
+}  // namespace
+
 TableResidual TableFunction(const SurfaceDerivs& o, const Affine3& worldFromObject, const ThetaFrame& frame,
                             const Vec2& angle) {
-  const auto L = worldFromObject.linear();
   const Vec3 p = worldFromObject * o.p;
-  const Vec3 pu = L * o.dpdu, pv = L * o.dpdv;
-  const Vec3 puu = L * o.d2pdu2, puv = L * o.d2pduv, pvv = L * o.d2pdv2;
-  // (L a) × (L b) = det L · L^-T (a × b): the world normal up to the sign of det L, which
-  // FragmentAt's L^-T (a × b) keeps.
-  const double sign = L.determinant() < 0.0 ? -1.0 : 1.0;
-  const Vec3 n = sign * pu.cross(pv);
-  const Vec3 nu = sign * (puu.cross(pv) + pu.cross(puv));
-  const Vec3 nv = sign * (puv.cross(pv) + pu.cross(pvv));
+  const WorldNormal w = WorldNormalOf(o, worldFromObject);
+  const Vec3 &n = w.n, &nu = w.nu, &nv = w.nv, &pu = w.pu, &pv = w.pv;
   // The view ray r and its derivatives along the surface (zero in orthographic).
   Vec3 r, ru = Vec3::Zero(), rv = Vec3::Zero();
   if (frame.orthographic) {
@@ -59,6 +75,15 @@ double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const Affine
   const Vec3 n = (L.determinant() < 0.0 ? -1.0 : 1.0) * (L * object.dpdu).cross(L * object.dpdv);
   const double theta = frame.Theta(worldFromObject * object.p, n);
   return TurnRate(TableFunction(object, worldFromObject, frame, Vec2(std::cos(theta), std::sin(theta))), gradY);
+}
+
+Vec3 NormalSlope(const SurfaceDerivs& o, const Vec2& duv, const Affine3& worldFromObject) {
+  const WorldNormal w = WorldNormalOf(o, worldFromObject);
+  const double len = w.n.norm();
+  if (!(len > kCollapsedRel * w.pu.norm() * w.pv.norm())) return Vec3::Constant(NAN);  // FragmentAt's limit normal
+  const Vec3 N = w.n / len, dn = w.nu * duv.x() + w.nv * duv.y();
+  const Vec3 slope = (dn - N * N.dot(dn)) / len;
+  return slope.allFinite() ? slope : Vec3::Constant(NAN);
 }
 
 double TurnRate(const TableResidual& g, const Vec2& gradY) {

@@ -85,6 +85,12 @@ double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const Affine
 // gradient is -ρ ∇θ, with ρ = `along`.
 double TurnRate(const TableResidual& atOwnAngle, const Vec2& gradY);
 
+// The derivative of the unit world normal (FragmentAt's) at a point with second
+// derivatives `o` as (u,v) moves by `duv` (LevelPoint::UvPerPixelAlongRow: per pixel along
+// the scan line, the tangent a θ chain's vertex gives its chords). NaN where undefined: a
+// collapsed normal, or an infinite duv (on the silhouette).
+Vec3 NormalSlope(const SurfaceDerivs& o, const Vec2& duv, const Affine3& worldFromObject);
+
 // A turn tracker's turn function is solved to this (radians per unit of (u,v)): where θ
 // turns at a rate of 1 per unit² of (u,v) (a gentle crinkle), the point is within 1e-7 of
 // (u,v) of the turn.

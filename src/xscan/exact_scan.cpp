@@ -63,7 +63,7 @@ raster::Fragment FragmentAt(const LevelPoint& p, const Surface& surface,
   // The texture coordinates and, through the inverse of the screen Jacobian
   // [x_u x_v; y_u y_v], their change per pixel in x and y.
   const TexCoords t = TextureCoordsAt(surface, p.uv.x(), p.uv.y());
-  const Vec2 duvdx = Vec2(p.gradY.y(), -p.gradY.x()) / p.j, duvdy = Vec2(-p.gradX.y(), p.gradX.x()) / p.j;
+  const Vec2 duvdx = p.UvPerPixelAlongRow(), duvdy = Vec2(-p.gradX.y(), p.gradX.x()) / p.j;
   f.uv = t.st;
   f.duvdx = ClampLength(t.dstdu * duvdx.x() + t.dstdv * duvdx.y(), kMaxUvPerPixel);
   f.duvdy = ClampLength(t.dstdu * duvdy.x() + t.dstdv * duvdy.y(), kMaxUvPerPixel);
@@ -141,6 +141,7 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
     const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_};
     ThetaWalker<ShapeT> walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_, options_.thetaSteps, frame);
     walker.SetChainSink(chainSink_);
+    walker.SetNormalSlopes(options_.slabRows == 0);  // chords, not slabs
     walker.SetTrim(a.scan->Trim(), &trimScratch_);
     walker.SetTrimPieces(&trimPiece_, &trimFirst_);
     f(walker, [&](const LevelPoint& p) {

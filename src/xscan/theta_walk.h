@@ -59,6 +59,10 @@ struct ThetaVertex {
   raster::Fragment f;
   Kind kind = Kind::End;
   int index = -1;  // Table: i in θ_i = 2πi/N, 0 < i < N, i != N/2
+  // The unit normal's and the eye distance's derivatives per pixel along the row, the
+  // tangents of its chords' interpolation (raster::Chord); NaN where unknown or not wanted.
+  Vec3 dndx = Vec3::Constant(NAN);
+  double dwdx = NAN;
 };
 
 // Receives every θ chain as it is made (tests and diagnostics): one call per chain.
@@ -140,6 +144,10 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // Every chain made is also shown to `sink` (none by default).
   void SetChainSink(ThetaChainSink* sink) { sink_ = sink; }
 
+  // Whether vertices carry their normal's slope along the row (ThetaVertex::dndx), which
+  // only chords use (not slabs): off by default.
+  void SetNormalSlopes(bool on) { slopes_ = on; }
+
   // Advances the chains `from` of the line before to this line as θ trackers, in the same
   // order, into *to (the trackers of this line in `t`): false if a chain cannot be
   // advanced (a tracker lost, an end or silhouette with no tracker, a link whose sideways
@@ -174,7 +182,19 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   template <class Make>
   Vertex MakeVertex(const LevelPoint& p, Make& make, ThetaVertex::Kind kind = ThetaVertex::Kind::End,
                     int index = -1) const {
-    return {p.x, make(p), kind, index};
+    Vertex v{p.x, make(p), kind, index};
+    if (slopes_) {
+      const Vec2 duv = p.UvPerPixelAlongRow();
+      v.dwdx = this->map_.ViewDepthChange(p.object.dpdu * duv.x() + p.object.dpdv * duv.y());
+      if (p.second) {
+        v.dndx = NormalSlope(p.object, duv, frame_.World());
+      } else {
+        SurfaceDerivs o;
+        this->shape_.Evaluate(p.uv.x(), p.uv.y(), DerivOrder::Second, &o);
+        v.dndx = NormalSlope(o, duv, frame_.World());
+      }
+    }
+    return v;
   }
   double ThetaOf(const raster::Fragment& f) const { return frame_.Theta(f.position, f.normal); }
   // The turn function at (u,v) (NaN where undefined).
@@ -218,6 +238,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   ThetaFrame frame_;
   double table_;  // 2π / N
   ThetaChainSink* sink_ = nullptr;
+  bool slopes_ = false;
   std::vector<Vertex>*piece_ = nullptr, *first_ = nullptr;
 
   // Hands `chain` to take, or on a trimmed surface the pieces of it the trim keeps, each
@@ -329,6 +350,7 @@ inline long EmitThetaChain(std::span<const ThetaVertex> chain, const raster::Sam
     c.xb = b.x;
     c.a = a.f;
     c.b = b.f;
+    c.SetSlopes(a.dndx, a.dwdx, b.dndx, b.dwdx);
     const int n = c.ForEachColumn(cols, [](int) {});
     covered += n;
     if (n > 0) out.AddChord(c, cols);

@@ -396,6 +396,108 @@ TEST(ScanlineRenderer, ChordsKeptWholeShadeAsTheirFragments) {
     }
 }
 
+// A circular section seen by a pinhole at the origin looking along +z (focal f pixels):
+// the circle x² + (z - 5)² = 1 in the plane y = 0, its near side, at angle φ from the
+// view axis; its point, outward unit normal, screen x and their derivatives in φ.
+struct CircleSection {
+  static constexpr double kF = 100.0, kZ = 5.0;
+  static Vec3 Point(double phi) { return Vec3(std::sin(phi), 0.0, kZ - std::cos(phi)); }
+  static Vec3 Normal(double phi) { return Vec3(std::sin(phi), 0.0, -std::cos(phi)); }
+  static double X(double phi) { return kF * Point(phi).x() / Point(phi).z(); }
+  static double DxDphi(double phi) {
+    const Vec3 p = Point(phi);
+    return kF * (std::cos(phi) * p.z() - p.x() * std::sin(phi)) / (p.z() * p.z());
+  }
+  // φ at screen x by bisection (x rises with φ on the near side for |φ| < 1.3).
+  static double PhiAt(double x, double lo, double hi) {
+    for (int k = 0; k < 200; ++k) {
+      const double mid = 0.5 * (lo + hi);
+      (X(mid) < x ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  }
+  // The chord from φa to φb, with its ends' slopes per pixel or without.
+  static Chord Of(double pa, double pb, bool slopes) {
+    Chord c;
+    c.xa = X(pa);
+    c.xb = X(pb);
+    for (auto [end, phi] : {std::pair{&c.a, pa}, {&c.b, pb}}) {
+      end->w = Point(phi).z();
+      end->position = Point(phi);
+      end->normal = Normal(phi);
+    }
+    // dN/dφ = (cos φ, 0, sin φ) = dP/dφ; dw/dφ = sin φ.
+    const auto dn = [](double phi) { return Vec3(Vec3(std::cos(phi), 0.0, std::sin(phi)) / DxDphi(phi)); };
+    if (slopes) c.SetSlopes(dn(pa), std::sin(pa) / DxDphi(pa), dn(pb), std::sin(pb) / DxDphi(pb));
+    return c;
+  }
+  // The largest normal angle (radians) and eye-distance error over 101 points of the chord.
+  static std::pair<double, double> Errors(const Chord& c, double pa, double pb) {
+    double angle = 0.0, depth = 0.0;
+    for (int k = 0; k <= 100; ++k) {
+      const double x = c.xa + (c.xb - c.xa) * k / 100.0, phi = PhiAt(x, pa, pb);
+      const Fragment f = c.At(x);
+      angle = std::max(angle, std::acos(std::clamp(f.normal.dot(Normal(phi)), -1.0, 1.0)));
+      depth = std::max(depth, std::abs(f.w - Point(phi).z()));
+      EXPECT_EQ(f.w, c.DepthAt(x));  // one rule for the depth test and the fragment
+    }
+    return {angle, depth};
+  }
+};
+
+TEST(Chord, SlopesMakeTheSectionFourthOrder) {
+  // Blended, the normal's and the depth's errors fall as the square of the chord's turn;
+  // with the ends' slopes (cubics), as its fourth power: halving the turn divides them by
+  // about 4 and 16. Turns of 2π/16 and 2π/32 on a unit circle 5 away, 100 px focal.
+  constexpr double kSecondOrderMin = 3.0, kSecondOrderMax = 5.0;  // around 4
+  // Towards 16 as the turn shrinks: 10-11 measured from 2π/16 to 2π/32, 14 from 2π/64 to
+  // 2π/128 (the blend's 3.2-3.7 and 3.8).
+  constexpr double kFourthOrderMin = 8.0;
+  constexpr double kGainAt16Min = 10.0;  // slopes cut the error at N = 16 at least this much
+  const double start = -0.6;
+  double blend[2][2], cubic[2][2];
+  for (int k = 0; k < 2; ++k) {
+    const double turn = 2.0 * M_PI / (k == 0 ? 16 : 32);
+    const auto [ba, bd] = CircleSection::Errors(CircleSection::Of(start, start + turn, false), start, start + turn);
+    const auto [ca, cd] = CircleSection::Errors(CircleSection::Of(start, start + turn, true), start, start + turn);
+    blend[k][0] = ba, blend[k][1] = bd, cubic[k][0] = ca, cubic[k][1] = cd;
+  }
+  std::cout << "chord error, normal (rad) and depth, blend: N=16 " << blend[0][0] << ", " << blend[0][1] << "; N=32 "
+            << blend[1][0] << ", " << blend[1][1] << "; cubic: N=16 " << cubic[0][0] << ", " << cubic[0][1] << "; N=32 "
+            << cubic[1][0] << ", " << cubic[1][1] << '\n';
+  for (int m = 0; m < 2; ++m) {
+    SCOPED_TRACE(m == 0 ? "normal" : "depth");
+    EXPECT_GT(blend[0][m] / blend[1][m], kSecondOrderMin);
+    EXPECT_LT(blend[0][m] / blend[1][m], kSecondOrderMax);
+    EXPECT_GT(cubic[0][m] / cubic[1][m], kFourthOrderMin);
+    EXPECT_GT(blend[0][m] / cubic[0][m], kGainAt16Min);
+  }
+}
+
+TEST(Chord, SlopeAtASilhouetteIsLeftOut) {
+  // Towards the silhouette (φ → atan(1/√24) here, where the ray grazes the circle) x stops
+  // and the slopes per pixel grow without bound: an end's slope that would turn the normal
+  // by more than twice the chord's own turn is left out, and the chord is no worse than
+  // the blend, and finite, whichever end's slope is huge or infinite.
+  const double graze = M_PI / 2.0 - std::atan(1.0 / std::sqrt(CircleSection::kZ * CircleSection::kZ - 1.0));
+  for (const double gap : {1e-3, 1e-9}) {
+    const double pb = graze - gap, pa = pb - 2.0 * M_PI / 16;
+    const auto [ba, bd] = CircleSection::Errors(CircleSection::Of(pa, pb, false), pa, pb);
+    const auto [ca, cd] = CircleSection::Errors(CircleSection::Of(pa, pb, true), pa, pb);
+    EXPECT_TRUE(std::isfinite(ca) && std::isfinite(cd)) << gap;
+    EXPECT_LE(ca, ba) << gap;
+    EXPECT_LE(cd, bd) << gap;
+  }
+  Chord c = CircleSection::Of(0.1, 0.3, false);
+  c.SetSlopes(Vec3::Constant(INFINITY), INFINITY, Vec3::Constant(NAN), NAN);
+  const Chord blend = CircleSection::Of(0.1, 0.3, false);
+  for (int k = 0; k <= 10; ++k) {
+    const double x = c.xa + (c.xb - c.xa) * k / 10.0;
+    EXPECT_EQ(c.At(x).normal, blend.At(x).normal);
+    EXPECT_EQ(c.DepthAt(x), blend.DepthAt(x));
+  }
+}
+
 // Keeps rows as they come, refusing from row `refuseAt` on.
 class OrderedRows final : public RowSink {
  public:
