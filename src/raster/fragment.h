@@ -73,21 +73,29 @@ struct Chord {
   }
   static constexpr double kSlopeTurnRatio = 2.0, kSlopeFloor = 1e-3;
 
+  // The columns it covers: `count` of them from `first`, by `step` (±1, from xa).
+  struct Columns {
+    int first = 0, step = 1, count = 0;
+  };
+  Columns ColumnsOn(const SampleColumns& cols) const {
+    if (xa == xb) {
+      const int c = cols.Ceil(xa - kColumnEpsPx);
+      if (c >= cols.n || std::abs(cols.At(c) - xa) > kColumnEpsPx) return {};
+      return {c, 1, 1};
+    }
+    if (xb > xa) {
+      const int first = cols.Ceil(xa + kColumnEpsPx);
+      return {first, 1, std::max(0, cols.Floor(xb + kColumnEpsPx) - first + 1)};
+    }
+    const int first = cols.Floor(xa - kColumnEpsPx);
+    return {first, -1, std::max(0, first - cols.Ceil(xb - kColumnEpsPx) + 1)};
+  }
   // Calls f(column) for each column covered, in order from xa; returns how many.
   template <class F>
   int ForEachColumn(const SampleColumns& cols, F&& f) const {
-    if (xa == xb) {
-      const int c = cols.Ceil(xa - kColumnEpsPx);
-      if (c >= cols.n || std::abs(cols.At(c) - xa) > kColumnEpsPx) return 0;
-      f(c);
-      return 1;
-    }
-    const int dir = xb > xa ? 1 : -1;
-    int count = 0;
-    for (int c = dir > 0 ? cols.Ceil(xa + kColumnEpsPx) : cols.Floor(xa - kColumnEpsPx);
-         c >= 0 && c < cols.n && dir * (cols.At(c) - xb) <= kColumnEpsPx; c += dir, ++count)
-      f(c);
-    return count;
+    const Columns r = ColumnsOn(cols);
+    for (int k = 0, c = r.first; k < r.count; ++k, c += r.step) f(c);
+    return r.count;
   }
   // The eye distance at screen x (a column it covers).
   double DepthAt(double x) const { return xa == xb ? a.w : DepthAlong(Along(x)); }

@@ -163,7 +163,7 @@ class FragmentGeometry final : public FragmentRow {
 
   bool Hidden(int column, double w) const override {
     return column < 0 || column >= lat_.nx || !(w >= s_.hither) ||
-           !(1.0 / w > row_[static_cast<size_t>(column) * layers_ + static_cast<size_t>(layers_ - 1)].invW);
+           Behind(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / w);
   }
 
   // A chord is kept whole, and a sample of it made only when shaded (a hidden one never),

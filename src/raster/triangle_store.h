@@ -50,10 +50,14 @@ struct Sample {
   std::int32_t handle;  // -1: none
 };
 
+// Whether a fragment at 1/w = invW is no nearer than the farthest of a sample's `layers`
+// kept (nearest first): InsertNearest would drop it.
+inline bool Behind(const Sample* keep, int layers, double invW) { return !(invW > keep[layers - 1].invW); }
+
 // Keeps the `layers` nearest fragments of a sample, nearest first. Returns whether the
 // new one was kept.
 inline bool InsertNearest(Sample* keep, int layers, double invW, std::int32_t handle) {
-  if (!(invW > keep[layers - 1].invW)) return false;
+  if (Behind(keep, layers, invW)) return false;
   int at = layers - 1;  // insertion into the sorted layers, dropping the farthest
   for (; at > 0 && invW > keep[at - 1].invW; --at) keep[at] = keep[at - 1];
   keep[at] = {invW, handle};

@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "raster/scanline_renderer.h"
+#include "raster/triangle_store.h"
 
 namespace patchscan {
 
@@ -61,28 +62,25 @@ class DepthFilter {
   void Reset(const raster::KeptDepths& kept, int columns) {
     kept_ = kept;
     columns_ = columns;
-    invW_.assign(static_cast<std::size_t>(kept.layers > 0 ? columns * kept.layers : 0), 0.0);
+    keep_.assign(static_cast<std::size_t>(kept.layers > 0 ? columns * kept.layers : 0), kNone);
   }
-  void ClearRow() { std::fill(invW_.begin(), invW_.end(), 0.0); }
+  void ClearRow() { std::fill(keep_.begin(), keep_.end(), kNone); }
   bool Hidden(int column, double w) const {
     if (kept_.layers == 0) return false;
-    return column < 0 || column >= columns_ || !(w >= kept_.hither) ||
-           !(1.0 / w > invW_[static_cast<std::size_t>(column * kept_.layers + kept_.layers - 1)]);
+    return column < 0 || column >= columns_ || !(w >= kept_.hither) || raster::Behind(Of(column), kept_.layers, 1.0 / w);
   }
   // Takes a fragment not Hidden: its depth joins the sample's nearest.
   void Keep(int column, double w) {
-    if (kept_.layers == 0) return;
-    double* keep = invW_.data() + static_cast<std::ptrdiff_t>(column) * kept_.layers;
-    const double invW = 1.0 / w;
-    int at = kept_.layers - 1;
-    for (; at > 0 && invW > keep[at - 1]; --at) keep[at] = keep[at - 1];
-    keep[at] = invW;
+    if (kept_.layers > 0) raster::InsertNearest(Of(column), kept_.layers, 1.0 / w, 0);
   }
 
  private:
+  static constexpr raster::Sample kNone{0.0, -1};
+  const raster::Sample* Of(int column) const { return keep_.data() + static_cast<std::ptrdiff_t>(column) * kept_.layers; }
+  raster::Sample* Of(int column) { return keep_.data() + static_cast<std::ptrdiff_t>(column) * kept_.layers; }
   raster::KeptDepths kept_;
   int columns_ = 0;
-  std::vector<double> invW_;  // per column its layers' 1 / w, nearest first (0: none)
+  std::vector<raster::Sample> keep_;  // per column its layers' depths, nearest first (as the back end's)
 };
 
 // One worker's share of a row, as its scan handed it over: fragments and triangles, each

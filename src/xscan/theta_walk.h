@@ -341,7 +341,7 @@ inline long EmitThetaChain(std::span<const ThetaVertex> chain, const raster::Sam
   c.orthographic = orthographic;
   c.xa = c.xb = chain.front().x;
   c.a = chain.front().f;
-  long covered = c.ForEachColumn(cols, [](int) {});
+  long covered = c.ColumnsOn(cols).count;
   if (covered > 0) out.AddChord(c, cols);
   for (size_t k = 1; k < chain.size(); ++k) {
     const ThetaVertex &a = chain[k - 1], &b = chain[k];
@@ -351,7 +351,7 @@ inline long EmitThetaChain(std::span<const ThetaVertex> chain, const raster::Sam
     c.a = a.f;
     c.b = b.f;
     c.SetSlopes(a.dndx, a.dwdx, b.dndx, b.dwdx);
-    const int n = c.ForEachColumn(cols, [](int) {});
+    const int n = c.ColumnsOn(cols).count;
     covered += n;
     if (n > 0) out.AddChord(c, cols);
   }

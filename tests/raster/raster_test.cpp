@@ -276,6 +276,16 @@ class StreamedMesh final : public FragmentSource {
   double spacing_ = 1, offset_ = 0.5;
 };
 
+// The frame of the pinhole above (Homogeneous), `aa` samples a side.
+RenderSettings PinholeFrame(int aa) {
+  RenderSettings s;
+  s.width = 128;
+  s.height = 96;
+  s.aa = aa;
+  s.hither = 0.01;
+  return s;
+}
+
 TEST(ScanlineRenderer, TrianglesHandedOverByADirectSourceRenderAsAMesh) {
   // θ slabs reach the back end through the fragment path: the same triangles streamed
   // row by row cover exactly the samples the mesh path covers, and shade alike (a group
@@ -293,11 +303,7 @@ TEST(ScanlineRenderer, TrianglesHandedOverByADirectSourceRenderAsAMesh) {
   }
   for (std::uint32_t k = 0; k < kRing; ++k) m.triangles.push_back({{0, 1 + k, 1 + (k + 1) % kRing}, 0});
   for (const int aa : {1, 4}) {
-    RenderSettings s;
-    s.width = 128;
-    s.height = 96;
-    s.aa = aa;
-    s.hither = 0.01;
+    const RenderSettings s = PinholeFrame(aa);
     CaptureSink mesh(s.width), streamed(s.width);
     ASSERT_TRUE(RenderMesh(m, s, mesh));
     const double spacing = aa == 1 ? 1.0 : 1.0 / (aa - 1);
@@ -317,8 +323,9 @@ TEST(ScanlineRenderer, TrianglesHandedOverByADirectSourceRenderAsAMesh) {
 }
 
 // Two surfaces whose sections on every sample row are chains of chords, their depths
-// crossing: handed over as chords, or (`expand`) as one fragment per column made by the
-// chord itself (what a back end that does not keep chords does).
+// crossing, the normal and depth slopes given at every other vertex: handed over as
+// chords, or (`expand`) as one fragment per column made by the chord itself (what a back
+// end that does not keep chords does).
 class ChordSource final : public FragmentSource {
  public:
   explicit ChordSource(bool expand) : expand_(expand) {}
@@ -326,12 +333,15 @@ class ChordSource final : public FragmentSource {
     for (std::uint32_t id = 0; id < 2; ++id) {
       Chord c;
       const double xs[] = {8.3, 21.0, 40.7, 41.2, 77.9, 110.5};
+      const auto normal = [&](double x) { return Vec3(std::cos(0.05 * x + id), std::sin(0.05 * x), -1.5).normalized(); };
+      Vec3 dn = Vec3::Constant(NAN);
+      double dw = NAN;
       for (std::size_t k = 0; k < std::size(xs); ++k) {
         const double x = xs[k] + (id == 1 ? 6.0 * std::sin(0.1 * y) : 0.0);
         Fragment f;
         f.w = id == 0 ? 2.0 + 0.02 * x : 4.0 - 0.015 * x + 0.01 * y;
         f.position = Vec3((x - 64) * f.w / 100, (y - 48) * f.w / 100, f.w);
-        f.normal = Vec3(std::cos(0.05 * x + id), std::sin(0.05 * x), -1.5).normalized();
+        f.normal = normal(x);
         f.uv = Vec2(x / 128, y / 96);
         f.duvdx = Vec2(1.0 / 128, 0.0);
         f.duvdy = Vec2(0.0, 1.0 / 96);
@@ -344,6 +354,11 @@ class ChordSource final : public FragmentSource {
           c.a = f;
           c.xa = x;
         }
+        const Vec3 dnb = k % 2 ? Vec3((normal(x + 1e-4) - normal(x - 1e-4)) / 2e-4) : Vec3::Constant(NAN);
+        const double dwb = k % 2 ? (id == 0 ? 0.02 : -0.015) : NAN;
+        c.SetSlopes(dn, dw, dnb, dwb);
+        dn = dnb;
+        dw = dwb;
         if (expand_)
           c.ForEachColumn(columns, [&](int col) { out.Add(col, c.At(columns.At(col))); });
         else
@@ -375,11 +390,7 @@ TEST(ScanlineRenderer, ChordsKeptWholeShadeAsTheirFragments) {
   // end makes and adds the fragments itself).
   for (const bool cull : {false, true})
     for (const int aa : {1, 3}) {
-      RenderSettings s;
-      s.width = 128;
-      s.height = 96;
-      s.aa = aa;
-      s.hither = 0.01;
+      RenderSettings s = PinholeFrame(aa);
       s.cullBackFaces = cull;
       AllChannels kept(s.width), made(s.width);
       ChordSource chords(false), fragments(true);
