@@ -109,16 +109,11 @@ class RowBuffer final : public raster::FragmentRow {
     chords.clear();
     depth.ClearRow();
   }
-  // A chord is kept whole (its samples are made by the back end), unless all of it is hidden.
-  void AddChord(const raster::Chord& c, const raster::SampleColumns& columns) override {
-    bool shown = false;
-    c.ForEachColumn(columns, [&](int column) {
-      const double w = c.DepthAt(columns.At(column));
-      if (depth.Hidden(column, w)) return;
-      depth.Keep(column, w);
-      shown = true;
-    });
-    if (shown) chords.push_back({rank_[c.a.surfaceId], c});
+  // A chord is kept whole, its samples tested and made by the back end: testing its
+  // columns here too would cost as much as the back end's own test, to save copying a few
+  // hidden chords (of θ mode, which hands over nothing else to hide).
+  void AddChord(const raster::Chord& c, const raster::SampleColumns&) override {
+    chords.push_back({rank_[c.a.surfaceId], c});
   }
   void Add(int column, const raster::Fragment& f) override {
     if (depth.Hidden(column, f.w)) return;
@@ -399,10 +394,14 @@ bool PartitionedScan::PrepareRow(double y, const raster::SampleColumns& columns,
   // all taking the verdict.
   ExactScan& first = workers_.front()->scan;
   interval_ = first.SlabMode() && first.BeginsInterval(y, columns);
-  ForEachWorker([&](Worker& w) {
-    w.buffer.Clear();
-    if (interval_) w.vote = w.scan.PrepareInterval(y, columns, w.buffer);
-  });
+  if (!interval_) {  // nothing to prepare: no fork and join for it
+    for (auto& w : workers_) w->buffer.Clear();
+  } else {
+    ForEachWorker([&](Worker& w) {
+      w.buffer.Clear();
+      w.vote = w.scan.PrepareInterval(y, columns, w.buffer);
+    });
+  }
   *quiet = true;
   for (const auto& w : workers_) *quiet = *quiet && w->vote;
   return interval_;
