@@ -60,16 +60,21 @@ struct Chord {
   // unknown). An end's are kept where its normal slope would turn the normal by at most
   // kSlopeTurnRatio times the turn between the ends across the chord (plus kSlopeFloor
   // radians): on a silhouette, or near one, the section turns as the square root of x and
-  // the slopes there are infinite or huge, no tangents for a cubic.
+  // the slopes there are infinite or huge, no tangents for a cubic. Called once the ends
+  // are set, which then stay.
   void SetSlopes(const Vec3& dna, double dwa, const Vec3& dnb, double dwb) {
     const double span = xb - xa, turn = (b.normal - a.normal).norm();
-    const auto fits = [&](const Vec3& dn) { return (span * dn).norm() <= kSlopeTurnRatio * turn + kSlopeFloor; };
-    na_ = span * dna;
-    nb_ = span * dnb;
-    qa_ = span * (orthographic ? dwa : -dwa / (a.w * a.w));
-    qb_ = span * (orthographic ? dwb : -dwb / (b.w * b.w));
-    if (!fits(dna) || !std::isfinite(qa_)) na_ = Vec3::Constant(NAN), qa_ = NAN;
-    if (!fits(dnb) || !std::isfinite(qb_)) nb_ = Vec3::Constant(NAN), qb_ = NAN;
+    const Vec3 ta = span * dna, tb = span * dnb;
+    const double sa = span * (orthographic ? dwa : -dwa / (a.w * a.w));
+    const double sb = span * (orthographic ? dwb : -dwb / (b.w * b.w));
+    const auto fits = [&](const Vec3& t, double s) {
+      return t.norm() <= kSlopeTurnRatio * turn + kSlopeFloor && std::isfinite(s);  // false for NaN
+    };
+    const bool ka = fits(ta, sa), kb = fits(tb, sb);
+    cubic_ = ka || kb;
+    if (!cubic_) return;
+    Coefficients(a.normal, b.normal, ta, tb, ka, kb, n_);
+    Coefficients(Depth(a.w), Depth(b.w), sa, sb, ka, kb, q_);
   }
   static constexpr double kSlopeTurnRatio = 2.0, kSlopeFloor = 1e-3;
 
@@ -110,7 +115,7 @@ struct Chord {
     Fragment f = a;
     f.w = DepthAlong(t);
     f.position = wa * a.position + wb * b.position;
-    const Vec3 n = Known(na_) || Known(nb_) ? Cubic(t, a.normal, b.normal, na_, nb_) : Vec3(wa * a.normal + wb * b.normal);
+    const Vec3 n = cubic_ ? Horner(n_, t) : Vec3(wa * a.normal + wb * b.normal);
     f.normal = n.normalized();
     if (!f.normal.allFinite()) f.normal = a.normal;
     f.uv = wa * a.uv + wb * b.uv;
@@ -119,29 +124,40 @@ struct Chord {
   }
 
  private:
-  Vec3 na_ = Vec3::Constant(NAN), nb_ = Vec3::Constant(NAN);  // normal tangents per unit t
-  double qa_ = NAN, qb_ = NAN;  // 1/w's (orthographic: w's) tangents per unit t
+  // With slopes: the normal's and the depth's (Depth) cubics in t, lowest power first.
+  bool cubic_ = false;
+  Vec3 n_[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+  double q_[4] = {};
 
   double Along(double x) const { return std::clamp((x - xa) / (xb - xa), 0.0, 1.0); }
+  // What is interpolated for the eye distance: 1/w in perspective, w orthographic.
+  double Depth(double w) const { return orthographic ? w : 1.0 / w; }
   double DepthAlong(double t) const {
-    if (orthographic) return Cubic(t, a.w, b.w, qa_, qb_);
-    return 1.0 / Cubic(t, 1.0 / a.w, 1.0 / b.w, qa_, qb_);
+    const double d = cubic_ ? Horner(q_, t) : (1.0 - t) * Depth(a.w) + t * Depth(b.w);
+    return orthographic ? d : 1.0 / d;
   }
-  static bool Known(double v) { return std::isfinite(v); }
-  static bool Known(const Vec3& v) { return v.allFinite(); }
-  // The cubic from va at t = 0 to vb at 1 with tangents ta, tb (per unit t); with one
-  // tangent unknown the quadratic, with neither the line.
   template <class V>
-  static V Cubic(double t, const V& va, const V& vb, const V& ta, const V& tb) {
-    const bool ka = Known(ta), kb = Known(tb);
+  static V Horner(const V (&c)[4], double t) {
+    return ((c[3] * t + c[2]) * t + c[1]) * t + c[0];
+  }
+  // The cubic from va at t = 0 to vb at 1 with tangents ta and tb (per unit t) where both
+  // are known (ka, kb: Hermite's), else the quadratic with the one known.
+  template <class V>
+  static void Coefficients(const V& va, const V& vb, const V& ta, const V& tb, bool ka, bool kb, V (&c)[4]) {
+    const V d = vb - va;
+    c[0] = va;
+    c[3] = 0.0 * va;
     if (ka && kb) {
-      const double t2 = t * t, t3 = t2 * t;
-      return (2.0 * t3 - 3.0 * t2 + 1.0) * va + (t3 - 2.0 * t2 + t) * ta + (3.0 * t2 - 2.0 * t3) * vb + (t3 - t2) * tb;
+      c[1] = ta;
+      c[2] = 3.0 * d - 2.0 * ta - tb;
+      c[3] = -2.0 * d + ta + tb;
+    } else if (ka) {
+      c[1] = ta;
+      c[2] = d - ta;
+    } else {
+      c[1] = 2.0 * d - tb;
+      c[2] = tb - d;
     }
-    if (ka) return va + t * ta + t * t * (vb - va - ta);
-    const double s = 1.0 - t;
-    if (kb) return vb - s * tb + s * s * (va - vb + tb);
-    return s * va + t * vb;
   }
 };
 
