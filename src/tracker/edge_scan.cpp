@@ -8,22 +8,26 @@
 namespace patchscan {
 namespace {
 
-// y along the edge and its first two derivatives in t, and J, at t.
+// y along the edge and its first two derivatives in t, and J, at t; of an evaluation of
+// `order`, what it gives (NaN the rest): a Newton step needs y and y_t, a tracker's
+// prediction y_tt too. A subdivision face's second derivatives cost two more evaluations.
 struct EdgeSample {
-  double y, yt, ytt, j;
-  double tangent, across;  // |dp/dt| and |dp/d(other)| in screen space
+  double y, yt = NAN, ytt = NAN, j = NAN;
+  double tangent = NAN, across = NAN;  // |dp/dt| and |dp/d(other)| in screen space
 };
 
 template <class ShapeT>
-EdgeSample SampleEdge(const ShapeT& shape, const ScreenMap& map, PatchEdge e, double t) {
+EdgeSample SampleEdge(const ShapeT& shape, const ScreenMap& map, PatchEdge e, double t,
+                      DerivOrder order = DerivOrder::Second) {
   const Vec2 uv = EdgePoint(e, t);
   ScreenDerivs d;
-  EvaluateScreen(shape, map, uv.x(), uv.y(), DerivOrder::Second, &d);
+  EvaluateScreen(shape, map, uv.x(), uv.y(), order, &d);
+  if (!Wants(order, DerivOrder::First)) return {d.p.y()};
   const bool alongV = e == PatchEdge::U0 || e == PatchEdge::U1;
   const Vec3& pt = alongV ? d.dpdv : d.dpdu;
-  const Vec3& ptt = alongV ? d.d2pdv2 : d.d2pdu2;
   const Vec3& across = alongV ? d.dpdu : d.dpdv;
-  return {d.p.y(), pt.y(), ptt.y(), SilhouetteJ(d), pt.head<2>().norm(), across.head<2>().norm()};
+  const double ytt = Wants(order, DerivOrder::Second) ? (alongV ? d.d2pdv2 : d.d2pdu2).y() : NAN;
+  return {d.p.y(), pt.y(), ytt, SilhouetteJ(d), pt.head<2>().norm(), across.head<2>().norm()};
 }
 
 // Where a tracker's Newton iteration starts on scan line yNext. Paper 001 §3.5 extrapolates
@@ -63,10 +67,10 @@ std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEd
   // Step 1: collapsed edges (kCollapsedRel everywhere along them) have no crossing to track.
   bool collapsed = true;
   for (int k = 0; k <= 4 && collapsed; ++k) {
-    const EdgeSample s = SampleEdge(shape, map, e, k / 4.0);
+    const EdgeSample s = SampleEdge(shape, map, e, k / 4.0, DerivOrder::First);
     collapsed = s.tangent <= kCollapsedRel * std::max(s.across, 1e-300);
   }
-  if (collapsedY) *collapsedY = collapsed ? SampleEdge(shape, map, e, 0.5).y : NAN;
+  if (collapsedY) *collapsedY = collapsed ? SampleEdge(shape, map, e, 0.5, DerivOrder::Position).y : NAN;
   if (collapsed) return {};
   // Step 2: critical points of y(t): sign changes of y_t between samples, refined by
   // Newton on y_t = 0 inside the bracket (bisection when Newton leaves it).
@@ -78,7 +82,8 @@ std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEd
   cuts.push_back(1.0);
   std::vector<EdgePiece> pieces;
   for (size_t k = 0; k + 1 < cuts.size(); ++k) {
-    const double ya = SampleEdge(shape, map, e, cuts[k]).y, yb = SampleEdge(shape, map, e, cuts[k + 1]).y;
+    const double ya = SampleEdge(shape, map, e, cuts[k], DerivOrder::Position).y,
+                 yb = SampleEdge(shape, map, e, cuts[k + 1], DerivOrder::Position).y;
     if (cuts[k + 1] > cuts[k]) pieces.push_back({e, cuts[k], cuts[k + 1], std::min(ya, yb), std::max(ya, yb)});
   }
   return pieces;
@@ -126,8 +131,8 @@ void EdgeScan::Advance(double yScan) {
       ++counters_[Counter::EdgeDied];
       ++events_;
       deaths_.push_back(EdgePoint(p.edge, t.t));
-      const double bottom = SampleEdge(shape, map_, p.edge, p.t0).y >= p.yBottom ? p.t0 : p.t1;
-      const double j = SampleEdge(shape, map_, p.edge, bottom).j;
+      const double bottom = SampleEdge(shape, map_, p.edge, p.t0, DerivOrder::Position).y >= p.yBottom ? p.t0 : p.t1;
+      const double j = SampleEdge(shape, map_, p.edge, bottom, DerivOrder::First).j;
       if ((j > 0 && t.j < 0) || (j < 0 && t.j > 0)) {
         folds_.push_back(EdgePoint(p.edge, bottom));
         ++counters_[Counter::Folds];
@@ -139,11 +144,11 @@ void EdgeScan::Advance(double yScan) {
     for (; nextPiece_ < pieces_.size() && pieces_[nextPiece_].yTop <= yScan; ++nextPiece_) {
       if (pieces_[nextPiece_].yBottom < yScan) continue;  // passed between two lines
       const EdgePiece& p = pieces_[nextPiece_];
-      const double yAt0 = SampleEdge(shape, map_, p.edge, p.t0).y;
+      const double yAt0 = SampleEdge(shape, map_, p.edge, p.t0, DerivOrder::Position).y;
       const double top = yAt0 <= p.yTop ? p.t0 : p.t1;
       // J at the piece's top, where the tracker is born: a silhouette that crosses the
       // edge between the top and the first scan line is a fold too.
-      trackers_.push_back({static_cast<int>(nextPiece_), top, top, false, SampleEdge(shape, map_, p.edge, top).j});
+      trackers_.push_back({static_cast<int>(nextPiece_), top, top, false, SampleEdge(shape, map_, p.edge, top, DerivOrder::First).j});
       ++counters_[Counter::EdgeBorn];
       ++events_;
     }
@@ -152,7 +157,7 @@ void EdgeScan::Advance(double yScan) {
       const EdgePiece& p = pieces_[tr.piece];
       const double start = extrapolate_ ? PredictedStart(tr, yScan, tolerancePx_) : tr.t;
       auto f = [&](double t, double* v, double* d) {
-        const EdgeSample s = SampleEdge(shape, map_, p.edge, t);
+        const EdgeSample s = SampleEdge(shape, map_, p.edge, t, DerivOrder::First);
         *v = s.y - yScan;
         *d = s.yt;
       };
