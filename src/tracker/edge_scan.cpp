@@ -73,12 +73,15 @@ std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEd
   if (collapsedY) *collapsedY = collapsed ? SampleEdge(shape, map, e, 0.5, DerivOrder::Position).y : NAN;
   if (collapsed) return {};
   // Step 2: critical points of y(t): sign changes of y_t between samples, refined by
-  // Newton on y_t = 0 inside the bracket (bisection when Newton leaves it).
+  // Newton on y_t = 0 inside the bracket (bisection when Newton leaves it): the samples
+  // need y_t alone, Newton y_tt too.
   std::vector<double> cuts = {0.0};
-  SignChanges([&](double t) {
-    const EdgeSample s = SampleEdge(shape, map, e, t);
-    return std::pair(s.yt, s.ytt);
-  }, 0.0, 1.0, kEdgeCriticalSamples, &cuts);
+  SignChanges([&](double t) { return SampleEdge(shape, map, e, t, DerivOrder::First).yt; },
+              [&](double t) {
+                const EdgeSample s = SampleEdge(shape, map, e, t);
+                return std::pair(s.yt, s.ytt);
+              },
+              0.0, 1.0, kEdgeCriticalSamples, &cuts);
   cuts.push_back(1.0);
   std::vector<EdgePiece> pieces;
   for (size_t k = 0; k + 1 < cuts.size(); ++k) {
