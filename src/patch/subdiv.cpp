@@ -185,8 +185,8 @@ void SubdivFace::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* o
 }
 
 void SubdivFace::EvaluateBfr(const FaceData& face, double u, double v, DerivOrder order, SurfaceDerivs* out) const {
-  const double uv[2] = {c00_[0] + eu_[0] * u + ev_[0] * v + twist_[0] * u * v,
-                        c00_[1] + eu_[1] * u + ev_[1] * v + twist_[1] * u * v};
+  const SubFacePoint m = SubFaceAt(u, v);
+  const double* uv = m.uv;
   const osd::Bfr::Surface<double>::PointDescriptor desc(3);
   double p[3], du[3], dv[3], duu[3], duv[3], dvv[3];
   const double* pts = face.patchPoints.data();
@@ -196,13 +196,11 @@ void SubdivFace::EvaluateBfr(const FaceData& face, double u, double v, DerivOrde
   out->p = Vec3(p[0], p[1], p[2]);
   if (!Wants(order, DerivOrder::First)) return;
   const Vec3 Du(du[0], du[1], du[2]), Dv(dv[0], dv[1], dv[2]);
-  // The chain rule through the map (u, v) -> (U, V): its Jacobian columns are
-  // dU/du = eu + twist v and dU/dv = ev + twist u; its only second derivative is
-  // d2U/dudv = twist.
-  const double a00 = eu_[0] + twist_[0] * v, a10 = eu_[1] + twist_[1] * v;  // d(U, V)/du
-  const double a01 = ev_[0] + twist_[0] * u, a11 = ev_[1] + twist_[1] * u;  // d(U, V)/dv
-  out->dpdu = a00 * Du + a10 * Dv;
-  out->dpdv = a01 * Du + a11 * Dv;
+  // The chain rule through the map (u, v) -> (U, V) (SubFaceAt); its only second
+  // derivative is d2U/dudv = twist.
+  const double a00 = m.a00, a10 = m.a10, a01 = m.a01, a11 = m.a11;
+  out->dpdu = m.AlongU(Du, Dv);
+  out->dpdv = m.AlongV(Du, Dv);
   if (!Wants(order, DerivOrder::Second)) return;
   const Vec3 Duu(duu[0], duu[1], duu[2]), Duv(duv[0], duv[1], duv[2]), Dvv(dvv[0], dvv[1], dvv[2]);
   out->d2pdu2 = a00 * a00 * Duu + 2.0 * a00 * a10 * Duv + a10 * a10 * Dvv;
@@ -213,16 +211,12 @@ void SubdivFace::EvaluateBfr(const FaceData& face, double u, double v, DerivOrde
 std::optional<TexCoords> SubdivFace::TextureCoords(double u, double v) const {
   if (cage_->Mesh().st.empty()) return std::nullopt;
   const FaceData& face = cage_->Data(face_);
-  const double uv[2] = {c00_[0] + eu_[0] * u + ev_[0] * v + twist_[0] * u * v,
-                        c00_[1] + eu_[1] * u + ev_[1] * v + twist_[1] * u * v};
+  const SubFacePoint m = SubFaceAt(u, v);
   const osd::Bfr::Surface<double>::PointDescriptor desc(2);
   double st[2], du[2], dv[2];
-  face.stSurface.Evaluate(uv, face.stPatchPoints.data(), desc, st, du, dv);
-  // The chain rule through the sub-face's map, as in Evaluate.
-  const double a00 = eu_[0] + twist_[0] * v, a10 = eu_[1] + twist_[1] * v;
-  const double a01 = ev_[0] + twist_[0] * u, a11 = ev_[1] + twist_[1] * u;
+  face.stSurface.Evaluate(m.uv, face.stPatchPoints.data(), desc, st, du, dv);
   const Vec2 Du(du[0], du[1]), Dv(dv[0], dv[1]);
-  return TexCoords{Vec2(st[0], st[1]), a00 * Du + a10 * Dv, a01 * Du + a11 * Dv};
+  return TexCoords{Vec2(st[0], st[1]), m.AlongU(Du, Dv), m.AlongV(Du, Dv)};
 }
 
 bool SubdivFace::Regular() const { return cage_->Data(face_).surface.IsRegular(); }

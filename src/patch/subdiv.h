@@ -117,6 +117,21 @@ class SubdivFace {
  private:
   // Bfr's evaluation of the prepared face through the sub-face map.
   void EvaluateBfr(const FaceData& face, double u, double v, DerivOrder order, SurfaceDerivs* out) const;
+  // The sub-face map at (u, v): the face's Bfr coordinates, and the map's Jacobian columns
+  // d(U, V)/du = (a00, a10) = eu + twist v and d(U, V)/dv = (a01, a11) = ev + twist u.
+  struct SubFacePoint {
+    double uv[2];
+    double a00, a10, a01, a11;
+    // Chain rule: a derivative along u or v from the Bfr derivatives dU, dV.
+    template <class V>
+    V AlongU(const V& dU, const V& dV) const { return a00 * dU + a10 * dV; }
+    template <class V>
+    V AlongV(const V& dU, const V& dV) const { return a01 * dU + a11 * dV; }
+  };
+  SubFacePoint SubFaceAt(double u, double v) const {
+    return {{c00_[0] + eu_[0] * u + ev_[0] * v + twist_[0] * u * v, c00_[1] + eu_[1] * u + ev_[1] * v + twist_[1] * u * v},
+            eu_[0] + twist_[0] * v, eu_[1] + twist_[1] * v, ev_[0] + twist_[0] * u, ev_[1] + twist_[1] * u};
+  }
 
   std::shared_ptr<Cage> cage_;
   int face_;
