@@ -38,6 +38,14 @@ Height EvalHeight(const ShapeT& shape, const ScreenMap& map, const Vec2& uv) {
   return r;
 }
 
+// h alone (a subdivision face's second derivatives cost two more evaluations).
+template <class ShapeT>
+double EvalH(const ShapeT& shape, const ScreenMap& map, const Vec2& uv) {
+  ScreenDerivs d;
+  EvaluateScreen(shape, map, uv.x(), uv.y(), DerivOrder::Position, &d);
+  return -d.p.y();
+}
+
 // Relative size of det H below which the Hessian counts as singular (a parabolic
 // cylinder, §3.4): the eigenvalue ratio is then below ~1e-6, far flatter than any
 // ellipse seeding could follow.
@@ -95,7 +103,8 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
 
       // Step 1: constrained hill climbing (projected gradient, Newton when concave).
       Vec2 uv = seed;
-      Height at = EvalHeight(shape, map, uv);
+      const Height atSeed = EvalHeight(shape, map, uv);
+      Height at = atSeed;
       double stepLen = 0.25;  // gradient step length in parameter units, adapted
       bool fixed[2] = {false, false};
       for (int it = 0; it < kMaxClimbIterations; ++it) {
@@ -167,8 +176,7 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
       // Step 3: saddles, by Newton on grad h = 0 from the same seed (§3.2.2.4).
       NewtonOptions opt;
       opt.domain = DomainRule::Fail;
-      const Height at0 = EvalHeight(shape, map, seed);
-      const double gtol = 1e-10 * std::max(at0.H.norm(), 1e-300);
+      const double gtol = 1e-10 * std::max(atSeed.H.norm(), 1e-300);
       const auto r = SolveNewton2(
           [&](const Vec2& p, Vec2* f, Mat2* j) {
             const Height e = EvalHeight(shape, map, p);
@@ -191,7 +199,7 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
     bool dup = false;
     for (const Stationary& u : unique) {
       if (u.kind != s.kind || std::abs(u.y - s.y) > kDuplicateY) continue;
-      const double yMid = -EvalHeight(shape, map, 0.5 * (u.uv + s.uv)).h;
+      const double yMid = -EvalH(shape, map, 0.5 * (u.uv + s.uv));
       if (std::abs(yMid - s.y) <= kDuplicateY && std::abs(yMid - u.y) <= kDuplicateY) {
         dup = true;
         break;
