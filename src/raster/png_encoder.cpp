@@ -1,4 +1,5 @@
 #include "raster/png_encoder.h"
+#include "raster/work_arena.h"
 
 #include "raster/srgb.h"
 
@@ -123,7 +124,7 @@ struct PngEncoder::Impl {
   int tasks = 0;                    // deflate tasks enqueued and not yet finished
   uLong adler = 1;
   bool failed = false, finished = false;
-  std::unique_ptr<tbb::task_arena> arena;
+  std::shared_ptr<tbb::task_arena> arena;
   std::mutex m;
   std::condition_variable cv;
 
@@ -208,9 +209,9 @@ void PngEncoder::Impl::Deflate(Band& b) {
   b.length = static_cast<uLong>(size);
 }
 
-// A band is deflated by whichever thread takes it up first: a task on the encoder's arena,
+// A band is deflated by whichever thread takes it up first: a task on the render's arena,
 // or the thread that needs it written (WriteDone), which so never waits for a task that no
-// thread is free to run (the rows may come from a task of another arena).
+// thread is free to run (the rows may come from a task of the arena itself).
 void PngEncoder::Impl::Submit(Band& b) {
   b.pending = true;
   b.done = false;
@@ -315,7 +316,7 @@ PngEncoder::PngEncoder(std::FILE* file, int width, int height, Options options)
   // Enough bands in flight to keep every thread deflating while finished ones wait their turn.
   s.bands = std::vector<Band>(s.threads > 1 ? static_cast<std::size_t>(2 * s.threads + 1) : 1);
   // More threads than cores would only queue (and oneTBB warns); the bytes do not change.
-  if (s.threads > 1) s.arena = std::make_unique<tbb::task_arena>(std::min(s.threads, tbb::info::default_concurrency()));
+  if (s.threads > 1 && tbb::info::default_concurrency() > 1) s.arena = WorkArena(s.threads);
 
   static const std::uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   s.Write(kSignature, 8);

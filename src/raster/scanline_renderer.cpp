@@ -1,4 +1,5 @@
 #include "raster/scanline_renderer.h"
+#include "raster/work_arena.h"
 
 #include <algorithm>
 #include <limits>
@@ -470,7 +471,7 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
         geo.CopySampleRow(above->refs, s.aa - 1, pr.refs, 0);
         continue;
       }
-      std::fill(pr.samples[r].begin(), pr.samples[r].end(), Sample{0.0, -1});
+      std::fill(pr.samples[r].begin(), pr.samples[r].end(), kNoSample);
       geo.ScanRow(pr.j0 + r, r, lat.At(pr.j0 + r), pr.samples[r].data(), pr.refs);
     }
     above = &pr;
@@ -492,7 +493,8 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
       emit(*pr);
     }
   } else {
-    tbb::task_arena arena(threads);
+    const std::shared_ptr<tbb::task_arena> shared = WorkArena(threads);
+    tbb::task_arena& arena = *shared;
     std::vector<tbb::task_group> shading(ring.size());  // per ring slot, its row's task
     std::size_t oldest = 0;                             // rows handed over: the oldest in flight
     // Waits for the oldest row in flight (running other rows' tasks meanwhile) and hands it over.

@@ -49,6 +49,8 @@ struct Sample {
   double invW;          // 1 / w of the fragment; 0: none
   std::int32_t handle;  // -1: none
 };
+// A sample no fragment has reached.
+inline constexpr Sample kNoSample{0.0, -1};
 
 // Whether a fragment at 1/w = invW is no nearer than the farthest of a sample's `layers`
 // kept (nearest first): InsertNearest would drop it.

@@ -17,6 +17,7 @@
 
 #include "raster/scanline_renderer.h"
 #include "raster/triangle_store.h"
+#include "raster/work_arena.h"
 
 namespace patchscan {
 
@@ -62,24 +63,34 @@ class DepthFilter {
   void Reset(const raster::KeptDepths& kept, int columns) {
     kept_ = kept;
     columns_ = columns;
-    keep_.assign(static_cast<std::size_t>(kept.layers > 0 ? columns * kept.layers : 0), kNone);
+    keep_.clear();
+    touched_ = false;
   }
-  void ClearRow() { std::fill(keep_.begin(), keep_.end(), kNone); }
+  // The depths are made when the first is kept: a row that keeps none (a θ scan's, whose
+  // chords are not tested here) costs nothing to hold or to clear.
+  void ClearRow() {
+    if (touched_) std::fill(keep_.begin(), keep_.end(), raster::kNoSample);
+    touched_ = false;
+  }
   bool Hidden(int column, double w) const {
     if (kept_.layers == 0) return false;
-    return column < 0 || column >= columns_ || !(w >= kept_.hither) || raster::Behind(Of(column), kept_.layers, 1.0 / w);
+    return column < 0 || column >= columns_ || !(w >= kept_.hither) ||
+           (touched_ && raster::Behind(Of(column), kept_.layers, 1.0 / w));
   }
   // Takes a fragment not Hidden: its depth joins the sample's nearest.
   void Keep(int column, double w) {
-    if (kept_.layers > 0) raster::InsertNearest(Of(column), kept_.layers, 1.0 / w, 0);
+    if (kept_.layers == 0) return;
+    if (keep_.empty()) keep_.assign(static_cast<std::size_t>(columns_) * kept_.layers, raster::kNoSample);
+    raster::InsertNearest(Of(column), kept_.layers, 1.0 / w, 0);
+    touched_ = true;
   }
 
  private:
-  static constexpr raster::Sample kNone{0.0, -1};
   const raster::Sample* Of(int column) const { return keep_.data() + static_cast<std::ptrdiff_t>(column) * kept_.layers; }
   raster::Sample* Of(int column) { return keep_.data() + static_cast<std::ptrdiff_t>(column) * kept_.layers; }
   raster::KeptDepths kept_;
   int columns_ = 0;
+  bool touched_ = false;  // some depth kept since the row was cleared
   std::vector<raster::Sample> keep_;  // per column its layers' depths, nearest first (as the back end's)
 };
 
@@ -164,7 +175,8 @@ void MergeByRank(std::size_t nLists, Entries&& entries, std::vector<std::size_t>
 // Sample rows the scan-ahead may be in front of the back end: two pixel rows' worth of the
 // render's supersampling grid (RowsAhead), at most those of the largest grid. A row held
 // is every fragment of every layer of it (144 bytes each): 16 rows of a 16384-wide teapot
-// were 60 MB, so the ring is sized by the grid in use, and memory stays O(width).
+// were 60 MB, so the ring is sized by the grid in use, and memory stays O(width). A θ
+// scan's rows hold chords, a few dozen a row: its ring holds two batches (kThetaBatch).
 constexpr int kMaxRowsAhead = 2 * raster::kMaxAa;
 int RowsAhead(double dy) {
   const double perPixel = dy > 0.0 ? std::round(1.0 / dy) : 1.0;
@@ -224,12 +236,16 @@ struct PartitionedScan::Ahead {
   raster::SampleColumns columns;
   double y0 = 0.0, dy = 1.0;
   int nRows = 0;
-  int depth = 2;  // RowsAhead(dy)
+  int depth = 2;  // RowsAhead(dy), or two θ batches
   std::vector<StoredRow> slots;
   std::vector<char> okOf;
   std::mutex m;
-  std::condition_variable cv;
+  // The producer waits on `space` for the back end to have replayed `producerNeeds` rows
+  // (half the ring: a wait frees room for several rows), the back end on `ready` for
+  // `consumerNeeds` rows composited; each is woken only once what it waits for is there.
+  std::condition_variable space, ready;
   int produced = 0, consumed = 0;  // rows composited, rows replayed
+  int producerNeeds = -1, consumerNeeds = -1;  // -1: not waiting
   bool cancel = false;
   std::exception_ptr error;
   // A plain thread, not a task of the arena: the destructor joins it without waiting inside
@@ -239,23 +255,27 @@ struct PartitionedScan::Ahead {
 
 struct PartitionedScan::Worker {
   Worker(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
-         std::vector<ScanEntry> share, const std::vector<std::uint32_t>& rank)
-      : scan(surfaces, camera, options, std::move(share)), buffer(rank) {}
+         std::vector<ScanEntry> share, const std::vector<std::uint32_t>& rank, int batch)
+      : scan(surfaces, camera, options, std::move(share)) {
+    rows.reserve(static_cast<std::size_t>(batch));
+    for (int k = 0; k < batch; ++k) rows.emplace_back(rank);
+    ok.assign(static_cast<std::size_t>(batch), 1);
+  }
   ExactScan scan;
-  RowBuffer buffer;
-  bool vote = false;  // this worker's answer to the current θ slab interval's phase
-  bool ok = true;     // its last ScanRow's answer
+  std::vector<RowBuffer> rows;  // a batch of rows, scanned between one fork and join
+  RowBuffer& buffer() { return rows.front(); }
+  bool vote = false;      // this worker's answer to the current θ slab interval's phase
+  std::vector<char> ok;   // its ScanRow's answers, a batch's rows
   double seconds = 0.0;  // spent scanning
 };
 
-// The threads: all of them scan (none is kept for the caller, which runs the back end
-// while the scan-ahead composites).
+// The threads: the render's (raster::WorkArena), shared with the back end's shading and
+// the PNG encoder's deflating, so a thread that has scanned its share of a row takes up a
+// row's shading instead of waiting idle.
 struct PartitionedScan::Arena {
-  explicit Arena(int threads)
-      : control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads) + 1),
-        arena(threads, 0) {}
-  tbb::global_control control;
-  tbb::task_arena arena;
+  explicit Arena(int threads) : shared(raster::WorkArena(threads)), arena(*shared) {}
+  std::shared_ptr<tbb::task_arena> shared;
+  tbb::task_arena& arena;
 };
 
 PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
@@ -268,11 +288,12 @@ PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera
 
 PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
                                  int workers, int threads, const std::vector<ScanEntry>& order,
-                                 std::optional<std::vector<ScanEntry>> share) {
+                                 std::optional<std::vector<ScanEntry>> share)
+    : batch_(threads > 1 && options.thetaSteps > 0 ? kThetaBatch : 1) {
   rank_.assign(surfaces.size(), 0);
   for (std::size_t k = 0; k < order.size(); ++k) rank_[order[k].index] = static_cast<std::uint32_t>(k);
   for (std::vector<ScanEntry>& part : PartitionSurfaces(share ? *share : order, camera, workers))
-    workers_.push_back(std::make_unique<Worker>(surfaces, camera, options, std::move(part), rank_));
+    workers_.push_back(std::make_unique<Worker>(surfaces, camera, options, std::move(part), rank_, batch_));
   // More threads than the machine has cores would only queue (and oneTBB warns): the
   // arena is capped there; the partition, and so the image, follows `workers` alone.
   threads = std::min(threads, tbb::info::default_concurrency());
@@ -285,12 +306,13 @@ PartitionedScan::~PartitionedScan() {
     std::lock_guard lock(ahead_->m);
     ahead_->cancel = true;
   }
-  ahead_->cv.notify_all();
+  ahead_->space.notify_one();
   ahead_->producer.join();
 }
 
 void PartitionedScan::KeepDepths(const raster::KeptDepths& kept, int columns) {
-  for (auto& w : workers_) w->buffer.depth.Reset(kept, columns);
+  for (auto& w : workers_)
+    for (RowBuffer& row : w->rows) row.depth.Reset(kept, columns);
 }
 
 void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
@@ -303,35 +325,62 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
   a.y0 = y0;
   a.dy = dy;
   a.nRows = nRows;
-  a.depth = RowsAhead(dy);
+  a.depth = std::max(RowsAhead(dy), 2 * batch_);
   a.slots.resize(static_cast<std::size_t>(a.depth));
   for (StoredRow& slot : a.slots) slot.depth.Reset(kept, columns.n);
   a.okOf.assign(static_cast<std::size_t>(a.depth), 1);
   a.producer = std::thread([this, &a] {
-      for (int j = 0; j < a.nRows; ++j) {
-        {
-          std::unique_lock lock(a.m);
-          a.cv.wait(lock, [&] { return a.cancel || j - a.consumed < a.depth; });
-          if (a.cancel) return;
-        }
-        StoredRow& slot = a.slots[static_cast<std::size_t>(j % a.depth)];
-        slot.Clear();
-        bool ok = false;
-        try {
-          ok = Composite(a.y0 + j * a.dy, a.columns, slot);
-        } catch (...) {
-          std::lock_guard lock(a.m);
-          a.error = std::current_exception();
-          a.cv.notify_all();
-          return;
-        }
-        {
-          std::lock_guard lock(a.m);
-          a.okOf[static_cast<std::size_t>(j % a.depth)] = ok;
-          a.produced = j + 1;
-        }
-        a.cv.notify_all();
+    // The slot of row j once the back end is done with the row it held (null: cancelled).
+    const auto slotFor = [&](int j) -> StoredRow* {
+      std::unique_lock lock(a.m);
+      if (!a.cancel && j - a.consumed >= a.depth) {
+        a.producerNeeds = j - a.depth / 2;
+        a.space.wait(lock, [&] { return a.cancel || a.consumed >= a.producerNeeds; });
+        a.producerNeeds = -1;
       }
+      if (a.cancel) return nullptr;
+      StoredRow& slot = a.slots[static_cast<std::size_t>(j % a.depth)];
+      slot.Clear();
+      return &slot;
+    };
+    const auto publish = [&](int j, bool ok) {
+      bool wake = false;
+      {
+        std::lock_guard lock(a.m);
+        a.okOf[static_cast<std::size_t>(j % a.depth)] = ok;
+        a.produced = j + 1;
+        wake = a.consumerNeeds >= 0 && a.produced >= a.consumerNeeds;
+      }
+      if (wake) a.ready.notify_one();
+    };
+    try {
+      for (int j = 0; j < a.nRows;) {
+        const double y = a.y0 + j * a.dy;
+        if (workers_.size() == 1) {
+          StoredRow* slot = slotFor(j);
+          if (!slot) return;
+          publish(j, Composite(y, a.columns, *slot));
+          ++j;
+          continue;
+        }
+        // A batch of rows between one fork and join: the rows up to the next θ slab
+        // interval, at most batch_.
+        bool quiet = true, slab = true;
+        PrepareRow(y, a.columns, &quiet);
+        PairRow(quiet, a.columns, &slab);
+        const int count = BatchAfter(y, a.dy, a.nRows - j, a.columns);
+        ScanRows(slab, y, a.dy, count, a.columns);
+        for (int k = 0; k < count; ++k, ++j) {
+          StoredRow* slot = slotFor(j);
+          if (!slot) return;
+          publish(j, MergeRow(k, a.columns, *slot));
+        }
+      }
+    } catch (...) {
+      std::lock_guard lock(a.m);
+      a.error = std::current_exception();
+      a.ready.notify_one();
+    }
   });
 }
 
@@ -361,7 +410,11 @@ bool PartitionedScan::ScanRow(double y, const raster::SampleColumns& columns, ra
   Ahead& a = *ahead_;
   const int j = static_cast<int>(std::lround((y - a.y0) / a.dy));
   std::unique_lock lock(a.m);
-  a.cv.wait(lock, [&] { return a.produced > j || a.error; });
+  if (a.produced <= j && !a.error) {
+    a.consumerNeeds = j + 1;
+    a.ready.wait(lock, [&] { return a.produced > j || a.error; });
+    a.consumerNeeds = -1;
+  }
   if (a.error) std::rethrow_exception(a.error);
   lock.unlock();
   // The producer leaves slot j alone until row j is consumed.
@@ -370,8 +423,9 @@ bool PartitionedScan::ScanRow(double y, const raster::SampleColumns& columns, ra
   const bool ok = a.okOf[k] != 0;
   lock.lock();
   a.consumed = j + 1;
+  const bool wake = a.producerNeeds >= 0 && a.consumed >= a.producerNeeds;
   lock.unlock();
-  a.cv.notify_all();
+  if (wake) a.space.notify_one();
   return ok;
 }
 
@@ -392,16 +446,11 @@ bool PartitionedScan::PrepareRow(double y, const raster::SampleColumns& columns,
   // Step 1: a θ slab interval beginning here is a slab only if no worker's surfaces have
   // an event in it and every worker's chains pair up: the workers vote twice, each time
   // all taking the verdict.
+  for (auto& w : workers_) w->buffer().Clear();
   ExactScan& first = workers_.front()->scan;
   interval_ = first.SlabMode() && first.BeginsInterval(y, columns);
-  if (!interval_) {  // nothing to prepare: no fork and join for it
-    for (auto& w : workers_) w->buffer.Clear();
-  } else {
-    ForEachWorker([&](Worker& w) {
-      w.buffer.Clear();
-      w.vote = w.scan.PrepareInterval(y, columns, w.buffer);
-    });
-  }
+  if (interval_)  // else nothing to prepare: no fork and join for it
+    ForEachWorker([&](Worker& w) { w.vote = w.scan.PrepareInterval(y, columns, w.buffer()); });
   *quiet = true;
   for (const auto& w : workers_) *quiet = *quiet && w->vote;
   return interval_;
@@ -412,7 +461,7 @@ void PartitionedScan::PairRow(bool quiet, const raster::SampleColumns& columns, 
   if (!interval_) return;
   // Without an event the lines' chains are walked and paired (in parallel); with one there
   // is nothing to walk.
-  auto pair = [&](Worker& w) { w.vote = w.scan.PairInterval(quiet, columns, w.buffer); };
+  auto pair = [&](Worker& w) { w.vote = w.scan.PairInterval(quiet, columns, w.buffer()); };
   if (quiet)
     ForEachWorker(pair);
   else
@@ -421,26 +470,48 @@ void PartitionedScan::PairRow(bool quiet, const raster::SampleColumns& columns, 
   for (const auto& w : workers_) *slab = *slab && w->vote;
 }
 
-bool PartitionedScan::FinishRow(bool slab, double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  // Step 2: every worker's row, into its own buffer.
+int PartitionedScan::BatchAfter(double y, double dy, int rowsLeft, const raster::SampleColumns& columns) const {
+  const ExactScan& first = workers_.front()->scan;
+  int count = 1;
+  while (count < batch_ && count < rowsLeft && !(first.SlabMode() && first.BeginsInterval(y + count * dy, columns)))
+    ++count;
+  return count;
+}
+
+void PartitionedScan::ScanRows(bool slab, double y, double dy, int count, const raster::SampleColumns& columns) {
+  // Step 2: every worker's rows, each into its own buffer (the first, prepared, already
+  // cleared).
   ForEachWorker([&](Worker& w) {
-    if (interval_) w.scan.FinishInterval(slab, columns, w.buffer);
-    w.ok = w.scan.ScanRow(y, columns, w.buffer);
+    if (interval_) w.scan.FinishInterval(slab, columns, w.buffer());
+    for (int k = 0; k < count; ++k) {
+      RowBuffer& row = w.rows[static_cast<std::size_t>(k)];
+      if (k > 0) row.Clear();
+      w.ok[static_cast<std::size_t>(k)] = w.scan.ScanRow(y + k * dy, columns, row);
+    }
   });
+}
+
+bool PartitionedScan::MergeRow(int k, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   // Step 3: composite, in scan order.
   const double t0 = Now();
   const std::size_t n = workers_.size();
+  const auto row = [&](std::size_t w) -> const RowBuffer& { return workers_[w]->rows[static_cast<std::size_t>(k)]; };
   // A scan hands over fragments (exact mode) or chords (θ mode), not both.
-  MergeByRank(n, [&](std::size_t w) -> const auto& { return workers_[w]->buffer.fragments; }, &next_,
+  MergeByRank(n, [&](std::size_t w) -> const auto& { return row(w).fragments; }, &next_,
               [&](const RowBuffer::BufferedFragment& e) { out.Add(e.column, e.f); });
-  MergeByRank(n, [&](std::size_t w) -> const auto& { return workers_[w]->buffer.chords; }, &next_,
+  MergeByRank(n, [&](std::size_t w) -> const auto& { return row(w).chords; }, &next_,
               [&](const RowBuffer::BufferedChord& e) { out.AddChord(e.chord, columns); });
-  MergeByRank(n, [&](std::size_t w) -> const auto& { return workers_[w]->buffer.triangles; }, &next_,
+  MergeByRank(n, [&](std::size_t w) -> const auto& { return row(w).triangles; }, &next_,
               [&](const RowBuffer::BufferedTriangle& e) { out.AddTriangle(e.a, e.b, e.c, e.surfaceId); });
   compositeSeconds_ += Now() - t0;
   bool ok = true;
-  for (const auto& w : workers_) ok = ok && w->ok;
+  for (const auto& w : workers_) ok = ok && w->ok[static_cast<std::size_t>(k)] != 0;
   return ok;
+}
+
+bool PartitionedScan::FinishRow(bool slab, double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  ScanRows(slab, y, 0.0, 1, columns);
+  return MergeRow(0, columns, out);
 }
 
 PartitionedScan::Timing PartitionedScan::Times() const {

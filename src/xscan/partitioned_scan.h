@@ -77,7 +77,8 @@ class PartitionedScan final : public DirectScanSource {
   ~PartitionedScan() override;
 
   // With more than one thread, rows are scanned and composited ahead of the back end (up
-  // to two pixel rows) on a task of their own while the back end shades the rows before.
+  // to two pixel rows, or two θ batches) on a thread of their own while the back end
+  // shades the rows before.
   void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
                  const raster::KeptDepths& kept) override;
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
@@ -121,6 +122,18 @@ class PartitionedScan final : public DirectScanSource {
 
   // One row of all workers, composited (into `out`, or into a slot of the scan-ahead).
   bool Composite(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // The rows from sample row y (PrepareRow's) that the workers scan between one fork and
+  // join: up to the next θ slab interval, at most batch_ and rowsLeft.
+  int BatchAfter(double y, double dy, int rowsLeft, const raster::SampleColumns& columns) const;
+  // Every worker scans `count` rows from y (the first prepared) into its buffers.
+  void ScanRows(bool slab, double y, double dy, int count, const raster::SampleColumns& columns);
+  // The workers' k-th buffered rows, merged in scan order into `out`: whether all scanned.
+  bool MergeRow(int k, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // A θ scan's workers scan this many rows between one fork and join (when no slab
+  // interval begins among them): a fork and join a sample row cost more than its scan
+  // at two threads. Other scans hand over fragments, a row's worth of memory each: 1.
+  static constexpr int kThetaBatch = 8;
+  int batch_ = 1;
   struct Ahead;
 
   std::vector<std::unique_ptr<Worker>> workers_;
