@@ -439,7 +439,10 @@ template <class Geometry>
 std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const Lattice& lat,
                                       int layers, Counters& stats, RowSink& sink) {
   const int threads = s.threads > 1 ? std::min(s.threads, tbb::info::default_concurrency()) : 1;
-  const int inFlight = threads > 1 ? 2 * threads : 1;
+  // Rows in flight a thread: with two, the threads ran out of rows to shade while the
+  // calling thread resolved and handed over (4096x3072 θ teapot at two threads 3 % slower).
+  constexpr int kRowsInFlightPerThread = 4;
+  const int inFlight = threads > 1 ? kRowsInFlightPerThread * threads : 1;
   // One row more than may be in flight: the row being resolved reads the one above it.
   std::vector<PixelRow<Geometry>> ring(static_cast<size_t>(inFlight + 1));
   for (auto& pr : ring) {
