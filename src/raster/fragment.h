@@ -43,30 +43,39 @@ struct SampleColumns {
 // front end's solves' tolerance, far below the 1e-3 px within which coverage may differ.
 constexpr double kColumnEpsPx = 1e-6;
 
+// A chord end's unit normal and eye distance derivatives per pixel along the row (NaN:
+// unknown).
+struct ChordSlope {
+  Vec3 normal = Vec3::Constant(NAN);
+  double depth = NAN;
+};
+
 // A chord of a surface's section along one sample row (θ mode, paper 001 §4: the link
 // between two chain vertices): the screen x and fragment of each end, in front of the eye.
 // It covers the columns past xa up to xb (within kColumnEpsPx), or, a point chord (xa ==
 // xb), the one column at xa. Along it the attributes are blended perspective-correctly
 // (1/w affine in screen x; orthographic: w), except where the ends' slopes along the row
-// are known (SetSlopes): there the normal and the eye distance (its inverse, in
+// are known (Slope): there the normal and the eye distance (its inverse, in
 // perspective) follow cubics in screen x with those tangents (Hermite), whose error falls
-// as the fourth power of the chord's length where the blend's falls as the square.
-struct Chord {
-  double xa = 0.0, xb = 0.0;
-  Fragment a, b;
-  bool orthographic = false;
-
-  // The ends' unit normal and eye distance derivatives per pixel along the row (NaN:
-  // unknown). An end's are kept where its normal slope would turn the normal by at most
-  // kSlopeTurnRatio times the turn between the ends across the chord (plus kSlopeFloor
-  // radians): on a silhouette, or near one, the section turns as the square root of x and
-  // the slopes there are infinite or huge, no tangents for a cubic. Called once the ends
-  // are set, which then stay.
-  void SetSlopes(const Vec3& dna, double dwa, const Vec3& dnb, double dwb) {
+// as the fourth power of the chord's length where the blend's falls as the square. Made
+// whole by a constructor (its cubics follow from its ends), then only read.
+class Chord {
+ public:
+  using Slope = ChordSlope;
+  Chord() = default;
+  // A point chord: the one column at x.
+  Chord(double x, const Fragment& f, bool orthographic) : xa_(x), xb_(x), a_(f), b_(f), orthographic_(orthographic) {}
+  // From xa to xb. An end's slopes are kept where its normal slope would turn the normal
+  // by at most kSlopeTurnRatio times the turn between the ends across the chord (plus
+  // kSlopeFloor radians): on a silhouette, or near one, the section turns as the square
+  // root of x and the slopes there are infinite or huge, no tangents for a cubic.
+  Chord(double xa, const Fragment& a, double xb, const Fragment& b, bool orthographic, const Slope& slopeA = {},
+        const Slope& slopeB = {})
+      : xa_(xa), xb_(xb), a_(a), b_(b), orthographic_(orthographic) {
     const double span = xb - xa, turn = (b.normal - a.normal).norm();
-    const Vec3 ta = span * dna, tb = span * dnb;
-    const double sa = span * (orthographic ? dwa : -dwa / (a.w * a.w));
-    const double sb = span * (orthographic ? dwb : -dwb / (b.w * b.w));
+    const Vec3 ta = span * slopeA.normal, tb = span * slopeB.normal;
+    const double sa = span * (orthographic ? slopeA.depth : -slopeA.depth / (a.w * a.w));
+    const double sb = span * (orthographic ? slopeB.depth : -slopeB.depth / (b.w * b.w));
     const auto fits = [&](const Vec3& t, double s) {
       return t.norm() <= kSlopeTurnRatio * turn + kSlopeFloor && std::isfinite(s);  // false for NaN
     };
@@ -78,22 +87,27 @@ struct Chord {
   }
   static constexpr double kSlopeTurnRatio = 2.0, kSlopeFloor = 1e-3;
 
+  double xa() const { return xa_; }
+  double xb() const { return xb_; }
+  const Fragment& a() const { return a_; }
+  const Fragment& b() const { return b_; }
+
   // The columns it covers: `count` of them from `first`, by `step` (±1, from xa).
   struct Columns {
     int first = 0, step = 1, count = 0;
   };
   Columns ColumnsOn(const SampleColumns& cols) const {
-    if (xa == xb) {
-      const int c = cols.Ceil(xa - kColumnEpsPx);
-      if (c >= cols.n || std::abs(cols.At(c) - xa) > kColumnEpsPx) return {};
+    if (xa_ == xb_) {
+      const int c = cols.Ceil(xa_ - kColumnEpsPx);
+      if (c >= cols.n || std::abs(cols.At(c) - xa_) > kColumnEpsPx) return {};
       return {c, 1, 1};
     }
-    if (xb > xa) {
-      const int first = cols.Ceil(xa + kColumnEpsPx);
-      return {first, 1, std::max(0, cols.Floor(xb + kColumnEpsPx) - first + 1)};
+    if (xb_ > xa_) {
+      const int first = cols.Ceil(xa_ + kColumnEpsPx);
+      return {first, 1, std::max(0, cols.Floor(xb_ + kColumnEpsPx) - first + 1)};
     }
-    const int first = cols.Floor(xa - kColumnEpsPx);
-    return {first, -1, std::max(0, first - cols.Ceil(xb - kColumnEpsPx) + 1)};
+    const int first = cols.Floor(xa_ - kColumnEpsPx);
+    return {first, -1, std::max(0, first - cols.Ceil(xb_ - kColumnEpsPx) + 1)};
   }
   // Calls f(column) for each column covered, in order from xa; returns how many.
   template <class F>
@@ -103,38 +117,41 @@ struct Chord {
     return r.count;
   }
   // The eye distance at screen x (a column it covers).
-  double DepthAt(double x) const { return xa == xb ? a.w : DepthAlong(Along(x)); }
+  double DepthAt(double x) const { return xa_ == xb_ ? a_.w : DepthAlong(Along(x)); }
   // The fragment at screen x (a column it covers): a point chord's own, or the ends'
   // attributes blended as above (the normal renormalised; texture footprint of the nearer
   // end).
   Fragment At(double x) const {
-    if (xa == xb) return a;
+    if (xa_ == xb_) return a_;
     const double t = Along(x);
-    const double ia = orthographic ? 1.0 - t : (1.0 - t) / a.w, ib = orthographic ? t : t / b.w;
+    const double ia = orthographic_ ? 1.0 - t : (1.0 - t) / a_.w, ib = orthographic_ ? t : t / b_.w;
     const double wa = ia / (ia + ib), wb = ib / (ia + ib);
-    Fragment f = a;
+    Fragment f = a_;
     f.w = DepthAlong(t);
-    f.position = wa * a.position + wb * b.position;
-    const Vec3 n = cubic_ ? Horner(n_, t) : Vec3(wa * a.normal + wb * b.normal);
+    f.position = wa * a_.position + wb * b_.position;
+    const Vec3 n = cubic_ ? Horner(n_, t) : Vec3(wa * a_.normal + wb * b_.normal);
     f.normal = n.normalized();
-    if (!f.normal.allFinite()) f.normal = a.normal;
-    f.uv = wa * a.uv + wb * b.uv;
-    if (t > 0.5) f.duvdx = b.duvdx, f.duvdy = b.duvdy;
+    if (!f.normal.allFinite()) f.normal = a_.normal;
+    f.uv = wa * a_.uv + wb * b_.uv;
+    if (t > 0.5) f.duvdx = b_.duvdx, f.duvdy = b_.duvdy;
     return f;
   }
 
  private:
+  double xa_ = 0.0, xb_ = 0.0;
+  Fragment a_, b_;
+  bool orthographic_ = false;
   // With slopes: the normal's and the depth's (Depth) cubics in t, lowest power first.
   bool cubic_ = false;
   Vec3 n_[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   double q_[4] = {};
 
-  double Along(double x) const { return std::clamp((x - xa) / (xb - xa), 0.0, 1.0); }
+  double Along(double x) const { return std::clamp((x - xa_) / (xb_ - xa_), 0.0, 1.0); }
   // What is interpolated for the eye distance: 1/w in perspective, w orthographic.
-  double Depth(double w) const { return orthographic ? w : 1.0 / w; }
+  double Depth(double w) const { return orthographic_ ? w : 1.0 / w; }
   double DepthAlong(double t) const {
-    const double d = cubic_ ? Horner(q_, t) : (1.0 - t) * Depth(a.w) + t * Depth(b.w);
-    return orthographic ? d : 1.0 / d;
+    const double d = cubic_ ? Horner(q_, t) : (1.0 - t) * Depth(a_.w) + t * Depth(b_.w);
+    return orthographic_ ? d : 1.0 / d;
   }
   template <class V>
   static V Horner(const V (&c)[4], double t) {

@@ -196,7 +196,7 @@ class FragmentGeometry final : public FragmentRow {
 
   std::uint32_t SurfaceOf(const Rows& rows, int r, const Sample& smp) const {
     if (smp.handle >= kTriangleHandle) return store_.SurfaceOf(smp.handle - kTriangleHandle);
-    if (smp.handle >= kChordHandle) return rows.chords[static_cast<size_t>(r)][smp.handle - kChordHandle].a.surfaceId;
+    if (smp.handle >= kChordHandle) return rows.chords[static_cast<size_t>(r)][smp.handle - kChordHandle].a().surfaceId;
     return rows.pools[static_cast<size_t>(r)][smp.handle].surfaceId;
   }
   double EdgeDistance(const Rows&, int, const Sample&, double, double) const { return INFINITY; }

@@ -124,7 +124,7 @@ class RowBuffer final : public raster::FragmentRow {
   // columns here too would cost as much as the back end's own test, to save copying a few
   // hidden chords (of θ mode, which hands over nothing else to hide).
   void AddChord(const raster::Chord& c, const raster::SampleColumns&) override {
-    chords.push_back({rank_[c.a.surfaceId], c});
+    chords.push_back({rank_[c.a().surfaceId], c});
   }
   void Add(int column, const raster::Fragment& f) override {
     if (depth.Hidden(column, f.w)) return;

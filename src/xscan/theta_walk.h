@@ -337,20 +337,13 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
 inline long EmitThetaChain(std::span<const ThetaVertex> chain, const raster::SampleColumns& cols, bool orthographic,
                            raster::FragmentRow& out) {
   if (chain.empty()) return 0;
-  raster::Chord c;
-  c.orthographic = orthographic;
-  c.xa = c.xb = chain.front().x;
-  c.a = chain.front().f;
-  long covered = c.ColumnsOn(cols).count;
-  if (covered > 0) out.AddChord(c, cols);
+  const raster::Chord first(chain.front().x, chain.front().f, orthographic);
+  long covered = first.ColumnsOn(cols).count;
+  if (covered > 0) out.AddChord(first, cols);
   for (size_t k = 1; k < chain.size(); ++k) {
     const ThetaVertex &a = chain[k - 1], &b = chain[k];
     if (!(a.f.w > 0.0 && b.f.w > 0.0) || a.x == b.x) continue;
-    c.xa = a.x;
-    c.xb = b.x;
-    c.a = a.f;
-    c.b = b.f;
-    c.SetSlopes(a.dndx, a.dwdx, b.dndx, b.dwdx);
+    const raster::Chord c(a.x, a.f, b.x, b.f, orthographic, {a.dndx, a.dwdx}, {b.dndx, b.dwdx});
     const int n = c.ColumnsOn(cols).count;
     covered += n;
     if (n > 0) out.AddChord(c, cols);

@@ -331,7 +331,8 @@ class ChordSource final : public FragmentSource {
   explicit ChordSource(bool expand) : expand_(expand) {}
   bool ScanRow(double y, const SampleColumns& columns, FragmentRow& out) override {
     for (std::uint32_t id = 0; id < 2; ++id) {
-      Chord c;
+      double xPrev = 0.0;
+      Fragment fPrev;
       const double xs[] = {8.3, 21.0, 40.7, 41.2, 77.9, 110.5};
       const auto normal = [&](double x) { return Vec3(std::cos(0.05 * x + id), std::sin(0.05 * x), -1.5).normalized(); };
       Vec3 dn = Vec3::Constant(NAN);
@@ -346,19 +347,14 @@ class ChordSource final : public FragmentSource {
         f.duvdx = Vec2(1.0 / 128, 0.0);
         f.duvdy = Vec2(0.0, 1.0 / 96);
         f.surfaceId = id;
-        c.a = c.b;
-        c.xa = c.xb;
-        c.b = f;
-        c.xb = x;
-        if (k == 0) {
-          c.a = f;
-          c.xa = x;
-        }
         const Vec3 dnb = k % 2 ? Vec3((normal(x + 1e-4) - normal(x - 1e-4)) / 2e-4) : Vec3::Constant(NAN);
         const double dwb = k % 2 ? (id == 0 ? 0.02 : -0.015) : NAN;
-        c.SetSlopes(dn, dw, dnb, dwb);
+        // The first vertex's point chord, then each link.
+        const Chord c = k == 0 ? Chord(x, f, false) : Chord(xPrev, fPrev, x, f, false, {dn, dw}, {dnb, dwb});
         dn = dnb;
         dw = dwb;
+        xPrev = x;
+        fPrev = f;
         if (expand_)
           c.ForEachColumn(columns, [&](int col) { out.Add(col, c.At(columns.At(col))); });
         else
@@ -429,24 +425,24 @@ struct CircleSection {
   }
   // The chord from φa to φb, with its ends' slopes per pixel or without.
   static Chord Of(double pa, double pb, bool slopes) {
-    Chord c;
-    c.xa = X(pa);
-    c.xb = X(pb);
-    for (auto [end, phi] : {std::pair{&c.a, pa}, {&c.b, pb}}) {
+    Fragment a, b;
+    for (auto [end, phi] : {std::pair{&a, pa}, {&b, pb}}) {
       end->w = Point(phi).z();
       end->position = Point(phi);
       end->normal = Normal(phi);
     }
+    if (!slopes) return Chord(X(pa), a, X(pb), b, false);
     // dN/dφ = (cos φ, 0, sin φ) = dP/dφ; dw/dφ = sin φ.
-    const auto dn = [](double phi) { return Vec3(Vec3(std::cos(phi), 0.0, std::sin(phi)) / DxDphi(phi)); };
-    if (slopes) c.SetSlopes(dn(pa), std::sin(pa) / DxDphi(pa), dn(pb), std::sin(pb) / DxDphi(pb));
-    return c;
+    const auto slope = [](double phi) {
+      return Chord::Slope{Vec3(Vec3(std::cos(phi), 0.0, std::sin(phi)) / DxDphi(phi)), std::sin(phi) / DxDphi(phi)};
+    };
+    return Chord(X(pa), a, X(pb), b, false, slope(pa), slope(pb));
   }
   // The largest normal angle (radians) and eye-distance error over 101 points of the chord.
   static std::pair<double, double> Errors(const Chord& c, double pa, double pb) {
     double angle = 0.0, depth = 0.0;
     for (int k = 0; k <= 100; ++k) {
-      const double x = c.xa + (c.xb - c.xa) * k / 100.0, phi = PhiAt(x, pa, pb);
+      const double x = c.xa() + (c.xb() - c.xa()) * k / 100.0, phi = PhiAt(x, pa, pb);
       const Fragment f = c.At(x);
       angle = std::max(angle, std::acos(std::clamp(f.normal.dot(Normal(phi)), -1.0, 1.0)));
       depth = std::max(depth, std::abs(f.w - Point(phi).z()));
@@ -499,11 +495,10 @@ TEST(Chord, SlopeAtASilhouetteIsLeftOut) {
     EXPECT_LE(ca, ba) << gap;
     EXPECT_LE(cd, bd) << gap;
   }
-  Chord c = CircleSection::Of(0.1, 0.3, false);
-  c.SetSlopes(Vec3::Constant(INFINITY), INFINITY, Vec3::Constant(NAN), NAN);
   const Chord blend = CircleSection::Of(0.1, 0.3, false);
+  const Chord c(blend.xa(), blend.a(), blend.xb(), blend.b(), false, {Vec3::Constant(INFINITY), INFINITY}, {});
   for (int k = 0; k <= 10; ++k) {
-    const double x = c.xa + (c.xb - c.xa) * k / 10.0;
+    const double x = c.xa() + (c.xb() - c.xa()) * k / 10.0;
     EXPECT_EQ(c.At(x).normal, blend.At(x).normal);
     EXPECT_EQ(c.DepthAt(x), blend.DepthAt(x));
   }
