@@ -177,6 +177,8 @@ void MergeByRank(std::size_t nLists, Entries&& entries, std::vector<std::size_t>
 // is every fragment of every layer of it (144 bytes each): 16 rows of a 16384-wide teapot
 // were 60 MB, so the ring is sized by the grid in use, and memory stays O(width). A θ
 // scan's rows hold chords, a few dozen a row: its ring holds two batches (kThetaBatch).
+// The workers scan a pixel row's sample rows between one fork and join (a θ scan's, a
+// batch), so each worker holds that many rows too.
 constexpr int kMaxRowsAhead = 2 * raster::kMaxAa;
 int RowsAhead(double dy) {
   const double perPixel = dy > 0.0 ? std::round(1.0 / dy) : 1.0;
@@ -255,12 +257,16 @@ struct PartitionedScan::Ahead {
 
 struct PartitionedScan::Worker {
   Worker(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
-         std::vector<ScanEntry> share, const std::vector<std::uint32_t>& rank, int batch)
-      : scan(surfaces, camera, options, std::move(share)) {
-    rows.reserve(static_cast<std::size_t>(batch));
-    for (int k = 0; k < batch; ++k) rows.emplace_back(rank);
-    ok.assign(static_cast<std::size_t>(batch), 1);
+         std::vector<ScanEntry> share, const std::vector<std::uint32_t>& rank)
+      : rank(rank), scan(surfaces, camera, options, std::move(share)) {
+    Batch(1);
   }
+  // Buffers for a batch of n rows.
+  void Batch(int n) {
+    while (rows.size() < static_cast<std::size_t>(n)) rows.emplace_back(rank);
+    ok.assign(rows.size(), 1);
+  }
+  const std::vector<std::uint32_t>& rank;  // of every surface, for the buffers
   ExactScan scan;
   std::vector<RowBuffer> rows;  // a batch of rows, scanned between one fork and join
   RowBuffer& buffer() { return rows.front(); }
@@ -289,11 +295,11 @@ PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera
 PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
                                  int workers, int threads, const std::vector<ScanEntry>& order,
                                  std::optional<std::vector<ScanEntry>> share)
-    : batch_(threads > 1 && options.thetaSteps > 0 ? kThetaBatch : 1) {
+    : chords_(options.thetaSteps > 0) {
   rank_.assign(surfaces.size(), 0);
   for (std::size_t k = 0; k < order.size(); ++k) rank_[order[k].index] = static_cast<std::uint32_t>(k);
   for (std::vector<ScanEntry>& part : PartitionSurfaces(share ? *share : order, camera, workers))
-    workers_.push_back(std::make_unique<Worker>(surfaces, camera, options, std::move(part), rank_, batch_));
+    workers_.push_back(std::make_unique<Worker>(surfaces, camera, options, std::move(part), rank_));
   // More threads than the machine has cores would only queue (and oneTBB warns): the
   // arena is capped there; the partition, and so the image, follows `workers` alone.
   threads = std::min(threads, tbb::info::default_concurrency());
@@ -317,6 +323,10 @@ void PartitionedScan::KeepDepths(const raster::KeptDepths& kept, int columns) {
 
 void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
                                 const raster::KeptDepths& kept) {
+  if (arena_ && !tracing_ && !ahead_) {
+    batch_ = chords_ ? kThetaBatch : RowsAhead(dy) / 2;
+    for (auto& w : workers_) w->Batch(batch_);
+  }
   KeepDepths(kept, columns.n);
   if (!arena_ || tracing_ || ahead_) return;
   ahead_ = std::make_unique<Ahead>();
