@@ -9,7 +9,8 @@
 // surface's own in its own order), so even ties of depth resolve alike. The one decision
 // that joins surfaces — a θ slab interval is a slab only if every surface's chains allow it
 // (watertight shared boundaries) — is taken over all workers between the two phases of
-// each interval. Memory: each worker holds one row of fragments.
+// each interval. Memory: each worker holds a batch of rows (a pixel row's sample rows, or 8
+// rows of θ chords).
 #pragma once
 
 #include <functional>
