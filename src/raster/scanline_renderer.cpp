@@ -313,6 +313,34 @@ void ShadePixel(const Geometry& geo, const RenderSettings& s, const Lattice& lat
     std::copy(background.begin(), background.end(), out);  // most pixels of most frames
     return;
   }
+  // The AOVs of the surface covering most of the pixel, from the fragment its shading call
+  // took.
+  const auto writeAovs = [out](const Fragment& a, std::uint32_t surface) {
+    const Vec3 nrm = a.normal.normalized();
+    out[kChannelZ] = static_cast<float>(a.w);
+    for (int k = 0; k < 3; ++k) out[kChannelN + k] = static_cast<float>(nrm.allFinite() ? nrm[k] : 0.0);
+    out[kChannelUv] = static_cast<float>(a.uv.x());
+    out[kChannelUv + 1] = static_cast<float>(a.uv.y());
+    out[kChannelId] = static_cast<float>(surface);
+  };
+  if (s.aa == 1 && layers == 1 && !s.hiddenLine) {
+    // One sample, one layer: the pixel is one group of one sample, shaded as below (the
+    // same arithmetic, term for term) without the grouping.
+    const Sample& smp = pr.samples[0][static_cast<size_t>(i0)];
+    const std::uint32_t surface = geo.SurfaceOf(pr.refs, 0, smp);
+    const double opacity = s.opacity * s.MaterialOf(surface).opacity;
+    ++stats[Counter::SamplesCovered];
+    const Member m{0, i0, smp};
+    Fragment f;
+    const Rgb rgb = geo.ShadeGroup(pr.refs, &m, 1, lat.At(i0), lat.At(pr.j0), stats[Counter::ShadingCalls], &f);
+    const double through = 1.0 - opacity, alpha = 1.0 - through;
+    Rgb colour = Rgb::Zero();
+    colour += opacity * rgb;
+    for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(colour[k]);
+    out[3] = static_cast<float>(alpha);
+    writeAovs(f, surface);
+    return;
+  }
   // Group the pixel's samples by surface and layer: one shading call per group.
   struct Group {
     std::uint32_t surface;
@@ -419,13 +447,7 @@ void ShadePixel(const Geometry& geo, const RenderSettings& s, const Lattice& lat
     const Group& gr = groups[major];
     if (!haveMajor)
       majorFragment = geo.GroupFragment(pr.refs, gathered.data(), gather(major), gr.sx / gr.count, gr.sy / gr.count);
-    const Fragment& a = majorFragment;
-    const Vec3 nrm = a.normal.normalized();
-    out[kChannelZ] = static_cast<float>(a.w);
-    for (int k = 0; k < 3; ++k) out[kChannelN + k] = static_cast<float>(nrm.allFinite() ? nrm[k] : 0.0);
-    out[kChannelUv] = static_cast<float>(a.uv.x());
-    out[kChannelUv + 1] = static_cast<float>(a.uv.y());
-    out[kChannelId] = static_cast<float>(gr.surface);
+    writeAovs(majorFragment, gr.surface);
   }
 }
 
