@@ -140,6 +140,7 @@ class RowBuffer final : public raster::FragmentRow {
   std::vector<BufferedTriangle> triangles;
   std::vector<BufferedChord> chords;
   DepthFilter depth;
+  bool scanned = true;  // the worker's ScanRow's answer for the row
 
  private:
   const std::vector<std::uint32_t>& rank_;
@@ -264,24 +265,13 @@ struct PartitionedScan::Worker {
   // Buffers for a batch of n rows.
   void Batch(int n) {
     while (rows.size() < static_cast<std::size_t>(n)) rows.emplace_back(rank);
-    ok.assign(rows.size(), 1);
   }
   const std::vector<std::uint32_t>& rank;  // of every surface, for the buffers
   ExactScan scan;
   std::vector<RowBuffer> rows;  // a batch of rows, scanned between one fork and join
   RowBuffer& buffer() { return rows.front(); }
   bool vote = false;      // this worker's answer to the current θ slab interval's phase
-  std::vector<char> ok;   // its ScanRow's answers, a batch's rows
   double seconds = 0.0;  // spent scanning
-};
-
-// The threads: the render's (raster::WorkArena), shared with the back end's shading and
-// the PNG encoder's deflating, so a thread that has scanned its share of a row takes up a
-// row's shading instead of waiting idle.
-struct PartitionedScan::Arena {
-  explicit Arena(int threads) : shared(raster::WorkArena(threads)), arena(*shared) {}
-  std::shared_ptr<tbb::task_arena> shared;
-  tbb::task_arena& arena;
 };
 
 PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
@@ -303,7 +293,10 @@ PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera
   // More threads than the machine has cores would only queue (and oneTBB warns): the
   // arena is capped there; the partition, and so the image, follows `workers` alone.
   threads = std::min(threads, tbb::info::default_concurrency());
-  if (threads > 1) arena_ = std::make_unique<Arena>(threads);
+  // The render's threads (raster::WorkArena), shared with the back end's shading and the
+  // PNG encoder's deflating, so a thread that has scanned its share of a row takes up a
+  // row's shading instead of waiting idle.
+  if (threads > 1) arena_ = raster::WorkArena(threads);
 }
 
 PartitionedScan::~PartitionedScan() {
@@ -405,7 +398,7 @@ void PartitionedScan::ForEachWorker(F&& f) {
     for (auto& w : workers_) timed(*w);
     return;
   }
-  arena_->arena.execute([&] {
+  arena_->execute([&] {
     tbb::parallel_for(std::size_t{0}, workers_.size(), [&](std::size_t k) { timed(*workers_[k]); });
   });
 }
@@ -496,7 +489,7 @@ void PartitionedScan::ScanRows(bool slab, double y, double dy, int count, const 
     for (int k = 0; k < count; ++k) {
       RowBuffer& row = w.rows[static_cast<std::size_t>(k)];
       if (k > 0) row.Clear();
-      w.ok[static_cast<std::size_t>(k)] = w.scan.ScanRow(y + k * dy, columns, row);
+      row.scanned = w.scan.ScanRow(y + k * dy, columns, row);
     }
   });
 }
@@ -515,7 +508,7 @@ bool PartitionedScan::MergeRow(int k, const raster::SampleColumns& columns, rast
               [&](const RowBuffer::BufferedTriangle& e) { out.AddTriangle(e.a, e.b, e.c, e.surfaceId); });
   compositeSeconds_ += Now() - t0;
   bool ok = true;
-  for (const auto& w : workers_) ok = ok && w->ok[static_cast<std::size_t>(k)] != 0;
+  for (const auto& w : workers_) ok = ok && w->rows[static_cast<std::size_t>(k)].scanned;
   return ok;
 }
 

@@ -21,6 +21,7 @@
 
 #include "core/counters.h"
 #include "raster/scanline_renderer.h"
+#include "raster/work_arena.h"
 #include "xscan/exact_scan.h"
 
 namespace patchscan {
@@ -113,7 +114,6 @@ class PartitionedScan final : public DirectScanSource {
 
  private:
   struct Worker;
-  struct Arena;
   // Runs f(worker) for every worker, in parallel when there are threads.
   // The scan order of all surfaces is `order`; the workers scan `share` (all: order).
   PartitionedScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options, int workers,
@@ -144,7 +144,7 @@ class PartitionedScan final : public DirectScanSource {
   std::vector<std::unique_ptr<Worker>> workers_;
   std::unique_ptr<Ahead> ahead_;  // the scan-ahead, when BeginRows started one
   std::vector<std::uint32_t> rank_;  // per surface id: its place in the scan order
-  std::unique_ptr<Arena> arena_;
+  std::shared_ptr<tbb::task_arena> arena_;
   std::vector<std::size_t> next_;  // merge scratch
   double compositeSeconds_ = 0.0;
   bool tracing_ = false;           // no scan-ahead: the trace is drawn row by row
