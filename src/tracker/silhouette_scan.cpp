@@ -19,9 +19,12 @@ unsigned BoundarySides(const Vec2& uv) {
 
 // The repair search: cells of the domain are split while the scan line can cross them
 // (the cell's y range, from its corners grown by the second-order deviation of y from
-// their interpolation, h^2/8 max|y''| doubled for safety, holds yScan); a cell under
-// kSearchLeafPx on the screen is solved by Newton from its centre, and a solution inside
-// it (grown by half its side) is a crossing. Every answer is a verified root.
+// their interpolation, h^2/8 max|y''| doubled for safety, holds yScan) and so can the
+// silhouette (the range of J / max(|s_u|, |s_v|) over its corners and centre, grown by
+// its first-order change h/2 (|J_u| + |J_v|) to the farthest point of the cell, doubled
+// for safety, holds 0); a cell under kSearchLeafPx on the screen is solved by Newton
+// from its centre, and a solution inside it (grown by half its side) is a crossing.
+// Every answer is a verified root.
 constexpr double kSearchLeafPx = 2.0;
 constexpr int kSearchMaxDepth = 12;
 
@@ -31,14 +34,22 @@ struct SearchPoint {
   double y;      // screen y
   double bend;   // |y_uu| + 2 |y_uv| + |y_vv|
   double slope;  // max(|dp/du|, |dp/dv|) on the screen, pixels per unit of u or v
+  double j;      // J / max(|s_u|, |s_v|), pixels (the silhouette function SilhouetteSystem solves)
+  double jSlope;  // (|J_u| + |J_v|) / max(|s_u|, |s_v|), pixels per unit of u or v
 };
 
 template <class ShapeT>
 SearchPoint EvalSearchPoint(const ShapeT& shape, const ScreenMap& map, double u, double v) {
+  Vec2 f;
+  Mat2 jac;
   ScreenDerivs d;
-  EvaluateScreen(shape, map, u, v, DerivOrder::Second, &d);
-  return {d.w > 0.0, d.p.y(), std::abs(d.d2pdu2.y()) + 2.0 * std::abs(d.d2pduv.y()) + std::abs(d.d2pdv2.y()),
-          std::max(d.dpdu.head<2>().norm(), d.dpdv.head<2>().norm())};
+  SilhouetteSystem(shape, map, 0.0, Vec2(u, v), &f, &jac, &d);
+  return {d.w > 0.0,
+          d.p.y(),
+          std::abs(d.d2pdu2.y()) + 2.0 * std::abs(d.d2pduv.y()) + std::abs(d.d2pdv2.y()),
+          std::max(d.dpdu.head<2>().norm(), d.dpdv.head<2>().norm()),
+          f.y(),
+          std::abs(jac(1, 0)) + std::abs(jac(1, 1))};
 }
 
 // One cell [u0, u0 + h] x [v0, v0 + h], its corners (0,0), (1,0), (0,1), (1,1) already
@@ -51,16 +62,21 @@ void FindCrossingsInCell(const ShapeT& shape, const ScreenMap& map, double yScan
                          int depth, const std::array<SearchPoint, 4>& corner, std::vector<Vec2>* found) {
   const SearchPoint centre = EvalSearchPoint(shape, map, u0 + 0.5 * h, v0 + 0.5 * h);
   double lo = INFINITY, hi = -INFINITY, second = 0.0, slope = 0.0;
+  double jLo = INFINITY, jHi = -INFINITY, jSlope = 0.0;
   for (int k = 0; k < 5; ++k) {
     const SearchPoint& c = k < 4 ? corner[static_cast<std::size_t>(k)] : centre;
     if (!c.front) return;  // behind the eye: no screen y
     if (k < 4) lo = std::min(lo, c.y), hi = std::max(hi, c.y);
     second = std::max(second, c.bend);
     slope = std::max(slope, c.slope);
+    jLo = std::min(jLo, c.j), jHi = std::max(jHi, c.j);
+    jSlope = std::max(jSlope, c.jSlope);
   }
   const double size = h * slope;
   const double margin = 2.0 * h * h / 8.0 * second;
   if (!std::isfinite(lo) || yScan < lo - margin || yScan > hi + margin) return;
+  const double jMargin = 2.0 * 0.5 * h * jSlope;
+  if (std::isfinite(jLo) && std::isfinite(jHi) && (jLo > jMargin || jHi < -jMargin)) return;
   if (size > kSearchLeafPx && depth < kSearchMaxDepth) {
     const double g = 0.5 * h;
     // The 3 x 3 grid of the children's corners, (i, j) at (u0 + i g, v0 + j g).

@@ -29,11 +29,13 @@ struct SilhouetteTracker {
 // Two trackers closer than this in (u,v) are the same crossing.
 constexpr double kSameTrackerUv = 1e-7;
 
-// F = (y - yScan, J / max(|s_u|, |s_v|)) and its Jacobian at uv.
+// F = (y - yScan, J / max(|s_u|, |s_v|)) and its Jacobian at uv; `derivs`, when given,
+// receives the screen derivatives they were made from.
 template <class ShapeT>
 inline void SilhouetteSystem(const ShapeT& shape, const ScreenMap& map, double yScan, const Vec2& uv,
-                      Vec2* f, Mat2* jac) {
-  ScreenDerivs d;
+                             Vec2* f, Mat2* jac, ScreenDerivs* derivs = nullptr) {
+  ScreenDerivs local;
+  ScreenDerivs& d = derivs ? *derivs : local;
   EvaluateScreen(shape, map, uv.x(), uv.y(), DerivOrder::Second, &d);
   const Vec2 su = d.dpdu.head<2>(), sv = d.dpdv.head<2>();
   // J / max(|s_u|, |s_v|) is in pixels, like y - yScan, so one tolerance and the

@@ -169,5 +169,35 @@ TEST(SilhouetteScan, TeapotAgreesWithBruteForceOnNearlyEveryScanLine) {
   EXPECT_LE(mismatches, kAllowedMismatches);
 }
 
+TEST(SilhouetteScan, RepairSearchFindsEveryTeapotCrossingManyStartsFind) {
+  // The search's cells are cut where neither the scan line nor the silhouette (J = 0) can
+  // pass; a cut too eager would lose crossings. At 512 x 384, on every 8th scan line of
+  // every patch, each crossing the many-start solve finds must be among the search's
+  // (the search may find more: its starts are finer than the 24 x 24 grid's).
+  auto loaded = LoadScene(PATCHSCAN_SURFACES_DIR "/teapot.bpt");
+  const Scene& scene = std::get<Scene>(loaded);
+  Camera base;
+  base.width = 512;
+  base.height = 384;
+  const Camera cam = FrameBounds(scene.WorldBounds(), base, DefaultViewDirection(Vec3(0, 0, 1)));
+  long compared = 0;
+  for (const Surface& s : scene.surfaces) {
+    const ScreenMap map(cam, s.worldFromObject);
+    for (int row = 0; row < cam.height; row += 8) {
+      const double y = row + 0.5;
+      std::vector<Vec2> want = SilhouetteCrossingsBruteForce(s, map, y, 24);
+      std::erase_if(want, [&](const Vec2& p) { return OnCollapsedEdge(s, map, p); });
+      const std::vector<Vec2> got = SilhouetteCrossingsBySubdivision(s, map, y);
+      for (const Vec2& w : want) {
+        double best = INFINITY;
+        for (const Vec2& g : got) best = std::min(best, (w - g).norm());
+        EXPECT_LE(best, kMatchUv) << "y " << y << " crossing at " << w.transpose();
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(compared, 100);
+}
+
 }  // namespace
 }  // namespace patchscan
