@@ -127,6 +127,16 @@ TEST(SilhouetteScan, RepairSearchFindsWhatManyStartsFind) {
 namespace patchscan {
 namespace {
 
+Scene Teapot() { return std::get<Scene>(LoadScene(PATCHSCAN_SURFACES_DIR "/teapot.bpt")); }
+
+// The teapot framed as render frames it by default, at width x height.
+Camera TeapotCamera(const Scene& teapot, int width, int height) {
+  Camera base;
+  base.width = width;
+  base.height = height;
+  return FrameBounds(teapot.WorldBounds(), base, DefaultViewDirection(Vec3(0, 0, 1)));
+}
+
 TEST(SilhouetteScan, TeapotAgreesWithBruteForceOnNearlyEveryScanLine) {
   // Known gap of the Y scan alone: a silhouette that enters through an edge and runs far
   // inside within one scan line can be missed for a line or two. (In a render the X
@@ -134,12 +144,8 @@ TEST(SilhouetteScan, TeapotAgreesWithBruteForceOnNearlyEveryScanLine) {
   // tests/xscan.) Measured: 1 of 3072 (patch, scan line) pairs at 128 x 96; the bound
   // below allows 3 and fails on any regression beyond.
   constexpr int kAllowedMismatches = 3;
-  auto loaded = LoadScene(PATCHSCAN_SURFACES_DIR "/teapot.bpt");
-  const Scene& scene = std::get<Scene>(loaded);
-  Camera base;
-  base.width = 128;
-  base.height = 96;
-  const Camera cam = FrameBounds(scene.WorldBounds(), base, DefaultViewDirection(Vec3(0, 0, 1)));
+  const Scene scene = Teapot();
+  const Camera cam = TeapotCamera(scene, 128, 96);
   int mismatches = 0;
   for (size_t k = 0; k < scene.surfaces.size(); ++k) {
     const Surface& s = scene.surfaces[k];
@@ -174,12 +180,8 @@ TEST(SilhouetteScan, RepairSearchFindsEveryTeapotCrossingManyStartsFind) {
   // pass; a cut too eager would lose crossings. At 512 x 384, on every 8th scan line of
   // every patch, each crossing the many-start solve finds must be among the search's
   // (the search may find more: its starts are finer than the 24 x 24 grid's).
-  auto loaded = LoadScene(PATCHSCAN_SURFACES_DIR "/teapot.bpt");
-  const Scene& scene = std::get<Scene>(loaded);
-  Camera base;
-  base.width = 512;
-  base.height = 384;
-  const Camera cam = FrameBounds(scene.WorldBounds(), base, DefaultViewDirection(Vec3(0, 0, 1)));
+  const Scene scene = Teapot();
+  const Camera cam = TeapotCamera(scene, 512, 384);
   long compared = 0;
   for (const Surface& s : scene.surfaces) {
     const ScreenMap map(cam, s.worldFromObject);
