@@ -82,8 +82,11 @@ struct Layout {
 // ---- rows as flat messages of doubles (every value of a fragment or triangle is a double
 // or an integer far below 2^53, so nothing is rounded on the way) ----
 
-constexpr std::size_t kHeader = 4;     // row, ok, fragments, triangles
-constexpr std::size_t kFragment = 19;  // rank, column, w, position, normal, uv, duvdx, duvdy, id, colour
+constexpr std::size_t kHeader = 5;     // row, ok, fragments, chords, triangles
+constexpr std::size_t kFragmentBody = 17;  // w, position, normal, uv, duvdx, duvdy, id, colour
+constexpr std::size_t kFragment = 2 + kFragmentBody;  // rank, column, fragment
+// rank, xa, xb, orthographic, cubic, the ends' fragments, the normal's and depth's cubics
+constexpr std::size_t kChord = 5 + 2 * kFragmentBody + 16;
 constexpr std::size_t kVertex = 15;    // h, position, normal, uv, depth, colour
 constexpr std::size_t kTriangle = 3 + 3 * kVertex;  // origin row, rank, id, three vertices
 
@@ -91,6 +94,30 @@ void Put(std::vector<double>& m, const Vec3& v) { m.insert(m.end(), {v.x(), v.y(
 void Put(std::vector<double>& m, const Vec2& v) { m.insert(m.end(), {v.x(), v.y()}); }
 Vec3 Get3(const double* d) { return Vec3(d[0], d[1], d[2]); }
 Vec2 Get2(const double* d) { return Vec2(d[0], d[1]); }
+
+void PutFragment(std::vector<double>& m, const raster::Fragment& f) {
+  m.push_back(f.w);
+  Put(m, f.position);
+  Put(m, f.normal);
+  Put(m, f.uv);
+  Put(m, f.duvdx);
+  Put(m, f.duvdy);
+  m.push_back(f.surfaceId);
+  Put(m, f.colour);
+}
+
+raster::Fragment GetFragment(const double* d) {
+  raster::Fragment f;
+  f.w = d[0];
+  f.position = Get3(d + 1);
+  f.normal = Get3(d + 4);
+  f.uv = Get2(d + 7);
+  f.duvdx = Get2(d + 9);
+  f.duvdy = Get2(d + 11);
+  f.surfaceId = static_cast<std::uint32_t>(d[13]);
+  f.colour = Get3(d + 14);
+  return f;
+}
 
 // What one process's scan hands over on one sample row, each entry with its surface's
 // rank in the scan order of all surfaces (polygons after every surface), each triangle
@@ -101,18 +128,26 @@ class RowEncoder final : public raster::FragmentRow {
   void Begin(int row) {
     row_ = row;
     fragments.clear();
+    chords.clear();
     triangles.clear();
     lastRows.clear();
   }
   void Add(int column, const raster::Fragment& f) override {
-    fragments.insert(fragments.end(), {Rank(f.surfaceId), static_cast<double>(column), f.w});
-    Put(fragments, f.position);
-    Put(fragments, f.normal);
-    Put(fragments, f.uv);
-    Put(fragments, f.duvdx);
-    Put(fragments, f.duvdy);
-    fragments.push_back(f.surfaceId);
-    Put(fragments, f.colour);
+    fragments.insert(fragments.end(), {Rank(f.surfaceId), static_cast<double>(column)});
+    PutFragment(fragments, f);
+  }
+  // A chord travels whole, as the back end keeps it (its samples shaded from it, a run of
+  // a pixel's at their mean column): ends and cubics, made again bit for bit.
+  void AddChord(const raster::Chord& c, const raster::SampleColumns&) override {
+    const raster::Chord::Cubics* cubics = c.cubics();
+    chords.insert(chords.end(), {Rank(c.a().surfaceId), c.xa(), c.xb(), c.orthographic() ? 1.0 : 0.0,
+                                 cubics ? 1.0 : 0.0});
+    PutFragment(chords, c.a());
+    PutFragment(chords, c.b());
+    const raster::Chord::Cubics none;
+    const raster::Chord::Cubics& k = cubics ? *cubics : none;
+    for (const Vec3& n : k.normal) Put(chords, n);
+    chords.insert(chords.end(), std::begin(k.depth), std::end(k.depth));
   }
   void AddTriangle(const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c,
                    std::uint32_t surfaceId) override {
@@ -127,7 +162,7 @@ class RowEncoder final : public raster::FragmentRow {
     }
     lastRows.push_back(layout_.LastRowOf(a, b, c));
   }
-  std::vector<double> fragments, triangles;
+  std::vector<double> fragments, chords, triangles;
   std::vector<int> lastRows;  // per triangle
 
  private:
@@ -137,18 +172,12 @@ class RowEncoder final : public raster::FragmentRow {
   int row_ = 0;
 };
 
-raster::Fragment DecodeFragment(const double* d, int* column) {
-  *column = static_cast<int>(d[1]);
-  raster::Fragment f;
-  f.w = d[2];
-  f.position = Get3(d + 3);
-  f.normal = Get3(d + 6);
-  f.uv = Get2(d + 9);
-  f.duvdx = Get2(d + 11);
-  f.duvdy = Get2(d + 13);
-  f.surfaceId = static_cast<std::uint32_t>(d[15]);
-  f.colour = Get3(d + 16);
-  return f;
+raster::Chord DecodeChord(const double* d) {
+  const double* cubic = d + 5 + 2 * kFragmentBody;
+  raster::Chord::Cubics k;
+  for (int i = 0; i < 4; ++i) k.normal[i] = Get3(cubic + 3 * i), k.depth[i] = cubic[12 + i];
+  return raster::Chord(d[1], GetFragment(d + 5), d[2], GetFragment(d + 5 + kFragmentBody), d[3] != 0.0,
+                       d[4] != 0.0 ? &k : nullptr);
 }
 
 raster::RasterVertex DecodeVertex(const double* d) {
@@ -165,17 +194,21 @@ raster::RasterVertex DecodeVertex(const double* d) {
 // A row as received, and where its lists are.
 struct RowMessage {
   std::vector<double> data;
-  std::size_t nFragments = 0, nTriangles = 0;
+  std::size_t nFragments = 0, nChords = 0, nTriangles = 0;
   bool ok = true;
   bool Parse(int row) {
     if (data.size() < kHeader || data[0] != row) return false;
     ok = data[1] != 0.0;
     nFragments = static_cast<std::size_t>(data[2]);
-    nTriangles = static_cast<std::size_t>(data[3]);
-    return data.size() == kHeader + nFragments * kFragment + nTriangles * kTriangle;
+    nChords = static_cast<std::size_t>(data[3]);
+    nTriangles = static_cast<std::size_t>(data[4]);
+    return data.size() == kHeader + nFragments * kFragment + nChords * kChord + nTriangles * kTriangle;
   }
   const double* Fragment(std::size_t k) const { return data.data() + kHeader + k * kFragment; }
-  const double* Triangle(std::size_t k) const { return data.data() + kHeader + nFragments * kFragment + k * kTriangle; }
+  const double* Chord(std::size_t k) const { return data.data() + kHeader + nFragments * kFragment + k * kChord; }
+  const double* Triangle(std::size_t k) const {
+    return data.data() + kHeader + nFragments * kFragment + nChords * kChord + k * kTriangle;
+  }
 };
 
 // The entries of several messages in the order of their keys (fragments: the rank;
@@ -330,7 +363,7 @@ class Band final : public DirectScanSource {
     layout_.channels = channels;
   }
 
-  bool ScanRow(double y, const raster::SampleColumns&, raster::FragmentRow& out) override {
+  bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override {
     const int j = static_cast<int>(std::lround((y - layout_.y0) / layout_.dy));
     ScanThrough(j);
     // This process's own part of the row, and every other process's.
@@ -347,12 +380,12 @@ class Band final : public DirectScanSource {
         messages_, [](const RowMessage& m) { return m.nFragments; },
         [](const RowMessage& m, std::size_t i) { return m.Fragment(i); },
         [](const double* a, const double* b) { return a[0] < b[0]; },
-        [&](const double* d) {
-          int column = 0;
-          const raster::Fragment f = DecodeFragment(d, &column);
-          out.Add(column, f);
-        },
-        &next_);
+        [&](const double* d) { out.Add(static_cast<int>(d[1]), GetFragment(d + 2)); }, &next_);
+    Merge(
+        messages_, [](const RowMessage& m) { return m.nChords; },
+        [](const RowMessage& m, std::size_t i) { return m.Chord(i); },
+        [](const double* a, const double* b) { return a[0] < b[0]; },
+        [&](const double* d) { out.AddChord(DecodeChord(d), columns); }, &next_);
     Merge(
         messages_, [](const RowMessage& m) { return m.nTriangles; },
         [](const RowMessage& m, std::size_t i) { return m.Triangle(i); },
@@ -554,9 +587,11 @@ class Band final : public DirectScanSource {
       if (!owns) continue;
       std::vector<double> m = {static_cast<double>(j), ok ? 1.0 : 0.0,
                                static_cast<double>(encoder_->fragments.size() / kFragment),
+                               static_cast<double>(encoder_->chords.size() / kChord),
                                static_cast<double>(carry.size() / kTriangle)};
-      m.reserve(kHeader + encoder_->fragments.size() + carry.size());
+      m.reserve(kHeader + encoder_->fragments.size() + encoder_->chords.size() + carry.size());
       m.insert(m.end(), encoder_->fragments.begin(), encoder_->fragments.end());
+      m.insert(m.end(), encoder_->chords.begin(), encoder_->chords.end());
       m.insert(m.end(), carry.begin(), carry.end());
       carry.clear();
       if (o == link_.Rank()) {

@@ -82,10 +82,25 @@ class Chord {
     const bool ka = fits(ta, sa), kb = fits(tb, sb);
     cubic_ = ka || kb;
     if (!cubic_) return;
-    Coefficients(a.normal, b.normal, ta, tb, ka, kb, n_);
-    Coefficients(Depth(a.w), Depth(b.w), sa, sb, ka, kb, q_);
+    Coefficients(a.normal, b.normal, ta, tb, ka, kb, cubics_.normal);
+    Coefficients(Depth(a.w), Depth(b.w), sa, sb, ka, kb, cubics_.depth);
   }
   static constexpr double kSlopeTurnRatio = 2.0, kSlopeFloor = 1e-3;
+
+  // The cubics in t (lowest power first) of the normal and of the interpolated depth (1/w
+  // in perspective, w orthographic), when the ends' slopes gave them. A chord's ends and
+  // cubics are the whole of it: a copy made from them (another process's) is the same
+  // chord bit for bit.
+  struct Cubics {
+    Vec3 normal[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
+    double depth[4] = {};
+  };
+  const Cubics* cubics() const { return cubic_ ? &cubics_ : nullptr; }
+  bool orthographic() const { return orthographic_; }
+  Chord(double xa, const Fragment& a, double xb, const Fragment& b, bool orthographic, const Cubics* cubics)
+      : xa_(xa), xb_(xb), a_(a), b_(b), orthographic_(orthographic), cubic_(cubics != nullptr) {
+    if (cubics) cubics_ = *cubics;
+  }
 
   double xa() const { return xa_; }
   double xb() const { return xb_; }
@@ -129,7 +144,7 @@ class Chord {
     Fragment f = a_;
     f.w = DepthAlong(t);
     f.position = wa * a_.position + wb * b_.position;
-    const Vec3 n = cubic_ ? Horner(n_, t) : Vec3(wa * a_.normal + wb * b_.normal);
+    const Vec3 n = cubic_ ? Horner(cubics_.normal, t) : Vec3(wa * a_.normal + wb * b_.normal);
     f.normal = n.normalized();
     if (!f.normal.allFinite()) f.normal = a_.normal;
     f.uv = wa * a_.uv + wb * b_.uv;
@@ -141,16 +156,15 @@ class Chord {
   double xa_ = 0.0, xb_ = 0.0;
   Fragment a_, b_;
   bool orthographic_ = false;
-  // With slopes: the normal's and the depth's (Depth) cubics in t, lowest power first.
+  // With slopes: the normal's and the depth's (Depth) cubics.
   bool cubic_ = false;
-  Vec3 n_[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
-  double q_[4] = {};
+  Cubics cubics_;
 
   double Along(double x) const { return std::clamp((x - xa_) / (xb_ - xa_), 0.0, 1.0); }
   // What is interpolated for the eye distance: 1/w in perspective, w orthographic.
   double Depth(double w) const { return orthographic_ ? w : 1.0 / w; }
   double DepthAlong(double t) const {
-    const double d = cubic_ ? Horner(q_, t) : (1.0 - t) * Depth(a_.w) + t * Depth(b_.w);
+    const double d = cubic_ ? Horner(cubics_.depth, t) : (1.0 - t) * Depth(a_.w) + t * Depth(b_.w);
     return orthographic_ ? d : 1.0 / d;
   }
   template <class V>

@@ -153,10 +153,7 @@ class FragmentGeometry final : public FragmentRow {
 
   void Add(int column, const Fragment& f) override {
     ++stats_[Counter::SamplesTested];
-    if (column < 0 || column >= lat_.nx || !(f.w >= s_.hither)) return;
-    if (s_.cullBackFaces && f.normal.dot(s_.EyeFor(f.position) - f.position) < 0.0) return;
-    if (const Material& m = s_.MaterialOf(f.surfaceId); !m.twoSided && !ShowsFront(m, f.normal, f.position, s_.EyeFor(f.position)))
-      return;
+    if (column < 0 || column >= lat_.nx || !(f.w >= s_.hither) || !Shows(f)) return;
     const auto handle = static_cast<std::int32_t>(pool_->size());
     if (InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / f.w, handle))
       pool_->push_back(f);
@@ -168,17 +165,16 @@ class FragmentGeometry final : public FragmentRow {
   }
 
   // A chord is kept whole, and a sample of it made only when shaded (a hidden one never),
-  // unless its side may drop a fragment: then each is made and added.
+  // or when its side may drop it (culling, a one-sided material): then a sample the depth
+  // test would keep is made first to ask its side.
   void AddChord(const Chord& c, const SampleColumns& columns) override {
-    if (sided_) {
-      FragmentRow::AddChord(c, columns);
-      return;
-    }
     const auto handle = kChordHandle + static_cast<std::int32_t>(chords_->size());
     bool kept = false;
     c.ForEachColumn(columns, [&](int column) {
+      const double x = columns.At(column), w = c.DepthAt(x);
+      if (sided_ && Hidden(column, w)) return;
       ++stats_[Counter::SamplesTested];
-      const double w = c.DepthAt(columns.At(column));
+      if (sided_ && !Shows(c.At(x))) return;
       if (w >= s_.hither && InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / w, handle))
         kept = true;
     });
@@ -225,20 +221,34 @@ class FragmentGeometry final : public FragmentRow {
       if (d < best) best = d, nearest = k;
     }
     if (nearest >= 0) return store_.Interpolate(m[nearest].smp.handle - kTriangleHandle, cx, cy);
-    auto fragment = [&](const Member& x) -> Fragment {
-      if (x.smp.handle >= kChordHandle)
-        return rows.chords[static_cast<size_t>(x.r)][x.smp.handle - kChordHandle].At(lat_.At(x.i));
-      return rows.pools[static_cast<size_t>(x.r)][x.smp.handle];
-    };
-    Fragment f = fragment(m[0]);
-    for (int k = 1; k < n; ++k) {
-      const Fragment g = fragment(m[k]);
-      f.w += g.w;
-      f.position += g.position;
-      f.normal += g.normal;
-      f.uv += g.uv;
-      f.duvdx += g.duvdx;
-      f.duvdy += g.duvdy;
+    // The members come row by row, each row's from left to right: a run of samples of one
+    // chord is taken at its mean column, once (a chord's attributes are smooth along it,
+    // so to second order as their mean), weighted by its length.
+    Fragment f;
+    for (int k = 0, run = 1; k < n; k += run) {
+      const Member& x = m[k];
+      run = 1;
+      Fragment g;
+      if (x.smp.handle >= kChordHandle) {
+        double sx = lat_.At(x.i);
+        for (; k + run < n && m[k + run].r == x.r && m[k + run].smp.handle == x.smp.handle; ++run)
+          sx += lat_.At(m[k + run].i);
+        g = rows.chords[static_cast<size_t>(x.r)][x.smp.handle - kChordHandle].At(sx / run);
+      } else {
+        g = rows.pools[static_cast<size_t>(x.r)][x.smp.handle];
+      }
+      if (k == 0) {
+        f = g;
+        if (run == 1) continue;
+        f.w = 0.0, f.position.setZero(), f.normal.setZero(), f.uv.setZero(), f.duvdx.setZero(), f.duvdy.setZero();
+      }
+      const double weight = run;
+      f.w += weight * g.w;
+      f.position += weight * g.position;
+      f.normal += weight * g.normal;
+      f.uv += weight * g.uv;
+      f.duvdx += weight * g.duvdx;
+      f.duvdy += weight * g.duvdy;
     }
     const double inv = 1.0 / n;
     f.w *= inv;
@@ -251,6 +261,13 @@ class FragmentGeometry final : public FragmentRow {
   }
 
  private:
+  // Whether a fragment's side lets it be seen: not culled, and a one-sided material's front.
+  bool Shows(const Fragment& f) const {
+    if (s_.cullBackFaces && f.normal.dot(s_.EyeFor(f.position) - f.position) < 0.0) return false;
+    const Material& m = s_.MaterialOf(f.surfaceId);
+    return m.twoSided || ShowsFront(m, f.normal, f.position, s_.EyeFor(f.position));
+  }
+
   FragmentSource& source_;
   const RenderSettings& s_;
   const Lattice& lat_;
