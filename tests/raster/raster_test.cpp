@@ -15,6 +15,7 @@
 #include "raster/scanline_renderer.h"
 #include "raster/shadow_map.h"
 #include "raster/triangle_setup.h"
+#include "raster/triangle_store.h"
 
 #include <unistd.h>
 
@@ -436,6 +437,69 @@ TEST(ScanlineRenderer, ARunOfOneChordIsShadedAtItsMeanColumn) {
   s.cullBackFaces = true;
   ASSERT_EQ(Differ(RenderAll(fragments, s), made), 0) << "a fragment faces away";
   EXPECT_EQ(Differ(RenderAll(chords, s), kept), 0) << "culling";
+}
+
+// Two surfaces' fragments on every sample of a band of rows, their attributes smooth in
+// x and y and their depths crossing (surface 1 nearer left of x = 64): `Nearest` is the
+// fragment the depth test keeps.
+class CrossingFragments final : public FragmentSource {
+ public:
+  static Fragment Of(std::uint32_t id, double x, double y) {
+    Fragment f;
+    f.w = id == 0 ? 3.0 : 2.0 + x / 64.0;
+    f.position = Vec3((x - 64) * f.w / 100, (y - 48) * f.w / 100, f.w);
+    f.normal = Vec3(std::sin(0.03 * x + id), std::cos(0.04 * y), -1.2).normalized();
+    f.uv = Vec2(x / 128 + 0.1 * id, y / 96);
+    f.duvdx = Vec2(1.0 / 128, 0.0);
+    f.duvdy = Vec2(0.0, 1.0 / 96);
+    f.surfaceId = id;
+    return f;
+  }
+  static bool Covers(double y) { return y > 20 && y < 70; }
+  static Fragment Nearest(double x, double y) {
+    const Fragment a = Of(0, x, y), b = Of(1, x, y);
+    return b.w < a.w ? b : a;
+  }
+  bool ScanRow(double y, const SampleColumns& columns, FragmentRow& out) override {
+    if (!Covers(y)) return true;
+    for (std::uint32_t id = 0; id < 2; ++id)
+      for (int c = 0; c < columns.n; ++c) out.Add(c, Of(id, columns.At(c), y));
+    return true;
+  }
+};
+
+TEST(ScanlineRenderer, OneSamplePixelsAreTheirFragmentShaded) {
+  // At one sample a pixel and one layer a pixel is shaded without the grouping of its
+  // samples: every channel must be that of the nearest fragment, computed here: colour
+  // ShadeFragment's (lit), alpha 1, Z the eye distance, N the unit normal, uv, and the id.
+  RenderSettings s = PinholeFrame(1);
+  s.lights = DefaultLightRig(Vec3(0, 0, 1), Vec3(0, -1, 0), Vec3(1, 0, 0));
+  CrossingFragments source;
+  const std::vector<float> got = RenderAll(source, s);
+  ASSERT_EQ(got.size(), static_cast<std::size_t>(s.width) * s.height * kChannels);
+  long covered = 0, wrong = 0;
+  for (int py = 0; py < s.height; ++py)
+    for (int px = 0; px < s.width; ++px) {
+      const float* p = &got[(static_cast<std::size_t>(py) * s.width + px) * kChannels];
+      const double x = px + 0.5, y = py + 0.5;
+      if (!CrossingFragments::Covers(y)) {
+        wrong += p[3] != 0.0f;
+        continue;
+      }
+      ++covered;
+      const Fragment f = CrossingFragments::Nearest(x, y);
+      std::atomic<bool> failed = false;
+      const Rgb rgb = ShadeFragment(f, s, &failed);
+      const Vec3 n = f.normal.normalized();
+      const float want[kChannels] = {static_cast<float>(rgb[0]), static_cast<float>(rgb[1]),
+                                     static_cast<float>(rgb[2]), 1.0f, static_cast<float>(f.w),
+                                     static_cast<float>(n.x()), static_cast<float>(n.y()),
+                                     static_cast<float>(n.z()), static_cast<float>(f.uv.x()),
+                                     static_cast<float>(f.uv.y()), static_cast<float>(f.surfaceId)};
+      wrong += std::memcmp(p, want, sizeof(want)) != 0;
+    }
+  EXPECT_GT(covered, 5000);
+  EXPECT_EQ(wrong, 0);
 }
 
 // A circular section seen by a pinhole at the origin looking along +z (focal f pixels):
