@@ -31,6 +31,9 @@ SCENES = [  # name, file, extra camera options
     ("cage", None, []),  # bench/make_cage.py's torus cage of 2,176 faces, written into --out
 ]
 THETA_STEPS = [4, 8, 16, 32, 64]
+# θ with chains on every sample row (--y-step 0) instead of one-pixel slabs: only differs
+# with supersampling (at aa 1 every row is a line either way).
+THETA_ROW_STEPS = [4, 8, 16, 32]
 TESS_RATES = [2, 4, 8, 16, 32]
 TESS_PIXELS = [16, 8, 4, 2, 1]
 AAS = [1, 4]
@@ -44,12 +47,16 @@ FIELDS = ["scene", "aa", "mode", "setting", "seconds", "seconds_wall", "peak_rss
           "depth_rel_max", "normal_deg_p99", "normal_deg_max", "rmse", "psnr_db"]
 
 
-def settings(only=None):
-    """(mode, setting, options) of every setting, or of those `only` names (a set of short
-    names: exact, theta16, tess8, px4, ...)."""
+def settings(aa, only=None):
+    """(mode, setting, options) of every setting at supersampling aa, or of those `only`
+    names (a set of short names: exact, theta16, theta16r, tess8, px4, ...)."""
     every = [("exact", "", [], "exact")]
     for n in THETA_STEPS:
         every.append(("theta", f"steps {n}", ["--mode", "theta", "--theta-steps", str(n)], f"theta{n}"))
+    if aa > 1:
+        for n in THETA_ROW_STEPS:
+            every.append(("theta", f"steps {n}, rows", ["--mode", "theta", "--theta-steps", str(n), "--y-step", "0"],
+                          f"theta{n}r"))
     for r in TESS_RATES:
         every.append(("tess", f"rate {r}", ["--mode", "tess", "--tess-rate", str(r)], f"tess{r}"))
     for p in TESS_PIXELS:
@@ -245,7 +252,7 @@ def main():
     ap.add_argument("--repeat", type=int, default=1, help="renders per setting; the fastest counts")
     ap.add_argument("--scenes", default=",".join(s[0] for s in SCENES))
     ap.add_argument("--settings", default="",
-                    help="only these settings, by short name: exact (always), theta16, tess8, px4, ... "
+                    help="only these settings, by short name: exact (always), theta16, theta16r (rows), tess8, px4, ... "
                          "(default: all)")
     ap.add_argument("--aa", default=",".join(map(str, AAS)), help="supersampling levels, e.g. 1,4")
     ap.add_argument("--povray-steps", type=int, default=4,
@@ -275,7 +282,7 @@ def main():
         only = set(args.settings.split(",")) | {"exact"} if args.settings else None
         for aa in (int(a) for a in args.aa.split(",")):
             ref = os.path.join(work, f"{name}_aa{aa}_exact.exr")
-            for mode, setting, margs in settings(only):
+            for mode, setting, margs in settings(aa, only):
                 exr = ref if mode == "exact" else os.path.join(work, "candidate.exr")
                 secs, wall, st = render(args.binary, path, extra, aa, margs, args.size, exr,
                                         os.path.join(work, "stats.json"), args.repeat)
