@@ -31,9 +31,9 @@ SCENES = [  # name, file, extra camera options
     ("cage", None, []),  # bench/make_cage.py's torus cage of 2,176 faces, written into --out
 ]
 THETA_STEPS = [4, 8, 16, 32, 64]
-# θ with chains on every sample row (--y-step 0) instead of one-pixel slabs: only differs
-# with supersampling (at aa 1 every row is a line either way).
-THETA_ROW_STEPS = [4, 8, 16, 32]
+# θ with one-pixel slabs between lines of chains (--y-step 1) instead of the default chains
+# on every sample row: only differs with supersampling (at aa 1 every row is a line).
+THETA_SLAB_STEPS = [4, 8, 16, 32, 64]
 TESS_RATES = [2, 4, 8, 16, 32]
 TESS_PIXELS = [16, 8, 4, 2, 1]
 AAS = [1, 4]
@@ -49,14 +49,14 @@ FIELDS = ["scene", "aa", "mode", "setting", "seconds", "seconds_wall", "peak_rss
 
 def settings(aa, only=None):
     """(mode, setting, options) of every setting at supersampling aa, or of those `only`
-    names (a set of short names: exact, theta16, theta16r, tess8, px4, ...)."""
+    names (a set of short names: exact, theta16, theta16s, tess8, px4, ...)."""
     every = [("exact", "", [], "exact")]
     for n in THETA_STEPS:
         every.append(("theta", f"steps {n}", ["--mode", "theta", "--theta-steps", str(n)], f"theta{n}"))
     if aa > 1:
-        for n in THETA_ROW_STEPS:
-            every.append(("theta", f"steps {n}, rows", ["--mode", "theta", "--theta-steps", str(n), "--y-step", "0"],
-                          f"theta{n}r"))
+        for n in THETA_SLAB_STEPS:
+            every.append(("theta", f"steps {n}, 1-px slabs", ["--mode", "theta", "--theta-steps", str(n), "--y-step", "1"],
+                          f"theta{n}s"))
     for r in TESS_RATES:
         every.append(("tess", f"rate {r}", ["--mode", "tess", "--tess-rate", str(r)], f"tess{r}"))
     for p in TESS_PIXELS:
@@ -188,6 +188,11 @@ def write_report(rows, path, size, povray_line):
         f.write("\n".join(lines))
 
 
+def Series(r):
+    """The plot's series of a row: its mode, θ's 1-px slabs apart from its rows."""
+    return "theta slabs" if r["mode"] == "theta" and "slabs" in r["setting"] else r["mode"]
+
+
 def plot(rows, csv_path, png_path):
     if not shutil.which("gnuplot"):
         print("accuracy: gnuplot not installed: no plot (apt-get install gnuplot-nox)", file=sys.stderr)
@@ -198,9 +203,9 @@ def plot(rows, csv_path, png_path):
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     with open(data, "w") as f:
         for scene in scenes:
-            for mode in ["theta", "tess", "tess-pixels", "povray"]:
+            for mode in ["theta", "theta slabs", "tess", "tess-pixels", "povray"]:
                 for aa in AAS:
-                    sub = [r for r in rows if r["scene"] == scene and r["mode"] == mode and r["aa"] == aa]
+                    sub = [r for r in rows if r["scene"] == scene and Series(r) == mode and r["aa"] == aa]
                     if not sub:
                         continue
                     for r in sub:
@@ -213,7 +218,8 @@ def plot(rows, csv_path, png_path):
         f"set terminal {'pngcairo' if has_cairo else 'png'} size {400 * len(scenes)},800",
         f"set output '{png_path}'", "set logscale xy", "set grid", "set key top right font ',8'",
         f"set multiplot layout 2,{len(scenes)} title 'error against time, per mode (aa 1 open, aa 4 filled)'"]
-    colours = {"theta": "#d62728", "tess": "#1f77b4", "tess-pixels": "#2ca02c", "povray": "#9467bd"}
+    colours = {"theta": "#d62728", "theta slabs": "#ff9896", "tess": "#1f77b4", "tess-pixels": "#2ca02c",
+               "povray": "#9467bd"}
     for col, label in [(2, "max silhouette error, px (0 drawn at 0.01)"), (3, "colour RMSE")]:
         for scene in scenes:
             plots = []
@@ -252,7 +258,7 @@ def main():
     ap.add_argument("--repeat", type=int, default=1, help="renders per setting; the fastest counts")
     ap.add_argument("--scenes", default=",".join(s[0] for s in SCENES))
     ap.add_argument("--settings", default="",
-                    help="only these settings, by short name: exact (always), theta16, theta16r (rows), tess8, px4, ... "
+                    help="only these settings, by short name: exact (always), theta16, theta16s (slabs), tess8, px4, ... "
                          "(default: all)")
     ap.add_argument("--aa", default=",".join(map(str, AAS)), help="supersampling levels, e.g. 1,4")
     ap.add_argument("--povray-steps", type=int, default=4,

@@ -113,15 +113,15 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
   cmd->add_option("--y-step", o->yStep,
-                  "theta mode: pixels between the scan lines whose cross-sections are sampled "
-                  "(rounded to a whole number of sample rows); the surface between two such lines "
-                  "goes to the back end as one slab of triangles, and where the chains of two "
-                  "lines do not pair up (a curve born or gone, an event of the Y scan) every "
-                  "sample row between them is sampled instead. Silhouettes between the lines are "
-                  "chords: error about h^2 / (8 R) pixels for step h and a silhouette curving with "
-                  "radius R pixels. 0, or a step of less than two sample rows (the default at "
-                  "--aa 1): every sample row is sampled, its chains advanced from the row before, "
-                  "and no triangles are made")
+                  "theta mode: 0 (the default), or a step of less than two sample rows: every "
+                  "sample row is sampled, its chains advanced from the row before (coverage exact "
+                  "on every row), and no triangles are made. Else pixels between the scan lines "
+                  "whose cross-sections are sampled (rounded to a whole number of sample rows); "
+                  "the surface between two such lines goes to the back end as one slab of "
+                  "triangles, and where the chains of two lines do not pair up (a curve born or "
+                  "gone, an event of the Y scan) every sample row between them is sampled "
+                  "instead. Silhouettes between the lines are chords: error about h^2 / (8 R) "
+                  "pixels for step h and a silhouette curving with radius R pixels")
       ->check(CLI::Range(0.0, 64.0))
       ->capture_default_str();
   cmd->add_flag("--no-extrapolate", o->noExtrapolate,

@@ -34,7 +34,7 @@ struct RenderOptions {
   RenderMode mode = RenderMode::Exact;
   bool noExtrapolate = false;
   int thetaSteps = 16;
-  double yStep = 1.0;  // theta mode: pixels between scan lines with chains; 0: every sample row
+  double yStep = 0.0;  // theta mode: pixels between scan lines with chains; 0: every sample row
   Overlay overlay = Overlay::None;
   // Tessellation (xscan/tess_feed.h): uniform at tessRate > 0, or edges tessPixels long,
   // else (the default) a chord error of at most tessError pixels.

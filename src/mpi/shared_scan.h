@@ -4,12 +4,12 @@
 // them to workers, and each process scans its share row by row on its own threads (a
 // PartitionedScan of that share). The pixel rows are dealt out too, in bands of kBandRows
 // round robin: each process renders the bands it owns, and every process sends each owner
-// what its surfaces put on the owner's sample rows (the fragments, and the triangles that
-// reach them, carried to the owner's next row when handed over on another's). An owner
-// merges the processes' rows in the scan order of all surfaces (triangles by the row they
-// were handed over on, then that order): the same fragments and triangles in the same
-// order as one process scanning everything, so every pixel is the same, bit for bit, for
-// any number of processes. Process 0 writes the image, taking each band's rows from its
+// what its surfaces put on the owner's sample rows (the fragments, θ's chords whole, and
+// the triangles that reach them, carried to the owner's next row when handed over on
+// another's). An owner merges the processes' rows in the scan order of all surfaces
+// (triangles by the row they were handed over on, then that order): the same fragments,
+// chords and triangles in the same order as one process scanning everything, so every
+// pixel is the same, bit for bit, for any number of processes. Process 0 writes the image, taking each band's rows from its
 // owner as they come: no process holds a frame.
 //
 // Messages (between two processes they arrive in the order sent):

@@ -289,13 +289,13 @@ TEST(Cli, ExactModeIsTheDefaultAndReportsItsTrackers) {
 }
 
 TEST(Cli, ThetaStepOfOneSampleRowTakesRowsNotSlabs) {
-  // --y-step 1 is one sample row at --aa 1 (rows: chains on every row, advanced from the
-  // row before) and two at --aa 3 (slabs); --y-step 0 is rows at any --aa.
+  // The default (--y-step 0) is rows at any --aa (chains on every row, advanced from the
+  // row before); --y-step 1 is one sample row at --aa 1 (rows) and two at --aa 3 (slabs).
   const auto dir = std::filesystem::temp_directory_path() / "patchscan_cli_ystep";
   std::filesystem::create_directories(dir);
   const std::string out = (dir / "teapot.png").string();
   for (const auto& [args, slabs] : {std::pair{" --aa 1", false}, {" --aa 1 --y-step 1", false},
-                                    {" --aa 3", true}, {" --aa 3 --y-step 0", false}}) {
+                                    {" --aa 3", false}, {" --aa 3 --y-step 1", true}}) {
     const Result r = Patchscan("render " + kTeapot + " -o " + out + " --size 96x72 --mode theta --stats" + args);
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_EQ(StatsValue(r.err, "slab_triangles") > 0, slabs) << args << "\n" << r.err;
@@ -316,7 +316,7 @@ TEST(Cli, ThetaSlabsLeaveNoCrackOnASeamSeenExactlyVertical) {
   const std::string scene = std::string(PATCHSCAN_SURFACES_DIR) + "/nurbs.rib";
   const std::string exact = (dir / "exact.png").string(), theta = (dir / "theta.png").string();
   ASSERT_EQ(Patchscan("render " + scene + " --size 480x360 --mode exact -o " + exact).code, 0);
-  ASSERT_EQ(Patchscan("render " + scene + " --size 480x360 --mode theta -o " + theta).code, 0);
+  ASSERT_EQ(Patchscan("render " + scene + " --size 480x360 --mode theta --y-step 1 -o " + theta).code, 0);
   const std::vector<float> a = Pixels(exact), b = Pixels(theta);
   ASSERT_EQ(a.size(), 480u * 360u * 4u);
   ASSERT_EQ(b.size(), a.size());
