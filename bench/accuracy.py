@@ -55,8 +55,8 @@ def settings(aa, only=None):
         every.append(("theta", f"steps {n}", ["--mode", "theta", "--theta-steps", str(n)], f"theta{n}"))
     if aa > 1:
         for n in THETA_SLAB_STEPS:
-            every.append(("theta", f"steps {n}, 1-px slabs", ["--mode", "theta", "--theta-steps", str(n), "--y-step", "1"],
-                          f"theta{n}s"))
+            every.append(("theta", f"steps {n}, 1-px slabs",
+                          ["--mode", "theta", "--theta-steps", str(n), "--y-step", "1"], f"theta{n}s"))
     for r in TESS_RATES:
         every.append(("tess", f"rate {r}", ["--mode", "tess", "--tess-rate", str(r)], f"tess{r}"))
     for p in TESS_PIXELS:
@@ -258,7 +258,8 @@ def main():
     ap.add_argument("--repeat", type=int, default=1, help="renders per setting; the fastest counts")
     ap.add_argument("--scenes", default=",".join(s[0] for s in SCENES))
     ap.add_argument("--settings", default="",
-                    help="only these settings, by short name: exact (always), theta16, theta16s (slabs), tess8, px4, ... "
+                    help="only these settings, by short name: exact (always), theta16, theta16s (slabs), tess8, "
+                         "px4, ... "
                          "(default: all)")
     ap.add_argument("--aa", default=",".join(map(str, AAS)), help="supersampling levels, e.g. 1,4")
     ap.add_argument("--povray-steps", type=int, default=4,

@@ -9,8 +9,8 @@
 // another's). An owner merges the processes' rows in the scan order of all surfaces
 // (triangles by the row they were handed over on, then that order): the same fragments,
 // chords and triangles in the same order as one process scanning everything, so every
-// pixel is the same, bit for bit, for any number of processes. Process 0 writes the image, taking each band's rows from its
-// owner as they come: no process holds a frame.
+// pixel is the same, bit for bit, for any number of processes. Process 0 writes the
+// image, taking each band's rows from its owner as they come: no process holds a frame.
 //
 // Messages (between two processes they arrive in the order sent):
 //   0 -> k  kGo      a frame begins: its number, scan options, rows

@@ -224,7 +224,8 @@ class FragmentGeometry final : public FragmentRow {
     // The members come row by row, each row's from left to right: a run of samples of one
     // chord is taken at its mean column, once (a chord's attributes are smooth along it,
     // so to second order as their mean), weighted by its length.
-    Fragment f;
+    Fragment f;  // the first member sets every field; the zeros only tell the compiler so
+    f.position.setZero(), f.normal.setZero(), f.uv.setZero(), f.duvdx.setZero(), f.duvdy.setZero();
     for (int k = 0, run = 1; k < n; k += run) {
       const Member& x = m[k];
       run = 1;
@@ -237,6 +238,8 @@ class FragmentGeometry final : public FragmentRow {
       } else {
         g = rows.pools[static_cast<size_t>(x.r)][x.smp.handle];
       }
+      // The first member's fragment is taken as it is (a lone sample, or exact mode's first
+      // fragment: the sum starts from its values, signed zeros included, as it always has).
       if (k == 0) {
         f = g;
         if (run == 1) continue;
