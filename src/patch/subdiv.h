@@ -88,7 +88,13 @@ class SubdivFace {
   SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, std::shared_ptr<const std::vector<Vec3>> hull);
 
   // Prepares the base face first if it is not (thread-safe; allocates then, and not after).
+  // A regular quadrilateral (Catmull-Clark or bilinear) is evaluated as the bicubic patch
+  // its limit surface is (found from Bfr when the face is prepared), any other face by Bfr.
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
+  // Bfr's own evaluation, even where Evaluate takes the bicubic (to test one against the other).
+  void EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
+  // Whether Evaluate takes the face's bicubic form (prepares the face).
+  bool Bicubic() const;
   // The texture coordinates "st" at (u, v) with their derivatives, or nullopt when the cage
   // has none. Prepares as Evaluate does.
   std::optional<TexCoords> TextureCoords(double u, double v) const;
