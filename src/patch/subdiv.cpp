@@ -32,19 +32,79 @@ constexpr double kSecondDiffStep = 1e-6;
 
 // A bicubic fitted to Bfr agrees with it to rounding (~1e-15 of the face's size, the
 // collocation matrix's condition number being ~10); a surface of higher degree (Loop's
-// quartic box splines) differs by a sizeable fraction of it. Position and derivatives up
-// to the second must agree this closely, relative to the patch points' extent.
+// quartic box splines, a Gregory patch) differs by a sizeable fraction of it. Position
+// and derivatives up to the second must agree this closely, relative to the patch points'
+// extent.
 constexpr double kBicubicFitRel = 1e-9;
 
-// The limit surface of a regular Catmull-Clark quadrilateral is one uniform bicubic
-// B-spline patch (at a boundary too: Bfr extends the missing points linearly, which keeps
-// it bicubic), and a bilinear face's is bilinear: either is a bicubic polynomial, which
-// BicubicPatch evaluates in a fraction of Bfr's time (Horner's rule against Bfr's basis
-// weights and point combination). Found from Bfr itself, independently of the order of its
-// patch points: its values at the 4 x 4 nodes u, v in {0, 1/3, 2/3, 1} give the Bézier
-// points (b = M^-1 P M^-T, M the Bernstein collocation matrix), and the fit is kept only if
-// it matches Bfr's position and first and second derivatives at 9 points between the nodes.
-std::optional<BicubicPatch> FitBicubic(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts) {
+using SubFaceMap = SubdivFace::SubFaceMap;
+
+// Bfr's evaluation at (u, v) of a (sub-)face through its map to the face's coordinates.
+void EvaluateMapped(const osd::Bfr::Surface<double>& surface, const double* pts, const SubFaceMap& map, double u,
+                    double v, DerivOrder order, SurfaceDerivs* out) {
+  const SubFaceMap::Point m = map.At(u, v);
+  const double* uv = m.uv;
+  const osd::Bfr::Surface<double>::PointDescriptor desc(3);
+  double p[3], du[3], dv[3], duu[3], duv[3], dvv[3];
+  if (Wants(order, DerivOrder::Second)) surface.Evaluate(uv, pts, desc, p, du, dv, duu, duv, dvv);
+  else if (Wants(order, DerivOrder::First)) surface.Evaluate(uv, pts, desc, p, du, dv);
+  else surface.Evaluate(uv, pts, desc, p);
+  out->p = Vec3(p[0], p[1], p[2]);
+  if (!Wants(order, DerivOrder::First)) return;
+  const Vec3 Du(du[0], du[1], du[2]), Dv(dv[0], dv[1], dv[2]);
+  // The chain rule through the map (u, v) -> (U, V); its only second derivative is
+  // d2U/dudv = twist.
+  const double a00 = m.a00, a10 = m.a10, a01 = m.a01, a11 = m.a11;
+  out->dpdu = m.AlongU(Du, Dv);
+  out->dpdv = m.AlongV(Du, Dv);
+  if (!Wants(order, DerivOrder::Second)) return;
+  const Vec3 Duu(duu[0], duu[1], duu[2]), Duv(duv[0], duv[1], duv[2]), Dvv(dvv[0], dvv[1], dvv[2]);
+  out->d2pdu2 = a00 * a00 * Duu + 2.0 * a00 * a10 * Duv + a10 * a10 * Dvv;
+  out->d2pduv = a00 * a01 * Duu + (a00 * a11 + a10 * a01) * Duv + a10 * a11 * Dvv + map.twist[0] * Du + map.twist[1] * Dv;
+  out->d2pdv2 = a01 * a01 * Duu + 2.0 * a01 * a11 * Duv + a11 * a11 * Dvv;
+}
+
+// The map of sub-face `subFace` (-1: the face itself) of a face so parameterized.
+SubFaceMap MapOf(const osd::Bfr::Parameterization& param, int subFace) {
+  SubFaceMap map;
+  if (subFace < 0) return map;
+  double c00[2], c10[2], c01[2], c11[2];
+  if (param.GetType() == osd::Bfr::Parameterization::TRI) {
+    // The kite at corner k of the triangle (0,0), (1,0), (0,1): the corner, the midpoint of
+    // the edge after it, the centre, the midpoint of the edge before it.
+    const double corner[3][2] = {{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}};
+    const double* a = corner[subFace];
+    const double* b = corner[(subFace + 1) % 3];
+    const double* c = corner[(subFace + 2) % 3];
+    for (int i = 0; i < 2; ++i) {
+      c00[i] = a[i];
+      c10[i] = 0.5 * (a[i] + b[i]);
+      c11[i] = (a[i] + b[i] + c[i]) / 3.0;
+      c01[i] = 0.5 * (a[i] + c[i]);
+    }
+  } else {
+    // Bfr's quadrangulated sub-face: an affine map, read off at its corners.
+    const double s00[2] = {0.0, 0.0}, s10[2] = {1.0, 0.0}, s01[2] = {0.0, 1.0};
+    param.ConvertNormalizedSubFaceToCoord(subFace, s00, c00);
+    param.ConvertNormalizedSubFaceToCoord(subFace, s10, c10);
+    param.ConvertNormalizedSubFaceToCoord(subFace, s01, c01);
+    for (int i = 0; i < 2; ++i) c11[i] = c10[i] + c01[i] - c00[i];
+  }
+  for (int i = 0; i < 2; ++i) {
+    map.c00[i] = c00[i];
+    map.eu[i] = c10[i] - c00[i];
+    map.ev[i] = c01[i] - c00[i];
+    map.twist[i] = c11[i] - c10[i] - c01[i] + c00[i];
+  }
+  return map;
+}
+
+// The bicubic polynomial `at` (position and derivatives, at (s, t) in [0,1]^2) is, if it is
+// one: its values at the 4 x 4 nodes s, t in {0, 1/3, 2/3, 1} give the Bézier points (b =
+// M^-1 P M^-T, M the Bernstein collocation matrix), kept only if they match `at`'s position
+// and first and second derivatives within `tol` at 9 points between the nodes.
+template <class At>
+std::optional<BicubicPatch> FitBicubic(const At& at, double tol) {
   static const Eigen::Matrix4d kInverse = [] {
     Eigen::Matrix4d m;
     for (int i = 0; i < 4; ++i) {
@@ -53,52 +113,120 @@ std::optional<BicubicPatch> FitBicubic(const osd::Bfr::Surface<double>& surface,
     }
     return Eigen::Matrix4d(m.inverse());
   }();
-  const osd::Bfr::Surface<double>::PointDescriptor xyz(3);
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
-  for (std::size_t k = 0; k + 2 < pts.size(); k += 3) {
-    const Eigen::Vector3d q(pts[k], pts[k + 1], pts[k + 2]);
-    lo = lo.cwiseMin(q);
-    hi = hi.cwiseMax(q);
-  }
-  const double scale = (hi - lo).maxCoeff();
-  if (!(scale > 0.0) || !std::isfinite(scale)) return std::nullopt;
-  // Values at the nodes, P[j][i] at (u, v) = (i/3, j/3).
-  Vec3 at[4][4];
+  Vec3 node[4][4];  // [j][i] at (s, t) = (i/3, j/3)
+  SurfaceDerivs d;
   for (int j = 0; j < 4; ++j)
     for (int i = 0; i < 4; ++i) {
-      const double uv[2] = {i / 3.0, j / 3.0};
-      double p[3];
-      surface.Evaluate(uv, pts.data(), xyz, p);
-      at[j][i] = Vec3(p[0], p[1], p[2]);
+      at(i / 3.0, j / 3.0, DerivOrder::Position, &d);
+      node[j][i] = d.p;
     }
   std::array<Vec3, 16> bezier;
-  for (int l = 0; l < 4; ++l)      // along v
-    for (int k = 0; k < 4; ++k) {  // along u
+  for (int l = 0; l < 4; ++l)      // along t
+    for (int k = 0; k < 4; ++k) {  // along s
       Vec3 b = Vec3::Zero();
       for (int j = 0; j < 4; ++j)
-        for (int i = 0; i < 4; ++i) b += kInverse(l, j) * kInverse(k, i) * at[j][i];
+        for (int i = 0; i < 4; ++i) b += kInverse(l, j) * kInverse(k, i) * node[j][i];
       bezier[static_cast<std::size_t>(4 * l + k)] = b;
     }
   BicubicPatch patch(bezier);
-  const double tol = kBicubicFitRel * scale;
-  for (const double u : {1.0 / 6.0, 0.5, 5.0 / 6.0})
-    for (const double v : {1.0 / 6.0, 0.5, 5.0 / 6.0}) {
-      const double uv[2] = {u, v};
-      double p[3], du[3], dv[3], duu[3], duv[3], dvv[3];
-      surface.Evaluate(uv, pts.data(), xyz, p, du, dv, duu, duv, dvv);
-      SurfaceDerivs d;
-      patch.Evaluate(u, v, DerivOrder::Second, &d);
-      const auto off = [&](const Vec3& a, const double* b) {
-        return !((a - Vec3(b[0], b[1], b[2])).cwiseAbs().maxCoeff() <= tol);
-      };
-      if (off(d.p, p) || off(d.dpdu, du) || off(d.dpdv, dv) || off(d.d2pdu2, duu) || off(d.d2pduv, duv) ||
-          off(d.d2pdv2, dvv))
+  const auto off = [&](const Vec3& a, const Vec3& b) { return !((a - b).cwiseAbs().maxCoeff() <= tol); };
+  for (const double s : {0.5, 1.0 / 6.0, 5.0 / 6.0})
+    for (const double t : {0.5, 1.0 / 6.0, 5.0 / 6.0}) {
+      SurfaceDerivs e;
+      at(s, t, DerivOrder::Second, &d);
+      patch.Evaluate(s, t, DerivOrder::Second, &e);
+      if (off(d.p, e.p) || off(d.dpdu, e.dpdu) || off(d.dpdv, e.dpdv) || off(d.d2pdu2, e.d2pdu2) ||
+          off(d.d2pduv, e.d2pduv) || off(d.d2pdv2, e.d2pdv2))
         return std::nullopt;
     }
   return patch;
 }
 
+// Which quarter of [0, 1] u lies in (0 to 3; outside, the nearest; NaN: 3).
+int QuarterOf(double u) { return u < 0.25 ? 0 : u < 0.5 ? 1 : u < 0.75 ? 2 : 3; }
+
 }  // namespace
+
+// Where a (sub-)face's limit surface is a bicubic polynomial, as bicubic patches: the
+// whole face for a regular Catmull-Clark quadrilateral (at a boundary too: Bfr extends the
+// missing points linearly, which keeps it bicubic) or a bilinear one; else the cells of
+// Bfr's patch tree away from the extraordinary corners, which are regular B-spline patches
+// (at its approximation level 2, only the cell of 1/4 x 1/4 at such a corner is a Gregory
+// patch): BicubicPatch evaluates them by Horner's rule in a fraction of Bfr's time (its
+// basis weights and point combination), and the rest is left to Bfr. Found from Bfr itself
+// (FitBicubic), independently of how it orders and builds its points: the face whole, else
+// each quadrant, else each quarter of a quadrant.
+struct BicubicPieces {
+  std::vector<BicubicPatch> patches;
+  // Per cell of the 4 x 4 grid of quarters, [4 j + i] for u in quarter i and v in quarter j:
+  // the patch covering it (-1: none, Bfr) and that patch's level (0: the whole face, over
+  // [0,1]^2; 1: a quadrant; 2: the cell).
+  std::array<std::int8_t, 16> patchOf{}, levelOf{};
+
+  BicubicPieces(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
+                double tol) {
+    patchOf.fill(-1);
+    if (surface.IsRegular() && Fit(surface, pts, map, tol, 0, 0, 0)) return;
+    for (int qj = 0; qj < 2; ++qj)
+      for (int qi = 0; qi < 2; ++qi)
+        if (!Fit(surface, pts, map, tol, 1, qi, qj))
+          for (int j = 2 * qj; j < 2 * qj + 2; ++j)
+            for (int i = 2 * qi; i < 2 * qi + 2; ++i) Fit(surface, pts, map, tol, 2, i, j);
+  }
+  bool Covers(double u, double v) const { return patchOf[static_cast<std::size_t>(4 * QuarterOf(v) + QuarterOf(u))] >= 0; }
+  // The polynomial at (u, v), if it covers that cell.
+  bool Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const {
+    const int i = QuarterOf(u), j = QuarterOf(v);
+    const int k = patchOf[static_cast<std::size_t>(4 * j + i)];
+    if (k < 0) return false;
+    const BicubicPatch& patch = patches[static_cast<std::size_t>(k)];
+    const int level = levelOf[static_cast<std::size_t>(4 * j + i)];
+    if (level == 0) {
+      patch.Evaluate(u, v, order, out);
+      return true;
+    }
+    // The patch's own (s, t) = n (u - u0, v - v0): derivatives along u are n times those along s.
+    const int shift = 2 - level;
+    const double n = static_cast<double>(1 << level);
+    patch.Evaluate(n * u - (i >> shift), n * v - (j >> shift), order, out);
+    if (!Wants(order, DerivOrder::First)) return true;
+    out->dpdu *= n;
+    out->dpdv *= n;
+    if (!Wants(order, DerivOrder::Second)) return true;
+    out->d2pdu2 *= n * n;
+    out->d2pduv *= n * n;
+    out->d2pdv2 *= n * n;
+    return true;
+  }
+
+ private:
+  // Fits the cell (ci, cj) of level `level`; covers its quarters if it is bicubic.
+  bool Fit(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
+           double tol, int level, int ci, int cj) {
+    const double n = static_cast<double>(1 << level);
+    const auto at = [&](double s, double t, DerivOrder order, SurfaceDerivs* d) {
+      EvaluateMapped(surface, pts.data(), map, (ci + s) / n, (cj + t) / n, order, d);
+      if (!Wants(order, DerivOrder::First)) return;
+      d->dpdu /= n;
+      d->dpdv /= n;
+      if (!Wants(order, DerivOrder::Second)) return;
+      d->d2pdu2 /= n * n;
+      d->d2pduv /= n * n;
+      d->d2pdv2 /= n * n;
+    };
+    std::optional<BicubicPatch> patch = FitBicubic(at, tol);
+    if (!patch) return false;
+    const int k = static_cast<int>(patches.size());
+    patches.push_back(*patch);
+    const int width = 4 >> level;
+    for (int j = cj * width; j < (cj + 1) * width; ++j)
+      for (int i = ci * width; i < (ci + 1) * width; ++i) {
+        patchOf[static_cast<std::size_t>(4 * j + i)] = static_cast<std::int8_t>(k);
+        levelOf[static_cast<std::size_t>(4 * j + i)] = static_cast<std::int8_t>(level);
+      }
+    return true;
+  }
+};
 
 // A prepared base face: its Bfr surfaces (points and, where the cage has them, texture
 // coordinates) and their patch points.
@@ -107,9 +235,9 @@ struct FaceData {
   std::vector<double> patchPoints;  // x y z per point: the control points, then any Bfr adds
   osd::Bfr::Surface<double> stSurface;
   std::vector<double> stPatchPoints;  // s t per point
-  // A regular quadrilateral's limit surface as a bicubic patch in power form, evaluated
-  // instead of Bfr (FitBicubic); none for any other face.
-  std::optional<BicubicPatch> bicubic;
+  // Per sub-face (one for a quadrilateral), where it is a bicubic polynomial (Catmull-Clark
+  // and bilinear faces; none for Loop's, whose regular pieces are quartic).
+  std::vector<BicubicPieces> pieces;
 };
 
 class SubdivFace::Cage {
@@ -151,8 +279,19 @@ class SubdivFace::Cage {
     factory_.InitVertexSurface(face, &out->surface);
     out->patchPoints.resize(static_cast<std::size_t>(out->surface.GetNumPatchPoints()) * 3);
     out->surface.PreparePatchPoints(points_.data(), xyz, out->patchPoints.data(), xyz);
-    if (out->surface.IsRegular() && out->surface.GetParameterization().GetType() == osd::Bfr::Parameterization::QUAD)
-      out->bicubic = FitBicubic(out->surface, out->patchPoints);
+    const osd::Bfr::Parameterization param = out->surface.GetParameterization();
+    if (param.GetType() != osd::Bfr::Parameterization::TRI) {
+      Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+      for (std::size_t k = 0; k + 2 < out->patchPoints.size(); k += 3) {
+        const Eigen::Vector3d q(out->patchPoints[k], out->patchPoints[k + 1], out->patchPoints[k + 2]);
+        lo = lo.cwiseMin(q);
+        hi = hi.cwiseMax(q);
+      }
+      const double tol = kBicubicFitRel * (hi - lo).maxCoeff();
+      const bool quad = param.GetType() == osd::Bfr::Parameterization::QUAD;
+      for (int k = 0; k < (quad ? 1 : param.GetFaceSize()); ++k)
+        out->pieces.emplace_back(out->surface, out->patchPoints, MapOf(param, quad ? -1 : k), tol);
+    }
     if (mesh_.st.empty()) return;
     switch (mesh_.stClass) {
       case StClass::Vertex: factory_.InitVertexSurface(face, &out->stSurface); break;
@@ -205,44 +344,14 @@ class SubdivFace::Cage {
 
 SubdivFace::SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, std::shared_ptr<const std::vector<Vec3>> hull)
     : cage_(std::move(cage)), face_(face), subFace_(subFace), hull_(std::move(hull)) {
-  if (subFace_ < 0) return;
-  double c00[2], c10[2], c01[2], c11[2];
-  const osd::Bfr::Parameterization param = cage_->Factory().GetFaceParameterization(face_);
-  if (param.GetType() == osd::Bfr::Parameterization::TRI) {
-    // The kite at corner k of the triangle (0,0), (1,0), (0,1): the corner, the midpoint of
-    // the edge after it, the centre, the midpoint of the edge before it.
-    const double corner[3][2] = {{0.0, 0.0}, {1.0, 0.0}, {0.0, 1.0}};
-    const double* a = corner[subFace_];
-    const double* b = corner[(subFace_ + 1) % 3];
-    const double* c = corner[(subFace_ + 2) % 3];
-    for (int i = 0; i < 2; ++i) {
-      c00[i] = a[i];
-      c10[i] = 0.5 * (a[i] + b[i]);
-      c11[i] = (a[i] + b[i] + c[i]) / 3.0;
-      c01[i] = 0.5 * (a[i] + c[i]);
-    }
-  } else {
-    // Bfr's quadrangulated sub-face: an affine map, read off at its corners.
-    const double s00[2] = {0.0, 0.0}, s10[2] = {1.0, 0.0}, s01[2] = {0.0, 1.0};
-    param.ConvertNormalizedSubFaceToCoord(subFace_, s00, c00);
-    param.ConvertNormalizedSubFaceToCoord(subFace_, s10, c10);
-    param.ConvertNormalizedSubFaceToCoord(subFace_, s01, c01);
-    for (int i = 0; i < 2; ++i) c11[i] = c10[i] + c01[i] - c00[i];
-  }
-  for (int i = 0; i < 2; ++i) {
-    c00_[i] = c00[i];
-    eu_[i] = c10[i] - c00[i];
-    ev_[i] = c01[i] - c00[i];
-    twist_[i] = c11[i] - c10[i] - c01[i] + c00[i];
-  }
+  if (subFace_ >= 0) map_ = MapOf(cage_->Factory().GetFaceParameterization(face_), subFace_);
 }
 
 void SubdivFace::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const {
   const FaceData& face = cage_->Data(face_);
-  if (face.bicubic) {  // a regular quadrilateral: no sub-face map
-    face.bicubic->Evaluate(u, v, order, out);
+  if (!face.pieces.empty() && face.pieces[static_cast<std::size_t>(std::max(subFace_, 0))].Evaluate(u, v, order, out))
     return;
-  }
+  const double* pts = face.patchPoints.data();
   if (Wants(order, DerivOrder::Second) && !face.surface.IsRegular()) {
     // Bfr's irregular patches (Gregory patches at an extraordinary corner) give second
     // derivatives up to 21 % (Catmull-Clark) and 53 % (Loop) off those of their first
@@ -250,54 +359,34 @@ void SubdivFace::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* o
     // from them, can run away (a Loop kite seen edge-on lost its top row). Taken instead as
     // forward differences of the first derivatives kSecondDiffStep apart (backward at the
     // domain's far edges): consistent with them to O(step), two evaluations more.
-    EvaluateBfr(face, u, v, DerivOrder::First, out);
+    EvaluateMapped(face.surface, pts, map_, u, v, DerivOrder::First, out);
     SurfaceDerivs a, b;
     const double hu = u + kSecondDiffStep <= 1.0 ? kSecondDiffStep : -kSecondDiffStep;
     const double hv = v + kSecondDiffStep <= 1.0 ? kSecondDiffStep : -kSecondDiffStep;
-    EvaluateBfr(face, u + hu, v, DerivOrder::First, &a);
-    EvaluateBfr(face, u, v + hv, DerivOrder::First, &b);
+    EvaluateMapped(face.surface, pts, map_, u + hu, v, DerivOrder::First, &a);
+    EvaluateMapped(face.surface, pts, map_, u, v + hv, DerivOrder::First, &b);
     out->d2pdu2 = (a.dpdu - out->dpdu) / hu;
     out->d2pdv2 = (b.dpdv - out->dpdv) / hv;
     out->d2pduv = 0.5 * ((a.dpdv - out->dpdv) / hu + (b.dpdu - out->dpdu) / hv);
     return;
   }
-  EvaluateBfr(face, u, v, order, out);
+  EvaluateMapped(face.surface, pts, map_, u, v, order, out);
 }
 
 void SubdivFace::EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDerivs* out) const {
-  EvaluateBfr(cage_->Data(face_), u, v, order, out);
+  const FaceData& face = cage_->Data(face_);
+  EvaluateMapped(face.surface, face.patchPoints.data(), map_, u, v, order, out);
 }
 
-bool SubdivFace::Bicubic() const { return cage_->Data(face_).bicubic.has_value(); }
-
-void SubdivFace::EvaluateBfr(const FaceData& face, double u, double v, DerivOrder order, SurfaceDerivs* out) const {
-  const SubFacePoint m = SubFaceAt(u, v);
-  const double* uv = m.uv;
-  const osd::Bfr::Surface<double>::PointDescriptor desc(3);
-  double p[3], du[3], dv[3], duu[3], duv[3], dvv[3];
-  const double* pts = face.patchPoints.data();
-  if (Wants(order, DerivOrder::Second)) face.surface.Evaluate(uv, pts, desc, p, du, dv, duu, duv, dvv);
-  else if (Wants(order, DerivOrder::First)) face.surface.Evaluate(uv, pts, desc, p, du, dv);
-  else face.surface.Evaluate(uv, pts, desc, p);
-  out->p = Vec3(p[0], p[1], p[2]);
-  if (!Wants(order, DerivOrder::First)) return;
-  const Vec3 Du(du[0], du[1], du[2]), Dv(dv[0], dv[1], dv[2]);
-  // The chain rule through the map (u, v) -> (U, V) (SubFaceAt); its only second
-  // derivative is d2U/dudv = twist.
-  const double a00 = m.a00, a10 = m.a10, a01 = m.a01, a11 = m.a11;
-  out->dpdu = m.AlongU(Du, Dv);
-  out->dpdv = m.AlongV(Du, Dv);
-  if (!Wants(order, DerivOrder::Second)) return;
-  const Vec3 Duu(duu[0], duu[1], duu[2]), Duv(duv[0], duv[1], duv[2]), Dvv(dvv[0], dvv[1], dvv[2]);
-  out->d2pdu2 = a00 * a00 * Duu + 2.0 * a00 * a10 * Duv + a10 * a10 * Dvv;
-  out->d2pduv = a00 * a01 * Duu + (a00 * a11 + a10 * a01) * Duv + a10 * a11 * Dvv + twist_[0] * Du + twist_[1] * Dv;
-  out->d2pdv2 = a01 * a01 * Duu + 2.0 * a01 * a11 * Duv + a11 * a11 * Dvv;
+bool SubdivFace::BicubicAt(double u, double v) const {
+  const FaceData& face = cage_->Data(face_);
+  return !face.pieces.empty() && face.pieces[static_cast<std::size_t>(std::max(subFace_, 0))].Covers(u, v);
 }
 
 std::optional<TexCoords> SubdivFace::TextureCoords(double u, double v) const {
   if (cage_->Mesh().st.empty()) return std::nullopt;
   const FaceData& face = cage_->Data(face_);
-  const SubFacePoint m = SubFaceAt(u, v);
+  const SubFaceMap::Point m = map_.At(u, v);
   const osd::Bfr::Surface<double>::PointDescriptor desc(2);
   double st[2], du[2], dv[2];
   face.stSurface.Evaluate(m.uv, face.stPatchPoints.data(), desc, st, du, dv);

@@ -88,13 +88,15 @@ class SubdivFace {
   SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, std::shared_ptr<const std::vector<Vec3>> hull);
 
   // Prepares the base face first if it is not (thread-safe; allocates then, and not after).
-  // A regular quadrilateral (Catmull-Clark or bilinear) is evaluated as the bicubic patch
-  // its limit surface is (found from Bfr when the face is prepared), any other face by Bfr.
+  // Where the limit surface is a bicubic polynomial (a regular Catmull-Clark or bilinear
+  // quadrilateral, or the cells of an irregular Catmull-Clark face away from its
+  // extraordinary corners), it is evaluated as that bicubic (found from Bfr when the face
+  // is prepared), elsewhere by Bfr.
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
   // Bfr's own evaluation, even where Evaluate takes the bicubic (to test one against the other).
   void EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
-  // Whether Evaluate takes the face's bicubic form (prepares the face).
-  bool Bicubic() const;
+  // Whether Evaluate takes a bicubic at (u, v) (prepares the face).
+  bool BicubicAt(double u, double v) const;
   // The texture coordinates "st" at (u, v) with their derivatives, or nullopt when the cage
   // has none. Prepares as Evaluate does.
   std::optional<TexCoords> TextureCoords(double u, double v) const;
@@ -120,32 +122,34 @@ class SubdivFace {
   long Preparations() const;
   long PeakPrepared() const;
 
- private:
-  // Bfr's evaluation of the prepared face through the sub-face map.
-  void EvaluateBfr(const FaceData& face, double u, double v, DerivOrder order, SurfaceDerivs* out) const;
-  // The sub-face map at (u, v): the face's Bfr coordinates, and the map's Jacobian columns
-  // d(U, V)/du = (a00, a10) = eu + twist v and d(U, V)/dv = (a01, a11) = ev + twist u.
-  struct SubFacePoint {
-    double uv[2];
-    double a00, a10, a01, a11;
-    // Chain rule: a derivative along u or v from the Bfr derivatives dU, dV.
-    template <class V>
-    V AlongU(const V& dU, const V& dV) const { return a00 * dU + a10 * dV; }
-    template <class V>
-    V AlongV(const V& dU, const V& dV) const { return a01 * dU + a11 * dV; }
+  // The sub-face's (u, v) to the face's Bfr coordinates (U, V), bilinearly: c00 + eu u + ev
+  // v + twist u v (affine, twist 0, for Bfr's quadrangulated sub-faces; the identity for a
+  // quadrilateral).
+  struct SubFaceMap {
+    double c00[2] = {0.0, 0.0}, eu[2] = {1.0, 0.0}, ev[2] = {0.0, 1.0}, twist[2] = {0.0, 0.0};
+    // The map at (u, v): the face's Bfr coordinates, and the map's Jacobian columns
+    // d(U, V)/du = (a00, a10) = eu + twist v and d(U, V)/dv = (a01, a11) = ev + twist u.
+    struct Point {
+      double uv[2];
+      double a00, a10, a01, a11;
+      // Chain rule: a derivative along u or v from the Bfr derivatives dU, dV.
+      template <class V>
+      V AlongU(const V& dU, const V& dV) const { return a00 * dU + a10 * dV; }
+      template <class V>
+      V AlongV(const V& dU, const V& dV) const { return a01 * dU + a11 * dV; }
+    };
+    Point At(double u, double v) const {
+      return {{c00[0] + eu[0] * u + ev[0] * v + twist[0] * u * v, c00[1] + eu[1] * u + ev[1] * v + twist[1] * u * v},
+              eu[0] + twist[0] * v, eu[1] + twist[1] * v, ev[0] + twist[0] * u, ev[1] + twist[1] * u};
+    }
   };
-  SubFacePoint SubFaceAt(double u, double v) const {
-    return {{c00_[0] + eu_[0] * u + ev_[0] * v + twist_[0] * u * v, c00_[1] + eu_[1] * u + ev_[1] * v + twist_[1] * u * v},
-            eu_[0] + twist_[0] * v, eu_[1] + twist_[1] * v, ev_[0] + twist_[0] * u, ev_[1] + twist_[1] * u};
-  }
 
+ private:
   std::shared_ptr<Cage> cage_;
   int face_;
   int subFace_;
   std::shared_ptr<const std::vector<Vec3>> hull_;
-  // The sub-face's (u, v) to the face's Bfr coordinates, bilinearly: c00 + eu u + ev v +
-  // twist u v (affine, twist 0, for Bfr's quadrangulated sub-faces).
-  double c00_[2] = {0.0, 0.0}, eu_[2] = {1.0, 0.0}, ev_[2] = {0.0, 1.0}, twist_[2] = {0.0, 0.0};
+  SubFaceMap map_;
 };
 
 // Statistics of a cage, for `patchscan info`.
