@@ -16,6 +16,11 @@
 
 namespace patchscan {
 
+// A crawl's step may grow past kWalkStepMax up to kSmallStepMax while a step covers less
+// than kSmallStepPx pixels of the scan line (a surface seen small).
+constexpr double kSmallStepPx = 2.0;
+constexpr double kSmallStepMax = 1.0 / 4;
+
 template <class ShapeT>
 template <class Make>
 class ThetaWalker<ShapeT>::Crawler {
@@ -237,11 +242,15 @@ class ThetaWalker<ShapeT>::Crawler {
     }
     bool found = false;
     if (target_ && LinkEnd(&found)) return found;
+    // The step grows to kWalkStepMax, and beyond while steps that long cover less than
+    // kSmallStepPx of the line: on a surface a few pixels across the crawl then takes a few
+    // steps instead of ~20 (its vertices are placed by the θ limit and Newton either way).
+    const double hMax = std::abs(next.x - p_.x) < kSmallStepPx ? kSmallStepMax : kWalkStepMax;
     before_ = p_;
     p_ = next;
     th_ = thn;
     tilt_ = tiltNext;
-    h_ = std::min(2.0 * h_, kWalkStepMax);
+    h_ = std::min(2.0 * h_, std::max(hMax, h_));
     return std::nullopt;
   }
 
