@@ -236,8 +236,18 @@ struct FaceData {
   osd::Bfr::Surface<double> stSurface;
   std::vector<double> stPatchPoints;  // s t per point
   // Per sub-face (one for a quadrilateral), where it is a bicubic polynomial (Catmull-Clark
-  // and bilinear faces; none for Loop's, whose regular pieces are quartic).
-  std::vector<BicubicPieces> pieces;
+  // and bilinear faces; none for Loop's, whose regular pieces are quartic): fitted when a
+  // scan first holds the sub-face (Cage::Hold), under the cage's mutex, and read lock-free.
+  // Null until then, so every evaluation of a sub-face is Bfr's before its scan's hold and
+  // the bicubics' after it, whatever other threads do with the face's other sub-faces.
+  std::vector<std::atomic<const BicubicPieces*>> pieces;
+  double fitTol = 0.0;  // kBicubicFitRel of the patch points' extent
+  FaceData() = default;
+  FaceData(const FaceData&) = delete;
+  FaceData& operator=(const FaceData&) = delete;
+  ~FaceData() {
+    for (auto& p : pieces) delete p.load(std::memory_order_relaxed);
+  }
 };
 
 class SubdivFace::Cage {
@@ -287,10 +297,9 @@ class SubdivFace::Cage {
         lo = lo.cwiseMin(q);
         hi = hi.cwiseMax(q);
       }
-      const double tol = kBicubicFitRel * (hi - lo).maxCoeff();
+      out->fitTol = kBicubicFitRel * (hi - lo).maxCoeff();
       const bool quad = param.GetType() == osd::Bfr::Parameterization::QUAD;
-      for (int k = 0; k < (quad ? 1 : param.GetFaceSize()); ++k)
-        out->pieces.emplace_back(out->surface, out->patchPoints, MapOf(param, quad ? -1 : k), tol);
+      out->pieces = std::vector<std::atomic<const BicubicPieces*>>(quad ? 1 : static_cast<std::size_t>(param.GetFaceSize()));
     }
     if (mesh_.st.empty()) return;
     switch (mesh_.stClass) {
@@ -301,9 +310,22 @@ class SubdivFace::Cage {
     out->stPatchPoints.resize(static_cast<std::size_t>(out->stSurface.GetNumPatchPoints()) * 2);
     out->stSurface.PreparePatchPoints(st_.data(), st, out->stPatchPoints.data(), st);
   }
-  void Hold(int face) {
+  // A hold that fits (a scan's) also fits sub-face `subFace`'s bicubic pieces if they are
+  // not yet: the hold is taken first, so the face stays prepared while they are fitted.
+  void Hold(int face, int subFace, bool fit) {
+    {
+      const std::lock_guard lock(mutex_);
+      ++slots_[static_cast<std::size_t>(face)].holds;
+    }
+    if (!fit) return;
+    const FaceData& data = Data(face);
+    const std::size_t k = static_cast<std::size_t>(std::max(subFace, 0));
+    if (k >= data.pieces.size()) return;  // a Loop face
     const std::lock_guard lock(mutex_);
-    ++slots_[static_cast<std::size_t>(face)].holds;
+    if (data.pieces[k].load(std::memory_order_relaxed)) return;
+    const osd::Bfr::Parameterization param = data.surface.GetParameterization();
+    const auto* pieces = new BicubicPieces(data.surface, data.patchPoints, MapOf(param, subFace), data.fitTol);
+    const_cast<FaceData&>(data).pieces[k].store(pieces, std::memory_order_release);
   }
   void Release(int face) {
     const std::lock_guard lock(mutex_);
@@ -347,10 +369,14 @@ SubdivFace::SubdivFace(std::shared_ptr<Cage> cage, int face, int subFace, std::s
   if (subFace_ >= 0) map_ = MapOf(cage_->Factory().GetFaceParameterization(face_), subFace_);
 }
 
+const BicubicPieces* SubdivFace::Pieces(const FaceData& face) const {
+  const auto k = static_cast<std::size_t>(std::max(subFace_, 0));
+  return k < face.pieces.size() ? face.pieces[k].load(std::memory_order_acquire) : nullptr;
+}
+
 void SubdivFace::Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const {
   const FaceData& face = cage_->Data(face_);
-  if (!face.pieces.empty() && face.pieces[static_cast<std::size_t>(std::max(subFace_, 0))].Evaluate(u, v, order, out))
-    return;
+  if (const BicubicPieces* pc = Pieces(face); pc && pc->Evaluate(u, v, order, out)) return;
   const double* pts = face.patchPoints.data();
   if (Wants(order, DerivOrder::Second) && !face.surface.IsRegular()) {
     // Bfr's irregular patches (Gregory patches at an extraordinary corner) give second
@@ -380,7 +406,8 @@ void SubdivFace::EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDeri
 
 bool SubdivFace::BicubicAt(double u, double v) const {
   const FaceData& face = cage_->Data(face_);
-  return !face.pieces.empty() && face.pieces[static_cast<std::size_t>(std::max(subFace_, 0))].Covers(u, v);
+  const BicubicPieces* pc = Pieces(face);
+  return pc && pc->Covers(u, v);
 }
 
 std::optional<TexCoords> SubdivFace::TextureCoords(double u, double v) const {
@@ -405,7 +432,7 @@ std::string SubdivFace::Describe() const {
   return s;
 }
 
-void SubdivFace::Hold() const { cage_->Hold(face_); }
+void SubdivFace::Hold(bool fit) const { cage_->Hold(face_, subFace_, fit); }
 void SubdivFace::Release() const { cage_->Release(face_); }
 long SubdivFace::PreparedNow() const { return cage_->PreparedNow(); }
 long SubdivFace::Preparations() const { return cage_->Preparations(); }

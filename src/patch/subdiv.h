@@ -27,7 +27,8 @@
 
 namespace patchscan {
 
-struct FaceData;  // a prepared base face (patch/subdiv.cpp)
+struct FaceData;       // a prepared base face (patch/subdiv.cpp)
+struct BicubicPieces;  // where a sub-face is a bicubic polynomial (patch/subdiv.cpp)
 
 // The subdivision rules: RenderMan's "catmull-clark", "loop" (triangles only) and
 // "bilinear" (the cage itself, flat: each face bilinear, an n-gon as n bilinear quarters).
@@ -90,8 +91,8 @@ class SubdivFace {
   // Prepares the base face first if it is not (thread-safe; allocates then, and not after).
   // Where the limit surface is a bicubic polynomial (a regular Catmull-Clark or bilinear
   // quadrilateral, or the cells of an irregular Catmull-Clark face away from its
-  // extraordinary corners), it is evaluated as that bicubic (found from Bfr when the face
-  // is prepared), elsewhere by Bfr.
+  // extraordinary corners), it is evaluated as that bicubic once a hold that fits has
+  // fitted it (Hold), elsewhere by Bfr.
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
   // Bfr's own evaluation, even where Evaluate takes the bicubic (to test one against the other).
   void EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
@@ -114,7 +115,10 @@ class SubdivFace {
   // Holds the base face prepared (Hold) until as many Release calls: the last frees it. A
   // face evaluated without a hold stays prepared until a hold on it ends. A face must not be
   // evaluated by one thread while another releases its last hold.
-  void Hold() const;
+  // fit: the holder evaluates the face many times (a scan: thousands of times), so the
+  // bicubic pieces Evaluate takes are fitted first (~25 evaluations of a regular face, ~200
+  // of an irregular one) if they are not yet; without, Evaluate is Bfr's.
+  void Hold(bool fit = false) const;
   void Release() const;
   // Base faces of this face's cage prepared now, preparations so far and the most prepared
   // at once (for tests and statistics; the boxes' preparations at load are not counted).
@@ -145,6 +149,9 @@ class SubdivFace {
   };
 
  private:
+  // The sub-face's bicubic pieces, if a hold has fitted them.
+  const BicubicPieces* Pieces(const FaceData& face) const;
+
   std::shared_ptr<Cage> cage_;
   int face_;
   int subFace_;

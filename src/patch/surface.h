@@ -49,10 +49,12 @@ inline TexCoords TextureCoordsAt(const Surface& s, double u, double v) {
 
 // Holds what a surface prepares on demand (a subdivision face's Bfr surface, patch/subdiv.h)
 // for the holder's lifetime; the last hold's end frees it. Other kinds prepare nothing.
+// fit: the holder evaluates the surface many times (a scan), worth fitting a subdivision
+// face's bicubic pieces for (SubdivFace::Hold).
 class SurfaceHold {
  public:
-  explicit SurfaceHold(const Surface& s) : face_(std::get_if<SubdivFace>(&s.shape)) {
-    if (face_) face_->Hold();
+  explicit SurfaceHold(const Surface& s, bool fit = false) : face_(std::get_if<SubdivFace>(&s.shape)) {
+    if (face_) face_->Hold(fit);
   }
   ~SurfaceHold() {
     if (face_) face_->Release();

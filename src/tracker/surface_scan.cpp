@@ -15,7 +15,7 @@ constexpr double kMaxPreAdvancePx = 1024.0;
 
 SurfaceScan::SurfaceScan(const Surface& surface, const Camera& camera, bool extrapolate, Counters& counters)
     : surface_(surface),
-      hold_(surface),
+      hold_(surface, /*fit=*/true),
       map_(camera, surface.worldFromObject),
       normalFromObject_(surface.worldFromObject.linear().inverse().transpose()),
       counters_(counters),

@@ -121,9 +121,9 @@ TEST(Subdiv, ARegularFaceIsItsBicubicBSplinePatch) {
 }
 
 TEST(Subdiv, BicubicPiecesAreBfrsOwnSurface) {
-  // SubdivFace evaluates a regular Catmull-Clark or bilinear quadrilateral, and the cells of
-  // an irregular Catmull-Clark face away from its extraordinary corners, as bicubic patches
-  // fitted to Bfr's values: in every cell it covers it must be Bfr's surface, position and
+  // Once a scan's hold has fitted them, SubdivFace evaluates a regular Catmull-Clark or
+  // bilinear quadrilateral, and the cells of an irregular Catmull-Clark face away from its
+  // extraordinary corners, as bicubic patches fitted to Bfr's values: in every cell it covers it must be Bfr's surface, position and
   // derivatives (edges and corners too, where boundary faces extrapolate), to rounding of
   // points of size ~1 (kSameRel of the face's extent; Bfr and Horner's rule sum the same
   // cubic differently). Loop's regular triangles are quartic, and stay with Bfr; so does
@@ -133,6 +133,8 @@ TEST(Subdiv, BicubicPiecesAreBfrsOwnSurface) {
   for (const test::Cage& c : test::Cages()) {
     for (const SubdivFace& f : PrepareSubdivFaces(c.mesh)) {
       const bool loop = c.mesh.scheme == SubdivScheme::Loop;
+      EXPECT_FALSE(f.BicubicAt(0.5, 0.5)) << "fitted before a hold that fits: " << c.name << ", " << f.Describe();
+      f.Hold(/*fit=*/true);  // as a scan does
       int cells = 0;
       for (int i = 0; i < 4; ++i)
         for (int j = 0; j < 4; ++j) cells += f.BicubicAt((i + 0.5) / 4.0, (j + 0.5) / 4.0);
@@ -162,6 +164,7 @@ TEST(Subdiv, BicubicPiecesAreBfrsOwnSurface) {
           EXPECT_LT((a.d2pduv - b.d2pduv).cwiseAbs().maxCoeff(), tol) << at;
           EXPECT_LT((a.d2pdv2 - b.d2pdv2).cwiseAbs().maxCoeff(), tol) << at;
         }
+      f.Release();
     }
   }
   std::cout << whole << " faces evaluated wholly as bicubics, " << partly << " irregular ones in part ("
