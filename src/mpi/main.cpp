@@ -5,7 +5,9 @@
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <iostream>
+#include <thread>
 
 #include "cli/exit_codes.h"
 #include "cli/render.h"
@@ -26,7 +28,8 @@ int main(int argc, char** argv) {
 
   CLI::App app(
       "patchscan-mpi renders a scene across MPI processes (mpirun -n N patchscan-mpi render FILE ...): the "
-      "scene's surfaces are dealt out to the processes, each scans its share row by row on its own --threads, "
+      "scene's surfaces are dealt out to the processes, each scans its share row by row on its own --threads "
+      "(default: the node's cores shared among its processes), "
       "and process 0 merges their rows by depth in the scan order of all surfaces (paper 002's object "
       "partition and z-composition) and writes the image: the same image as 'patchscan render', bit for bit, "
       "for any number of processes. Tess mode renders on process 0 alone.",
@@ -57,6 +60,18 @@ int main(int argc, char** argv) {
     parsed = false;
   }
   // Every process parsed the same command line, so all agree on whether to go on.
+  if (parsed && options.threads <= 0) {
+    // Threads by default: the node's cores shared among its processes (one each at least).
+    // A core apiece for every process's threads would put several busy threads on each
+    // core when processes share a node: three processes on two cores took minutes for a
+    // render of a second.
+    MPI_Comm node = MPI_COMM_NULL;
+    MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank, MPI_INFO_NULL, &node);
+    int onNode = 1;
+    MPI_Comm_size(node, &onNode);
+    MPI_Comm_free(&node);
+    options.threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / std::max(onNode, 1));
+  }
   if (parsed) {
     if (rank == 0) {
       options.makeDirectScan = [](const cli::RenderOptions& o, const Scene& scene, const Camera& camera,

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # patchscan-mpi against patchscan render --threads 1: the same image, bit for bit, under
-# mpirun with 2 and 4 processes (more than this machine's cores: --oversubscribe); and its
+# mpirun with 2 and 4 processes (more than this machine's cores: --oversubscribe), with
+# --threads 1 and (four processes) the default; and its
 # faults: a scene that cannot be read, an output that cannot be written, a process that
 # fails mid-frame: every process exits with the same non-zero code, one message, no image,
 # nothing hangs (each mpirun runs under a timeout).
@@ -42,7 +43,16 @@ case $case_name in
       for mode in exact theta; do same_image "$n" png "$surfaces/teapot.bpt" --size 240x180 --mode "$mode"; done
       same_image "$n" png "$surfaces/teapot.bpt" --size 240x180 --mode theta --y-step 1 --aa 3
       same_image "$n" png "$surfaces/teapot.bpt" --size 240x180 --mode tess
-    done ;;
+    done
+    # Each process's threads by default: the node's cores shared among its processes (four
+    # processes on two cores: one thread each). Two threads apiece there took over 40 s
+    # for this half-second render, all threads busy on too few cores.
+    "$single" render "$surfaces/teapot.bpt" --size 240x180 --mode theta --threads 1 -o one.png --quiet ||
+      fail "patchscan render"
+    timeout 30 mpirun --oversubscribe -n 4 "$multi" render "$surfaces/teapot.bpt" --size 240x180 --mode theta \
+      -o many.png --quiet || fail "patchscan-mpi -n 4 with the default --threads: failed or over 30 s"
+    cmp -s one.png many.png || fail "-n 4, default --threads: the PNG differs from patchscan render's"
+    echo "same image: -n 4, default --threads" ;;
   rib)
     for n in 2 4; do
       for scene in quadrics.rib polygons.rib trimmed.rib cages.rib curves.rib; do
