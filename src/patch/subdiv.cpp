@@ -240,7 +240,7 @@ struct FaceData {
   // scan first holds the sub-face (Cage::Hold), under the cage's mutex, and read lock-free.
   // Null until then, so every evaluation of a sub-face is Bfr's before its scan's hold and
   // the bicubics' after it, whatever other threads do with the face's other sub-faces.
-  std::vector<std::atomic<const BicubicPieces*>> pieces;
+  mutable std::vector<std::atomic<const BicubicPieces*>> pieces;
   double fitTol = 0.0;  // kBicubicFitRel of the patch points' extent
   FaceData() = default;
   FaceData(const FaceData&) = delete;
@@ -318,14 +318,20 @@ class SubdivFace::Cage {
       ++slots_[static_cast<std::size_t>(face)].holds;
     }
     if (!fit) return;
-    const FaceData& data = Data(face);
-    const std::size_t k = static_cast<std::size_t>(std::max(subFace, 0));
-    if (k >= data.pieces.size()) return;  // a Loop face
-    const std::lock_guard lock(mutex_);
-    if (data.pieces[k].load(std::memory_order_relaxed)) return;
-    const osd::Bfr::Parameterization param = data.surface.GetParameterization();
-    const auto* pieces = new BicubicPieces(data.surface, data.patchPoints, MapOf(param, subFace), data.fitTol);
-    const_cast<FaceData&>(data).pieces[k].store(pieces, std::memory_order_release);
+    try {
+      const FaceData& data = Data(face);
+      const std::size_t k = static_cast<std::size_t>(std::max(subFace, 0));
+      if (k >= data.pieces.size()) return;  // a Loop face
+      const std::lock_guard lock(mutex_);
+      if (data.pieces[k].load(std::memory_order_relaxed)) return;
+      const osd::Bfr::Parameterization param = data.surface.GetParameterization();
+      auto pieces = std::make_unique<const BicubicPieces>(data.surface, data.patchPoints, MapOf(param, subFace),
+                                                          data.fitTol);
+      data.pieces[k].store(pieces.release(), std::memory_order_release);
+    } catch (...) {
+      Release(face);  // the holder's constructor fails: no release will come for this hold
+      throw;
+    }
   }
   void Release(int face) {
     const std::lock_guard lock(mutex_);
