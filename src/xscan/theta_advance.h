@@ -15,8 +15,7 @@ bool ThetaWalker<ShapeT>::Suspicious(const Vertex& A, const Vertex& B, const Ver
   // A tabulated angle strictly between the link's ends (θ is monotone along a link with
   // no turn point), or the tilt turning a table step: a vertex is missing.
   constexpr double kOnAngleRad = 1e-8;
-  const auto [ta, tiltA] = frame_.Angles(a.f.position, a.f.normal);
-  const auto [tb, tiltB] = frame_.Angles(b.f.position, b.f.normal);
+  const double ta = a.theta, tiltA = a.tilt, tb = b.theta, tiltB = b.tilt;
   const double d = Wrap(tb - ta);
   if (std::abs(d) > table_ + kOnAngleRad) return true;
   const double lo = std::min(ta, ta + d) + kOnAngleRad, hi = std::max(ta, ta + d) - kOnAngleRad;
@@ -69,7 +68,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
     // θ keeps its sense of rotation through a Table or Tilt vertex and reverses it at a
     // Turn (§4.3): the link from a to b breaks that rule.
     auto turnsWrong = [&](const Vertex& a, const Vertex& b) {
-      const double d = Wrap(ThetaOf(b.f) - ThetaOf(a.f));
+      const double d = Wrap(b.theta - a.theta);
       if (std::abs(d) <= kTurnRad || lastD == 0.0) return false;
       const bool flips = (d > 0.0) != (lastD > 0.0);
       if (a.kind == ThetaVertex::Kind::Turn) return !flips;
@@ -80,7 +79,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
     // Table vertex, or one come in across the boundary beside an end).
     double lastRate = NAN;  // at `last` (NaN: a turn)
     auto againstRate = [&](const Vertex& a, const Vertex& b, double rateB) {
-      const double d = Wrap(ThetaOf(b.f) - ThetaOf(a.f));
+      const double d = Wrap(b.theta - a.theta);
       return std::abs(d) > kTurnRad && (lastRate * d < 0.0 || rateB * d < 0.0);
     };
     // The link from `last` to b, repaired sideways if it looks suspicious; then b.
@@ -106,7 +105,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
       to->v.push_back(b);
       to->before.push_back(A[k % A.size()].f.uv);
       if (to->v.size() >= begin + 2) {
-        const double d = Wrap(ThetaOf(b.f) - ThetaOf(to->v[to->v.size() - 2].f));
+        const double d = Wrap(b.theta - to->v[to->v.size() - 2].theta);
         if (std::abs(d) > kTurnRad) lastD = d;
       }
       last = pb;

@@ -31,7 +31,7 @@ class ThetaWalker<ShapeT>::Crawler {
     chain_.push_back(w_.MakeVertex(start, make_, closed ? ThetaVertex::Kind::Silhouette : ThetaVertex::Kind::End));
     checked_ = chain_.size();
     p_ = before_ = start;
-    std::tie(th_, tilt_) = w_.frame_.Angles(chain_.back().f.position, chain_.back().f.normal);
+    th_ = chain_.back().theta, tilt_ = chain_.back().tilt;
     tiltAtVertex_ = tilt_;
     tiltCount_ = chain_.size();
     // The sense θ last moved in (0: not known); at the start θ's rate along the walk, so
@@ -148,7 +148,7 @@ class ThetaWalker<ShapeT>::Crawler {
   // a step and the crawl not see it (a turn point one step from the boundary).
   bool EndsAtTurn(const LevelPoint& to) {
     if (!turnTarget_.ok || !WithinStep(p_, to, turnTarget_)) return false;
-    PassTable(p_, th_, turnTarget_, Wrap(w_.ThetaOf(target_->f) - th_));
+    PassTable(p_, th_, turnTarget_, Wrap(target_->theta - th_));
     chain_.push_back(*target_);
     return true;
   }
@@ -157,7 +157,7 @@ class ThetaWalker<ShapeT>::Crawler {
   // result, or nothing if the step turned θ too far (halved).
   std::optional<bool> AtExit(const LevelPoint& e) {
     const Vertex ve = w_.MakeVertex(e, make_);
-    const auto [the, tilte] = w_.frame_.Angles(ve.f.position, ve.f.normal);
+    const double the = ve.theta, tilte = ve.tilt;
     const double d = Wrap(the - th_);
     const double dTilt = tilte - tilt_;
     if (!((std::abs(d) <= w_.table_ && std::abs(dTilt) <= w_.table_) || h_ <= 4.0 * kWalkStepMin)) {
@@ -178,11 +178,11 @@ class ThetaWalker<ShapeT>::Crawler {
       if (rp * re < 0.0 && w_.SolveTurn(0.5 * (p_.uv + e.uv), &v, &w_.Count(Counter::ThetaCrawlIterations)) &&
           WithinStep(p_, e, v) && std::abs(v.jn) > ThetaWalker::kOnSilhouetteJn && Between(v.x, chain_.back().x, e.x)) {
         const Vertex vt = w_.MakeVertex(v, make_, ThetaVertex::Kind::Turn);
-        const double tv = w_.ThetaOf(vt.f);
+        const double tv = vt.theta;
         PassTable(p_, th_, v, Wrap(tv - th_));
         chain_.push_back(vt);
         ++w_.Count(Counter::ThetaTurnPoints);
-        PassTable(v, tv, e, Wrap(w_.ThetaOf(ve.f) - tv));
+        PassTable(v, tv, e, Wrap(ve.theta - tv));
       } else {
         PassTable(p_, th_, e, d);
       }
@@ -234,10 +234,12 @@ class ThetaWalker<ShapeT>::Crawler {
     // error too.
     if (chain_.size() != tiltCount_) {
       tiltCount_ = chain_.size();
-      tiltAtVertex_ = w_.frame_.Tilt(chain_.back().f.position, chain_.back().f.normal);
+      tiltAtVertex_ = chain_.back().tilt;
     }
     if (std::abs(tiltNext - tiltAtVertex_) >= w_.table_) {
-      chain_.push_back({next.x, fn, ThetaVertex::Kind::Tilt, -1});
+      Vertex tilt{next.x, fn, ThetaVertex::Kind::Tilt, -1};
+      tilt.theta = thn, tilt.tilt = tiltNext;
+      chain_.push_back(tilt);
       ++w_.Count(Counter::ThetaTilts);
     }
     bool found = false;

@@ -42,6 +42,7 @@
 #include <cstdint>
 #include <numbers>
 #include <span>
+#include <tuple>
 #include <vector>
 
 #include "tracker/theta_tracker.h"
@@ -63,6 +64,9 @@ struct ThetaVertex {
   // tangents of its chords' interpolation (raster::Chord); NaN where unknown or not wanted.
   Vec3 dndx = Vec3::Constant(NAN);
   double dwdx = NAN;
+  // θ and the tilt of f's normal (ThetaFrame::Angles), found once when the vertex is made:
+  // the advance's and the crawl's tests ask for them several times a vertex.
+  double theta = NAN, tilt = NAN;
 };
 
 // Receives every θ chain as it is made (tests and diagnostics): one call per chain.
@@ -183,6 +187,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   Vertex MakeVertex(const LevelPoint& p, Make& make, ThetaVertex::Kind kind = ThetaVertex::Kind::End,
                     int index = -1) const {
     Vertex v{p.x, make(p), kind, index};
+    std::tie(v.theta, v.tilt) = frame_.Angles(v.f.position, v.f.normal);
     if (slopes_) {
       const Vec2 duv = p.UvPerPixelAlongRow();
       v.dwdx = this->map_.ViewDepthChange(p.object.dpdu * duv.x() + p.object.dpdv * duv.y());
@@ -196,7 +201,6 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     }
     return v;
   }
-  double ThetaOf(const raster::Fragment& f) const { return frame_.Theta(f.position, f.normal); }
   // The turn function at (u,v) (NaN where undefined).
   double TurnAt(const Vec2& uv) const { return patchscan::TurnAt(this->shape_, this->map_, frame_, uv); }
   static double Wrap(double a) {  // into (-π, π]
