@@ -114,18 +114,30 @@ double TurnAt(const ShapeT& shape, const ScreenMap& map, const ThetaFrame& frame
   return p.ok ? TurnFunction(p.object, p.gradY, frame.World(), frame) : NAN;
 }
 
+// A tracker's rate along the scan lines, d(u,v)/d(ys), from its system's Jacobian J at the
+// solution (rows: y's gradient, then the other function's, which does not depend on ys):
+// J⁻¹ (1, 0). NaN where J is singular. The next line's start is predicted from it
+// (ThetaWalker::Advance).
+inline Vec2 RateAlongLines(const Mat2& jac) {
+  const double det = jac.determinant();
+  if (SingularJacobian(jac, det)) return Vec2(NAN, NAN);
+  return Vec2(jac(1, 1), -jac(1, 0)) / det;
+}
+
 // The θ tracker of angle (cos θ_i, sin θ_i) on scan line ys by damped Newton on
 // (y - ys, G_i) from `start`: false if it does not converge or leaves [0,1]² (the tracker
 // has left the patch). Adds its iterations to *iterations; `residual`, if given, receives
-// G_i's residual at the solution. Never allocates.
+// G_i's residual at the solution, and `rate` its rate along the lines (RateAlongLines).
+// Never allocates.
 template <class ShapeT>
 bool SolveThetaTracker(const ShapeT& shape, const ScreenMap& map, double ys, const ThetaFrame& frame,
                        const Vec2& angle, const Vec2& start, LevelPoint* out, std::int64_t* iterations,
-                       TableResidual* residual = nullptr) {
+                       TableResidual* residual = nullptr, Vec2* rate = nullptr) {
   const Affine3& world = frame.World();
   NewtonOptions opt;
   opt.maxIterations = kThetaMaxIterations;
   opt.domain = DomainRule::Fail;  // a tracker leaving [0,1]² has left the patch
+  Mat2 last;  // the Jacobian of the last evaluation, at out->uv
   const auto r = SolveNewton2(
       [&](const Vec2& uv, Vec2* f, Mat2* jac) {
         *out = EvalLevelPoint(shape, map, uv, DerivOrder::Second);
@@ -134,6 +146,7 @@ bool SolveThetaTracker(const ShapeT& shape, const ScreenMap& map, double ys, con
         *f = Vec2(out->y - ys, g.g);
         jac->row(0) = out->gradY.transpose();
         jac->row(1) = g.grad.transpose();
+        last = *jac;
         // Blinn's damping (§4.1): a point where the normal's in-plane direction has
         // flipped (the other root θ_i + π of G_i) or T has changed sign is no decrease,
         // so the solver halves the step that reached it.
@@ -144,22 +157,28 @@ bool SolveThetaTracker(const ShapeT& shape, const ScreenMap& map, double ys, con
   if (r.status != NewtonStatus::Converged) return false;
   if (out->uv != r.uv) {
     *out = EvalLevelPoint(shape, map, r.uv, DerivOrder::Second);
-    if (residual && out->ok) *residual = TableFunction(out->object, world, frame, angle);
+    const TableResidual g = TableFunction(out->object, world, frame, angle);
+    if (residual && out->ok) *residual = g;
+    last.row(0) = out->gradY.transpose();
+    last.row(1) = g.grad.transpose();
   }
+  if (rate) *rate = RateAlongLines(last);
   return out->ok;
 }
 
 // The turn tracker of scan line ys (§4.3: y = ys and the turn function zero) by Newton
 // from `start`, the turn function's gradient by forward differences: false if it does not
 // converge (a turn pair has met and gone) or leaves [0,1]². Adds its iterations to
-// *iterations. Never allocates.
+// *iterations; `rate`, if given, receives its rate along the lines (RateAlongLines, NaN if
+// the solution was not the last point evaluated). Never allocates.
 template <class ShapeT>
 bool SolveTurnTracker(const ShapeT& shape, const ScreenMap& map, double ys, const ThetaFrame& frame,
-                      const Vec2& start, LevelPoint* out, std::int64_t* iterations) {
+                      const Vec2& start, LevelPoint* out, std::int64_t* iterations, Vec2* rate = nullptr) {
   const Affine3& world = frame.World();
   NewtonOptions opt;
   opt.maxIterations = kThetaMaxIterations;
   opt.domain = DomainRule::Fail;
+  Mat2 last;  // the Jacobian of the last evaluation, at out->uv
   const auto r = SolveNewton2(
       [&](const Vec2& uv, Vec2* f, Mat2* jac) {
         *out = EvalLevelPoint(shape, map, uv, DerivOrder::Second);
@@ -171,11 +190,13 @@ bool SolveTurnTracker(const ShapeT& shape, const ScreenMap& map, double ys, cons
         const double hv = uv.y() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
         (*jac)(1, 0) = (TurnAt(shape, map, frame, uv + Vec2(hu, 0.0)) - tau) / hu;
         (*jac)(1, 1) = (TurnAt(shape, map, frame, uv + Vec2(0.0, hv)) - tau) / hv;
+        last = *jac;
         if (!out->ok) *f = Vec2(NAN, NAN);
       },
       start, Vec2(kEdgeTolPx, kTurnTol), opt);
   *iterations += r.iterations;
   if (r.status != NewtonStatus::Converged) return false;
+  if (rate) *rate = out->uv == r.uv ? RateAlongLines(last) : Vec2(NAN, NAN);
   if (out->uv != r.uv) *out = EvalLevelPoint(shape, map, r.uv);
   return out->ok;
 }

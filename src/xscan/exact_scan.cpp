@@ -179,11 +179,13 @@ void ExactScan::WalkSurface(Active& a, double y, const RowTrackers& t, const ras
   FinishWalk(a);
 }
 
-bool ExactScan::AdvanceSurface(Active& a, double y, const raster::SampleColumns& columns) {
+bool ExactScan::AdvanceSurface(Active& a, double yFrom, double y, const raster::SampleColumns& columns) {
   walkEvents_.Clear();
   bool ok = false;
   VisitTheta(a, y, columns, [&](auto& walker, auto&& make) {
-    ok = walker.Advance(a.line, a.scan->Trackers(), options_.extrapolate, &edgeUsed_, &silUsed_, &chain_, &a.next, make);
+    const double dy = a.scan->LineFor(y) - a.scan->LineFor(yFrom);  // the walker's lines
+    ok = walker.Advance(a.line, dy, a.scan->Trackers(), options_.extrapolate, &edgeUsed_, &silUsed_, &chain_,
+                        &a.next, make);
   });
   FinishWalk(a);
   return ok;
@@ -208,7 +210,7 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
     // decides alone (its chains are its own), so a partition of the scene changes nothing.
     bool advanced = false;
     if (a.lineWalked && !a.lineBroken && Calm(a, events, a.lineY, y)) {
-      advanced = AdvanceSurface(a, y, columns) && !WalkBroken();
+      advanced = AdvanceSurface(a, a.lineY, y, columns) && !WalkBroken();
       ++counters_[advanced ? Counter::ThetaRowsAdvanced : Counter::ThetaLineRepairs];
     }
     if (!advanced) {
@@ -324,7 +326,7 @@ bool ExactScan::PairInterval(bool quiet, const raster::SampleColumns& columns, r
     // (§4.1); a chain that cannot be, or a broken top line, has the bottom line crawled
     // afresh.
     const bool advance = !a.lineBroken;
-    if (advance && AdvanceSurface(a, yBottom, columns)) {
+    if (advance && AdvanceSurface(a, yTop, yBottom, columns)) {
       ++counters_[Counter::SlabLines];
       a.nextBroken = WalkBroken();
     } else {

@@ -109,9 +109,10 @@ class ExactScan final : public raster::FragmentSource {
   // whether the walk failed or repaired a tracker miss.
   void WalkLine(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
                 raster::FragmentRow& out, ChainSet* set, bool* broken);
-  // θ slabs: the chains of a surface's last line advanced to line y (its trackers there
-  // advanced already) as θ trackers into a.next; false if the line must be crawled afresh.
-  bool AdvanceSurface(Active& a, double y, const raster::SampleColumns& columns);
+  // θ rows and slabs: the chains of a surface's last line, at yFrom, advanced to line y
+  // (its trackers there advanced already) as θ trackers into a.next; false if the line
+  // must be crawled afresh.
+  bool AdvanceSurface(Active& a, double yFrom, double y, const raster::SampleColumns& columns);
   // Calls f(walker, make) with the θ walker of a surface on line y and its fragment maker.
   template <class F>
   void VisitTheta(Active& a, double y, const raster::SampleColumns& columns, F&& f);

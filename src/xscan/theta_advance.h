@@ -35,7 +35,7 @@ bool ThetaWalker<ShapeT>::Suspicious(const Vertex& A, const Vertex& B, const Ver
 
 template <class ShapeT>
 template <class Make>
-bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bool extrapolate,
+bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrackers& t, bool extrapolate,
                                   std::vector<char>* edgeUsed, std::vector<char>* silUsed,
                                   std::vector<Vertex>* scratch, ChainSet* to, Make&& make) {
   this->Bind(t, edgeUsed, silUsed);
@@ -83,7 +83,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
       return std::abs(d) > kTurnRad && (lastRate * d < 0.0 || rateB * d < 0.0);
     };
     // The link from `last` to b, repaired sideways if it looks suspicious; then b.
-    auto link = [&](std::size_t k, const Vertex& b, const LevelPoint& pb, double rateB) {
+    auto link = [&](std::size_t k, const Vertex& b, const LevelPoint& pb, double rateB, const Vec2& uvRate) {
       if (to->v.size() > begin) {
         const Vertex& a = to->v.back();
         // x runs one way through a vertex that is not an anchor.
@@ -99,11 +99,13 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
           for (std::size_t i = 1; i + 1 < scratch->size(); ++i) {
             to->v.push_back((*scratch)[i]);
             to->before.push_back(Vec2(NAN, NAN));
+            to->rate.push_back(Vec2(NAN, NAN));
           }
         }
       }
       to->v.push_back(b);
       to->before.push_back(A[k % A.size()].f.uv);
+      to->rate.push_back(uvRate);
       if (to->v.size() >= begin + 2) {
         const double d = Wrap(b.theta - to->v[to->v.size() - 2].theta);
         if (std::abs(d) > kTurnRad) lastD = d;
@@ -117,18 +119,19 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
     for (std::size_t k = 0; k < n; ++k) {
       const Vertex& V = A[k];
       LevelPoint p;
-      TableResidual residual;  // a Table vertex's G_i at its solution
+      TableResidual residual;           // a Table vertex's G_i at its solution
+      Vec2 uvRate = Vec2(NAN, NAN);     // a tracker's rate along the lines (PredictedStart)
       switch (V.kind) {
         case ThetaVertex::Kind::Tilt:
           skipped = true;
           continue;
         case ThetaVertex::Kind::Turn: {
-          const Vec2& prev = from.before[c.begin + k];
-          const Vec2 start = extrapolate && prev.allFinite() ? Vec2(2.0 * V.f.uv - prev) : V.f.uv;
+          const Vec2 start = extrapolate ? PredictedStart(V.f.uv, from.before[c.begin + k], from.rate[c.begin + k], dy)
+                                         : V.f.uv;
           ++(*this->counters_)[Counter::ThetaTurnTrackers];
           // A turn tracker with no root near (its pair has met it and both are gone) is
           // dropped, and the link across its place repaired sideways.
-          if (!SolveTurn(start, &p, &(*this->counters_)[Counter::ThetaTurnIterations])) {
+          if (!SolveTurn(start, &p, &(*this->counters_)[Counter::ThetaTurnIterations], &uvRate)) {
             ++(*this->counters_)[Counter::ThetaTurnsLost];
             skipped = true;
             continue;
@@ -153,12 +156,13 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
           break;
         }
         case ThetaVertex::Kind::Table: {
-          const Vec2& prev = from.before[c.begin + k];
-          const Vec2 start = extrapolate && prev.allFinite() ? Vec2(2.0 * V.f.uv - prev) : V.f.uv;
+          const Vec2 start = extrapolate ? PredictedStart(V.f.uv, from.before[c.begin + k], from.rate[c.begin + k], dy)
+                                         : V.f.uv;
           ++(*this->counters_)[Counter::ThetaTrackers];
           // A tracker that leaves the patch or does not converge is dropped (§3.2: deleted
           // when it leaves [0,1]²); the link across its place is repaired sideways.
-          if (!SolveTable(V.index, start, &p, &(*this->counters_)[Counter::ThetaTrackerIterations], &residual)) {
+          if (!SolveTable(V.index, start, &p, &(*this->counters_)[Counter::ThetaTrackerIterations], &residual,
+                          &uvRate)) {
             ++(*this->counters_)[Counter::ThetaTrackersLost];
             skipped = true;
             continue;
@@ -173,14 +177,14 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, const RowTrackers& t, bo
       } else if (V.kind != ThetaVertex::Kind::Turn) {
         rate = sense * TurnAt(p.uv);
       }
-      if (!link(k, MakeVertex(p, make, V.kind, V.index), p, rate)) return false;
+      if (!link(k, MakeVertex(p, make, V.kind, V.index), p, rate, uvRate)) return false;
     }
     if (c.closed) {  // back round to the first vertex
       if (n + 1 > A.size() || to->v.size() == begin) return false;
       const Vertex first = to->v[begin];
       LevelPoint p0 = this->Eval(first.f.uv);
       p0.jn = 0.0;
-      if (!link(n, first, p0, NAN)) return false;
+      if (!link(n, first, p0, NAN, Vec2(NAN, NAN))) return false;
     }
     to->chains.push_back({begin, static_cast<std::uint32_t>(to->v.size()), c.closed});
     (*this->counters_)[Counter::ThetaVertices] += static_cast<long>(to->v.size() - begin);

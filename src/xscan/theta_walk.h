@@ -85,25 +85,27 @@ inline int DomainSide(const Vec2& uv) {
 }
 
 // The chains of one surface on one line: vertices of all chains end to end, and for each
-// vertex its (u,v) on the line before if it was advanced from there (NaN if it was made
-// on this line), for the next line's extrapolation.
+// vertex its (u,v) on the line before if it was advanced from there and its tracker's
+// rate d(u,v)/d(ys) if a tracker solved it (NaN if not), for the next line's prediction.
 struct ChainSet {
   struct Chain {
     std::uint32_t begin, end;  // into v
     bool closed;
   };
   std::vector<ThetaVertex> v;
-  std::vector<Vec2> before;
+  std::vector<Vec2> before, rate;
   std::vector<Chain> chains;
   void Clear() {
     v.clear();
     before.clear();
+    rate.clear();
     chains.clear();
   }
   void Add(std::span<const ThetaVertex> chain, bool closed) {
     chains.push_back({static_cast<std::uint32_t>(v.size()), static_cast<std::uint32_t>(v.size() + chain.size()), closed});
     v.insert(v.end(), chain.begin(), chain.end());
     before.resize(v.size(), Vec2(NAN, NAN));
+    rate.resize(v.size(), Vec2(NAN, NAN));
   }
   std::span<const ThetaVertex> Of(const Chain& c) const { return {v.data() + c.begin, c.end - c.begin}; }
 };
@@ -152,24 +154,38 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // only chords use (not slabs): off by default.
   void SetNormalSlopes(bool on) { slopes_ = on; }
 
-  // Advances the chains `from` of the line before to this line as θ trackers, in the same
-  // order, into *to (the trackers of this line in `t`): false if a chain cannot be
-  // advanced (a tracker lost, an end or silhouette with no tracker, a link whose sideways
-  // repair does not meet its other end, a tracker of the line left over), and the line
-  // must be crawled afresh. `extrapolate`: start each Newton iteration from the last two
-  // lines' positions (§3.5), else from the last. `scratch` is scratch.
+  // Advances the chains `from` of the line before, `dy` above this one, to this line as θ
+  // trackers, in the same order, into *to (the trackers of this line in `t`): false if a
+  // chain cannot be advanced (a tracker lost, an end or silhouette with no tracker, a link
+  // whose sideways repair does not meet its other end, a tracker of the line left over),
+  // and the line must be crawled afresh. `extrapolate`: start each Newton iteration from a
+  // prediction (PredictedStart), else from the last line's position. `scratch` is scratch.
   template <class Make>
-  bool Advance(const ChainSet& from, const RowTrackers& t, bool extrapolate, std::vector<char>* edgeUsed,
+  bool Advance(const ChainSet& from, double dy, const RowTrackers& t, bool extrapolate, std::vector<char>* edgeUsed,
                std::vector<char>* silUsed, std::vector<Vertex>* scratch, ChainSet* to, Make&& make);
 
   // The θ tracker of table angle i on this line, and the turn tracker, from `start`
   // (tracker/theta_tracker.h).
   bool SolveTable(int i, const Vec2& start, LevelPoint* out, std::int64_t* iterations,
-                  TableResidual* residual = nullptr) const {
-    return SolveThetaTracker(this->shape_, this->map_, this->ys_, frame_, Angle(i), start, out, iterations, residual);
+                  TableResidual* residual = nullptr, Vec2* rate = nullptr) const {
+    return SolveThetaTracker(this->shape_, this->map_, this->ys_, frame_, Angle(i), start, out, iterations, residual,
+                             rate);
   }
-  bool SolveTurn(const Vec2& start, LevelPoint* out, std::int64_t* iterations) const {
-    return SolveTurnTracker(this->shape_, this->map_, this->ys_, frame_, start, out, iterations);
+  bool SolveTurn(const Vec2& start, LevelPoint* out, std::int64_t* iterations, Vec2* rate = nullptr) const {
+    return SolveTurnTracker(this->shape_, this->map_, this->ys_, frame_, start, out, iterations, rate);
+  }
+
+  // Where a tracker at uv on the line before, `dy` above this one, is looked for on this
+  // line (paper 001 §3.5's extrapolation): with its position `before` on the line before
+  // that and its rate d(u,v)/d(ys) at uv, the quadratic through both with that slope at uv
+  // (before + 2 dy rate, for equally spaced lines: its error O(dy³)); with one of them, the
+  // line (O(dy²)); with neither, uv.
+  static Vec2 PredictedStart(const Vec2& uv, const Vec2& before, const Vec2& rate, double dy) {
+    const bool hasBefore = before.allFinite(), hasRate = rate.allFinite() && std::isfinite(dy);
+    if (hasBefore && hasRate) return before + 2.0 * dy * rate;
+    if (hasBefore) return 2.0 * uv - before;
+    if (hasRate) return uv + dy * rate;
+    return uv;
   }
 
   // (cos θ_i, sin θ_i).

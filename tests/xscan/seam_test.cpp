@@ -115,18 +115,24 @@ Image Render(const Surface& s, const Camera& cam, const ModeCase& m, int aa, con
   return img;
 }
 
-// The largest colour difference between two renders over pixels inside both, and the
-// number of pixels inside both.
-std::pair<double, int> MaxDifference(const Image& a, const Image& b) {
+// The largest colour difference between two renders over pixels inside both, the number
+// of pixels inside both, and where the largest is.
+struct Difference {
   double worst = 0.0;
-  int n = 0;
+  int n = 0, x = -1, y = -1;
+};
+Difference MaxDifference(const Image& a, const Image& b) {
+  Difference d;
   for (int y = 0; y < a.height; ++y)
     for (int x = 0; x < a.width; ++x) {
       if (!a.Inside(x, y) || !b.Inside(x, y)) continue;
-      ++n;
-      for (int c = 0; c < 3; ++c) worst = std::max(worst, static_cast<double>(std::abs(a.At(x, y, c) - b.At(x, y, c))));
+      ++d.n;
+      for (int c = 0; c < 3; ++c) {
+        const double e = std::abs(a.At(x, y, c) - b.At(x, y, c));
+        if (e > d.worst) d.worst = e, d.x = x, d.y = y;
+      }
     }
-  return {worst, n};
+  return d;
 }
 
 // The largest second difference of colour, across and along the rows, inside.
@@ -222,9 +228,10 @@ TEST(Seams, QuadricsTurnedOnThemselvesGiveTheSameImage) {
           plain.skipCentrePx = sc.conePointPx;
           for (const Affine3& turn : sc.symmetries) {
             const Image turned = Render(Surface{sc.shape, turn}, cam, m, aa, what);
-            const auto [diff, n] = MaxDifference(plain, turned);
-            EXPECT_GT(n, 20) << what;
-            EXPECT_LE(diff, m.thetaSteps > 0 && sc.thetaTolerance > 0 ? sc.thetaTolerance : Tolerance(m)) << what;
+            const Difference d = MaxDifference(plain, turned);
+            EXPECT_GT(d.n, 20) << what;
+            EXPECT_LE(d.worst, m.thetaSteps > 0 && sc.thetaTolerance > 0 ? sc.thetaTolerance : Tolerance(m))
+                << what << ", at pixel (" << d.x << ", " << d.y << ")";
           }
         }
 }
@@ -270,9 +277,9 @@ TEST(Seams, ThetaSlabsBesideAConePointMatchThetaPerRow) {
     Image slabs = Render(Surface{Cone(1.0, 1.0, 360.0), turn}, cam, {"theta64 slabs", 64, -1, false}, aa, what);
     const Image rows = Render(Surface{Cone(1.0, 1.0, 360.0), turn}, cam, {"theta64 per row", 64, 0, false}, aa, what);
     slabs.skipCentrePx = 1.0;  // the point's own pixel: a fan of normals either way
-    const auto [diff, n] = MaxDifference(slabs, rows);
-    EXPECT_GT(n, 500) << what;
-    EXPECT_LE(diff, kSlabAgainstRow) << what;
+    const Difference d = MaxDifference(slabs, rows);
+    EXPECT_GT(d.n, 500) << what;
+    EXPECT_LE(d.worst, kSlabAgainstRow) << what << ", at pixel (" << d.x << ", " << d.y << ")";
   }
 }
 
