@@ -141,7 +141,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
         case ThetaVertex::Kind::End: {
           const int e = nearest(t.edgePoints, edgeUsed, V.f.uv, DomainSide(V.f.uv));
           if (e < 0) return false;
-          p = this->Eval(t.edgePoints[static_cast<std::size_t>(e)]);
+          p = this->Eval(t.edgePoints[static_cast<std::size_t>(e)], DerivOrder::Second);  // for its slopes and rate
           if (!p.ok) return false;
           if (k == 0) sense = Base::InwardSense(p, t.edgeOf[static_cast<std::size_t>(e)]);
           if (sense == 0.0) return false;
@@ -150,7 +150,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
         case ThetaVertex::Kind::Silhouette: {
           const int e = nearest(t.silhouettePoints, silUsed, V.f.uv, -1);
           if (e < 0) return false;
-          p = this->Eval(t.silhouettePoints[static_cast<std::size_t>(e)]);
+          p = this->Eval(t.silhouettePoints[static_cast<std::size_t>(e)], DerivOrder::Second);
           if (!p.ok) return false;
           p.jn = 0.0;  // on the silhouette whatever rounding says
           break;
@@ -175,7 +175,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
       if (V.kind == ThetaVertex::Kind::Table) {
         rate = sense * TurnRate(residual, p.gradY);
       } else if (V.kind != ThetaVertex::Kind::Turn) {
-        rate = sense * TurnAt(p.uv);
+        rate = sense * TurnFunction(p.object, p.gradY, frame_.World(), frame_);  // TurnAt(p.uv), p evaluated
       }
       if (!link(k, MakeVertex(p, make, V.kind, V.index), p, rate, uvRate)) return false;
     }
