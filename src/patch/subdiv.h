@@ -128,7 +128,8 @@ class SubdivFace {
 
   // The sub-face's (u, v) to the face's Bfr coordinates (U, V), bilinearly: c00 + eu u + ev
   // v + twist u v (affine, twist 0, for Bfr's quadrangulated sub-faces; the identity for a
-  // quadrilateral).
+  // quadrilateral). Public for subdiv.cpp's free helpers (Bfr evaluation through the map,
+  // and the fitting of bicubic pieces, which see no SubdivFace), not for other users.
   struct SubFaceMap {
     double c00[2] = {0.0, 0.0}, eu[2] = {1.0, 0.0}, ev[2] = {0.0, 1.0}, twist[2] = {0.0, 0.0};
     // The map at (u, v): the face's Bfr coordinates, and the map's Jacobian columns

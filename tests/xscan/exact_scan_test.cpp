@@ -414,6 +414,45 @@ TEST(ThetaScan, CoverageMatchesExactOnTheTestSurfaces) {
   }
 }
 
+TEST(ThetaScan, SurfacesSmallOnScreenTakeLongSteps) {
+  // theta_crawl.h: a crawl's step grows past kWalkStepMax (1/16 of the domain), up to
+  // kSmallStepMax (1/4), while a step moves the crawl less than kSmallStepPx along the
+  // line: across a face a few pixels wide whose normal hardly turns (a subdivision cage's)
+  // a crawl takes a few steps instead of twenty. Its vertices are placed by the θ limit and
+  // Newton either way: on a gently curved patch 24 px across, coverage stays exact and
+  // depth within the chords' error as it is at 192 px.
+  constexpr double kSmallStepsPerChain = 22.0;  // measured 17 at 24 px (30.5 at 192); 1/16 as the only limit: 28
+  // A Bézier patch over [-1, 1]² whose inner control points are lifted by 0.15.
+  std::array<Vec3, 16> cv;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i)
+      cv[4 * j + i] = Vec3((i - 1.5) / 1.5, (j - 1.5) / 1.5, i > 0 && i < 3 && j > 0 && j < 3 ? 0.15 : 0.0);
+  const Surface bulge{BicubicPatch(cv), Affine3::Identity()};
+  const std::span<const Surface> one(&bulge, 1);
+  double depthMax[2] = {0.0, 0.0};  // at 24 px and 192 px
+  for (int size : {24, 192}) {
+    const Camera cam = View(Vec3(1.5, -3.0, 2.5), size);
+    ExactScanOptions theta;
+    theta.thetaSteps = 8;
+    Counters st;
+    NearestImage(one, cam, theta, &st);
+    const double perChain = static_cast<double>(st[Counter::ThetaSteps]) / static_cast<double>(st[Counter::ThetaChains]);
+    const ThetaAgreement a = CompareTheta(one, cam, 8);
+    std::cout << "bulge " << size << " px, θ8: " << st[Counter::ThetaSteps] << " crawl steps, "
+              << st[Counter::ThetaChains] << " chains (" << perChain << " steps a chain); depth max " << a.maxDepth
+              << "\n";
+    EXPECT_EQ(a.coverageDiffers, 0) << size;
+    EXPECT_GT(a.depthSamples, size * size / 8) << size;
+    if (size == 24) {
+      EXPECT_LT(perChain, kSmallStepsPerChain);
+    }
+    depthMax[size == 192] = a.maxDepth;
+  }
+  // The chords' depth error is the section's sagitta between vertices θ places, whatever
+  // the image size (0.021 and 0.026 measured): the long steps add none.
+  EXPECT_LE(depthMax[0], depthMax[1]);
+}
+
 TEST(ThetaScan, WatertightOnTeapotTeacupTeaspoon) {
   // No background inside the exact coverage: shared patch boundaries give both patches the
   // same end points (the edge trackers' crossings), so no sample falls between them.
