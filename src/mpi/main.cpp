@@ -60,17 +60,28 @@ int main(int argc, char** argv) {
     parsed = false;
   }
   // Every process parsed the same command line, so all agree on whether to go on.
-  if (parsed && options.threads <= 0) {
+  if (parsed) {
     // Threads by default: the node's cores shared among its processes (one each at least).
     // A core apiece for every process's threads would put several busy threads on each
     // core when processes share a node: three processes on two cores took minutes for a
-    // render of a second.
+    // render of a second. An explicit --threads is taken as given, with a note where it
+    // oversubscribes the node the same way.
     MPI_Comm node = MPI_COMM_NULL;
     MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank, MPI_INFO_NULL, &node);
-    int onNode = 1;
+    int onNode = 1, nodeRank = 0;
     MPI_Comm_size(node, &onNode);
+    MPI_Comm_rank(node, &nodeRank);
     MPI_Comm_free(&node);
-    options.threads = std::max(1, static_cast<int>(std::thread::hardware_concurrency()) / std::max(onNode, 1));
+    const int cores = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+    const int share = std::max(1, cores / std::max(onNode, 1));
+    if (options.threads <= 0) {
+      options.threads = share;
+    } else if (nodeRank == 0 && options.threads > share && static_cast<long>(onNode) * options.threads > cores) {
+      std::cerr << "patchscan-mpi: note: " << onNode << " processes on this machine with --threads "
+                << options.threads << " each want " << static_cast<long>(onNode) * options.threads << " of its "
+                << cores << " cores; busy threads sharing a core slow every process down (without --threads each "
+                << "takes " << share << ")\n";
+    }
   }
   if (parsed) {
     if (rank == 0) {

@@ -52,7 +52,15 @@ case $case_name in
     timeout 30 mpirun --oversubscribe -n 4 "$multi" render "$surfaces/teapot.bpt" --size 240x180 --mode theta \
       -o many.png --quiet || fail "patchscan-mpi -n 4 with the default --threads: failed or over 30 s"
     cmp -s one.png many.png || fail "-n 4, default --threads: the PNG differs from patchscan render's"
-    echo "same image: -n 4, default --threads" ;;
+    echo "same image: -n 4, default --threads"
+    # An explicit --threads is taken as given; where it oversubscribes the machine a note
+    # says so, once.
+    timeout 60 mpirun --oversubscribe -n 2 "$multi" render "$surfaces/teapot.bpt" --size 240x180 --mode theta \
+      --threads $(( $(nproc) + 1 )) -o many.png --quiet 2>err.txt || fail "patchscan-mpi -n 2 --threads nproc+1: $(cat err.txt)"
+    [ "$(grep -c 'note: 2 processes on this machine with --threads' err.txt)" -eq 1 ] ||
+      fail "no note of oversubscription: $(cat err.txt)"
+    cmp -s one.png many.png || fail "-n 2, --threads nproc+1: the PNG differs from patchscan render's"
+    echo "same image and a note: -n 2, --threads $(( $(nproc) + 1 ))" ;;
   rib)
     for n in 2 4; do
       for scene in quadrics.rib polygons.rib trimmed.rib cages.rib curves.rib; do
