@@ -254,6 +254,12 @@ class ObjParser {
         Fail(line, "tag " + Shown(name) + ": a negative count");
         return;
       }
+      // Each count is at most the line's arguments, so their sum below cannot overflow.
+      if (counts[i] > static_cast<long long>(w.size()) - 3) {
+        Fail(line, "tag " + Shown(name) + ": " + Shown(w[2]) + " asks for more than the " +
+                       std::to_string(w.size() - 3) + " arguments found");
+        return;
+      }
       if (slash != std::string_view::npos) c = c.substr(slash + 1);
     }
     if (static_cast<long long>(w.size()) - 3 != counts[0] + counts[1] + counts[2]) {

@@ -151,6 +151,9 @@ TEST(ObjReader, MalformedFilesAreRefusedAtTheirLine) {
       {tri + "l 1 2\n", "bad.obj: no faces ('f') to render (not read here: 1 'l')"},
       {tri + "f 1 2 3\nt crease 2/1 0 1 5\n", "bad.obj:5: tag 'crease': the counts '2/1' are nint/nfloat/nstring"},
       {tri + "f 1 2 3\nt crease 2/1/0 0 1\n", "bad.obj:5: tag 'crease': '2/1/0' asks for 3 arguments, found 2"},
+      // Counts whose sum would overflow (found by fuzz_obj).
+      {tri + "f 1 2 3\nt crease 1/9223372036854775807/0 0 1\n",
+       "bad.obj:5: tag 'crease': '1/9223372036854775807/0' asks for more than the 2 arguments found"},
       {tri + "f 1 2 3\nt crease 2/1/0 0 3 5\n", "bad.obj:5: tag 'crease': vertex 3 is out of range (3 vertices read so far, from 0)"},
       {tri + "f 1 2 3\nt crease 1/1/0 0 5\n", "bad.obj:5: tag \"crease\" takes a chain of 2 or more vertices"},
       {tri + "f 1 2 3\nt corner 2/3/0 0 1 5 5 5\n", "bad.obj:5: tag \"corner\" takes vertices and one sharpness"},
