@@ -64,6 +64,7 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(YScan, SilhouettesAdopted, "silhouettes_adopted", "silhouettes found by the x scan and tracked from then on", "trackers", Sum) \
   X(YScan, RepairSearches, "repair_searches", "subdivision searches after an unexplained event", "searches", Sum)  \
   X(YScan, RepairedBySearch, "repaired_by_search", "lost crossings the searches found", "crossings", Sum)         \
+  X(YScan, MinimumSearches, "minimum_searches", "searches around a pair of trackers that met (a minimum of the curve)", "searches", Sum) \
   X(XScan, Walks, "walks", "walks along level curves", "walks", Sum)                                               \
   X(XScan, ClosedWalks, "closed_walks", "walks around closed level curves", "walks", Sum)                           \
   X(XScan, ColumnSteps, "column_steps", "walk steps aimed at a sample column", "steps", Sum)                        \

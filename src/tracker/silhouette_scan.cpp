@@ -108,13 +108,28 @@ void FindCrossingsInCell(const ShapeT& shape, const ScreenMap& map, double yScan
   found->push_back(r.uv);
 }
 
+// The search over the square [u0, u0 + h] x [v0, v0 + h] of the domain.
 template <class ShapeT>
-void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, double yScan, std::vector<Vec2>* found) {
-  FindCrossingsInCell(shape, map, yScan, 0.0, 0.0, 1.0, 0,
-                      {EvalSearchPoint(shape, map, 0.0, 0.0), EvalSearchPoint(shape, map, 1.0, 0.0),
-                       EvalSearchPoint(shape, map, 0.0, 1.0), EvalSearchPoint(shape, map, 1.0, 1.0)},
+void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, double yScan, std::vector<Vec2>* found,
+                                double u0, double v0, double h) {
+  FindCrossingsInCell(shape, map, yScan, u0, v0, h, 0,
+                      {EvalSearchPoint(shape, map, u0, v0), EvalSearchPoint(shape, map, u0 + h, v0),
+                       EvalSearchPoint(shape, map, u0, v0 + h), EvalSearchPoint(shape, map, u0 + h, v0 + h)},
                       found);
 }
+
+// Two trackers dying on one line whose failed iterations ended this much closer together
+// than the trackers had been (as a fraction of that distance) ran into each other: the
+// silhouette curve's lowest point passed between the lines (paper 001 §3.2.3's minimum,
+// where Newton fails to converge). Measured on the teapot's pairs at 1024x768: 1e-4 to
+// 0.07; a lost tracker's failure point has no partner.
+constexpr double kMetFraction = 0.25;
+// The square searched around such a pair: the box of the pair's last crossings and
+// failure points, grown on each side by this fraction of its side (and at least
+// kMinimumBoxMin), where the curve's remaining crossings would be if the pair had been
+// lost rather than met.
+constexpr double kMinimumBoxGrow = 0.5;
+constexpr double kMinimumBoxMin = 1.0 / 64.0;
 
 // Convergence in y: as for the edge trackers.
 const Vec2 kTolerance(kEdgeTolPx, kEdgeTolPx);
@@ -155,6 +170,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   deaths_.clear();
   births_.clear();
   exits_.clear();
+  insideDeaths_.clear();
   bool search = false;  // an event no tracker explains: look for the crossings again
   std::erase_if(trackers_, [&](SilhouetteTracker& t) {
     const Vec2 start = extrapolate_ ? ExtrapolatedStart(t.uv, t.uvPrev, t.uvPrev2, t.nSolved,
@@ -172,7 +188,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
       if (OnBoundary(uv))
         exits_.push_back(BoundarySides(uv));
       else
-        search = true;
+        insideDeaths_.push_back({t.uv, uv, -1});
       return true;
     }
     t.uvPrev2 = t.uvPrev;
@@ -247,20 +263,40 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     else
       search = true;
   }
-  // Step 3b: repair by subdivision (when an event is not explained by the trackers).
+  // Step 3b: deaths inside the domain. Trackers that died in pairs, each pair's failed
+  // iterations ending together, met at a minimum of their curve: a search of the square
+  // around each pair tells a minimum (nothing there) from two lost trackers. A death with
+  // no such partner needs the whole domain searched.
+  for (size_t a = 0; a < insideDeaths_.size() && !search; ++a) {
+    InsideDeath& p = insideDeaths_[a];
+    for (size_t b = a + 1; b < insideDeaths_.size() && p.partner < 0; ++b) {
+      InsideDeath& q = insideDeaths_[b];
+      if (q.partner < 0 && (p.failed - q.failed).norm() < kMetFraction * (p.last - q.last).norm())
+        p.partner = static_cast<int>(b), q.partner = static_cast<int>(a);
+    }
+    search = p.partner < 0;
+  }
+  for (size_t a = 0; a < insideDeaths_.size() && !search; ++a) {
+    const InsideDeath &p = insideDeaths_[a], &q = insideDeaths_[static_cast<size_t>(p.partner)];
+    if (p.partner < static_cast<int>(a)) continue;  // searched with its partner
+    const Vec2 lo = p.last.cwiseMin(p.failed).cwiseMin(q.last).cwiseMin(q.failed);
+    const Vec2 hi = p.last.cwiseMax(p.failed).cwiseMax(q.last).cwiseMax(q.failed);
+    const double side =
+        std::min(1.0, std::max((1.0 + 2.0 * kMinimumBoxGrow) * (hi - lo).maxCoeff(), kMinimumBoxMin));
+    const Vec2 corner = (0.5 * (lo + hi) - Vec2::Constant(0.5 * side)).cwiseMax(0.0).cwiseMin(1.0 - side);
+    ++counters_[Counter::MinimumSearches];
+    ++events_;
+    searchFound_.clear();
+    FindCrossingsBySubdivision(shape, map_, yScan, &searchFound_, corner.x(), corner.y(), side);
+    AddFound();
+  }
+  // Step 3c: repair by subdivision (when an event is not explained by the trackers).
   if (search) {
     ++counters_[Counter::RepairSearches];
     ++events_;
     searchFound_.clear();
-    FindCrossingsBySubdivision(shape, map_, yScan, &searchFound_);
-    for (const Vec2& uv : searchFound_) {
-      bool tracked = false;
-      for (const SilhouetteTracker& t : trackers_) tracked = tracked || (t.uv - uv).norm() < kSameTrackerUv;
-      if (tracked) continue;
-      trackers_.push_back({uv, uv, false});
-      births_.push_back(uv);
-      ++counters_[Counter::RepairedBySearch];
-    }
+    FindCrossingsBySubdivision(shape, map_, yScan, &searchFound_, 0.0, 0.0, 1.0);
+    AddFound();
   }
   // Step 4: trackers that converged onto one crossing are one tracker.
   for (size_t a = 0; a < trackers_.size(); ++a)
@@ -272,6 +308,17 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
       } else {
         ++b;
       }
+}
+
+void SilhouetteScan::AddFound() {
+  for (const Vec2& uv : searchFound_) {
+    bool tracked = false;
+    for (const SilhouetteTracker& t : trackers_) tracked = tracked || (t.uv - uv).norm() < kSameTrackerUv;
+    if (tracked) continue;
+    trackers_.push_back({uv, uv, false});
+    births_.push_back(uv);
+    ++counters_[Counter::RepairedBySearch];
+  }
 }
 
 void SilhouetteScan::Adopt(const Vec2& uv) {
@@ -286,9 +333,10 @@ void SilhouetteScan::Advance(double yScan, const EdgeScan& edges) {
   VisitShape(surface_, [&](const auto& shape) { AdvanceImpl(shape, yScan, edges); });
 }
 
-std::vector<Vec2> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan) {
+std::vector<Vec2> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan,
+                                                   double u0, double v0, double side) {
   std::vector<Vec2> found;
-  VisitShape(s, [&](const auto& shape) { FindCrossingsBySubdivision(shape, map, yScan, &found); });
+  VisitShape(s, [&](const auto& shape) { FindCrossingsBySubdivision(shape, map, yScan, &found, u0, v0, side); });
   return found;
 }
 

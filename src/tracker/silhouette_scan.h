@@ -69,7 +69,7 @@ class SilhouetteScan {
   void Adopt(const Vec2& uv);
 
   const std::vector<SilhouetteTracker>& Trackers() const { return trackers_; }
-  // Events so far: trackers born, died, left, merged and adopted, repair searches (as
+  // Events so far: trackers born, died, left, merged and adopted, searches (as
   // EdgeScan::Events).
   long Events() const { return events_; }
   // Where trackers were born and where they died (their last position) at the latest
@@ -82,6 +82,8 @@ class SilhouetteScan {
   void AdvanceImpl(const ShapeT& shape, double yScan, const EdgeScan& edges);
   template <class ShapeT>
   bool Solve(const ShapeT& shape, double yScan, const Vec2& start, Vec2* uv, DomainRule domain);
+  // Tracks what the latest search found that no tracker holds.
+  void AddFound();
 
   const Surface& surface_;
   const ScreenMap& map_;
@@ -91,14 +93,24 @@ class SilhouetteScan {
   std::vector<SilhouetteTracker> trackers_;
   std::vector<Vec2> births_, deaths_, searchFound_;
   std::vector<unsigned> exits_;  // the latest Advance's trackers that left: their boundary edges
+  // The latest Advance's trackers that died inside the domain: where they were, where their
+  // iteration failed, and the one they met (index; -1: none).
+  struct InsideDeath {
+    Vec2 last, failed;
+    int partner;
+  };
+  std::vector<InsideDeath> insideDeaths_;
   Counters& counters_;
   long events_ = 0;
 };
 
 // The crossings of scan line yScan with the silhouette found by the trackers' repair
 // search: the domain subdivided while a cell's conservative y range holds yScan, Newton
-// from cells under two pixels on the screen. Collapsed edges are not silhouettes.
-std::vector<Vec2> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan);
+// from cells under two pixels on the screen. Collapsed edges are not silhouettes. With a
+// square [u0, u0 + side] x [v0, v0 + side] of the domain, that square alone (as searched
+// around two trackers that met).
+std::vector<Vec2> SilhouetteCrossingsBySubdivision(const Surface& s, const ScreenMap& map, double yScan,
+                                                   double u0 = 0.0, double v0 = 0.0, double side = 1.0);
 
 // All solutions of y = yScan, J = 0 in [0,1]^2 found by Newton from a grid of starts and
 // merged: slow and independent of any tracking, for tests and repairs.

@@ -31,6 +31,20 @@ bool OnCollapsedEdge(const Surface& s, const ScreenMap& map, const Vec2& p) {
          d.dpdv.head<2>().norm() < 1e-6 * d.dpdu.head<2>().norm();
 }
 
+// The many-start solve's crossings of line y, without points on a collapsed edge.
+std::vector<Vec2> ManyStartCrossings(const Surface& s, const ScreenMap& map, double y, int grid = 48) {
+  std::vector<Vec2> want = SilhouetteCrossingsBruteForce(s, map, y, grid);
+  std::erase_if(want, [&](const Vec2& p) { return OnCollapsedEdge(s, map, p); });
+  return want;
+}
+
+// A torus turned so that its view has saddles and an inner silhouette.
+Surface TurnedTorus() {
+  Surface torus{Torus(1.5, 0.5, 0, 360, 360), Affine3(Eigen::AngleAxisd(0.4, Vec3::UnitZ()))};
+  torus.worldFromObject.prerotate(Eigen::AngleAxisd(0.9, Vec3::UnitX()));
+  return torus;
+}
+
 // Tracked and brute-force crossings agree, scan line by scan line, to kMatchUv.
 // Brute-force points on a collapsed edge (a pole, where J vanishes identically) are not
 // silhouette crossings and are left out.
@@ -47,8 +61,7 @@ void ExpectTracksMatch(const Surface& s, const Camera& cam, const char* name,
     const double y = row + 0.5;
     edges.Advance(y);
     sil.Advance(y, edges);
-    std::vector<Vec2> want = SilhouetteCrossingsBruteForce(s, map, y);
-    std::erase_if(want, [&](const Vec2& p) { return OnCollapsedEdge(s, map, p); });
+    const std::vector<Vec2> want = ManyStartCrossings(s, map, y);
     ASSERT_EQ(sil.Trackers().size(), want.size()) << name << " scan line y " << y;
     for (const SilhouetteTracker& t : sil.Trackers()) {
       double best = INFINITY;
@@ -74,8 +87,7 @@ TEST(SilhouetteScan, SphereBornAtItsMaximumAndThroughTheSeam) {
 }
 
 TEST(SilhouetteScan, TorusWithSaddlesAndAnInnerSilhouette) {
-  Surface torus{Torus(1.5, 0.5, 0, 360, 360), Affine3(Eigen::AngleAxisd(0.4, Vec3::UnitZ()))};
-  torus.worldFromObject.prerotate(Eigen::AngleAxisd(0.9, Vec3::UnitX()));
+  const Surface torus = TurnedTorus();
   Counters st;
   ExpectTracksMatch(torus, View(Vec3(0.3, -9, 1.0)), "torus", &st);
   EXPECT_GT(st[Counter::SilhouettesBornAtSaddles], 0);
@@ -96,25 +108,50 @@ TEST(SilhouetteScan, ACurveLeavingAcrossAnEdgeNeedsNoSearch) {
   EXPECT_EQ(st[Counter::RepairSearches], 0);
 }
 
+TEST(SilhouetteScan, TrackersMeetingAtTheCurvesLowestPointAreSearchedAroundOnly) {
+  // A sphere's silhouette circle ends at its lowest point, where its two trackers run
+  // into each other and both fail (paper 001 §3.2.3's minimum). A pair failing together
+  // is searched for lost crossings in the square around it, not over the whole domain (as
+  // every death inside the domain was); the tracks still match the many-start solve on
+  // every line.
+  for (const double turn : {0.0, 0.35, 1.1}) {
+    Surface sphere{Sphere(1, -1, 1, 360), Affine3(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitX()))};
+    sphere.worldFromObject.prerotate(Eigen::AngleAxisd(turn, Vec3::UnitZ()));
+    Counters st;
+    ExpectTracksMatch(sphere, View(Vec3(0.5, -5, 1.5)), "sphere", &st);
+    EXPECT_EQ(st[Counter::MinimumSearches], 1) << "turned " << turn;
+    EXPECT_EQ(st[Counter::RepairSearches], 0) << "turned " << turn;
+  }
+}
+
 TEST(SilhouetteScan, RepairSearchFindsWhatManyStartsFind) {
-  // The subdivision search of the repairs against the many-start solve, row by row.
-  Surface torus{Torus(1.5, 0.5, 0, 360, 360), Affine3(Eigen::AngleAxisd(0.4, Vec3::UnitZ()))};
-  torus.worldFromObject.prerotate(Eigen::AngleAxisd(0.9, Vec3::UnitX()));
+  // The subdivision search of the repairs against the many-start solve, row by row: over
+  // the whole domain, and over squares of two sizes (as searched around two trackers that
+  // met; not aligned with the whole domain's cells) placed off each crossing.
+  const Surface torus = TurnedTorus();
   const Camera cam = View(Vec3(0.3, -9, 1.0));
   const ScreenMap map(cam, torus.worldFromObject);
   long compared = 0;
+  auto nearest = [](const std::vector<Vec2>& points, const Vec2& p) {
+    double best = INFINITY;
+    for (const Vec2& q : points) best = std::min(best, (q - p).norm());
+    return best;
+  };
   for (int row = 0; row < cam.height; ++row) {
     const double y = row + 0.5;
-    std::vector<Vec2> want = SilhouetteCrossingsBruteForce(torus, map, y);
-    std::erase_if(want, [&](const Vec2& p) { return OnCollapsedEdge(torus, map, p); });
+    const std::vector<Vec2> want = ManyStartCrossings(torus, map, y);
     const std::vector<Vec2> got = SilhouetteCrossingsBySubdivision(torus, map, y);
     ASSERT_EQ(got.size(), want.size()) << "y " << y;
     for (const Vec2& g : got) {
-      double best = INFINITY;
-      for (const Vec2& w : want) best = std::min(best, (w - g).norm());
-      EXPECT_LE(best, kMatchUv) << "y " << y;
+      EXPECT_LE(nearest(want, g), kMatchUv) << "y " << y;
       ++compared;
     }
+    for (const Vec2& w : want)
+      for (const double side : {0.05, 0.3}) {
+        const Vec2 corner = (w - Vec2(0.37, 0.61) * side).cwiseMax(0.0).cwiseMin(1.0 - side);
+        EXPECT_LE(nearest(SilhouetteCrossingsBySubdivision(torus, map, y, corner.x(), corner.y(), side), w), kMatchUv)
+            << "y " << y << " crossing at " << w.transpose() << " square of side " << side;
+      }
   }
   EXPECT_GT(compared, 100);
 }
@@ -157,8 +194,7 @@ TEST(SilhouetteScan, TeapotAgreesWithBruteForceOnNearlyEveryScanLine) {
       const double y = row + 0.5;
       edges.Advance(y);
       sil.Advance(y, edges);
-      auto want = SilhouetteCrossingsBruteForce(s, map, y, 32);
-      std::erase_if(want, [&](const Vec2& p) { return OnCollapsedEdge(s, map, p); });
+      const auto want = ManyStartCrossings(s, map, y, 32);
       bool same = want.size() == sil.Trackers().size();
       for (const SilhouetteTracker& t : sil.Trackers()) {
         double best = INFINITY;
@@ -187,8 +223,7 @@ TEST(SilhouetteScan, RepairSearchFindsEveryTeapotCrossingManyStartsFind) {
     const ScreenMap map(cam, s.worldFromObject);
     for (int row = 0; row < cam.height; row += 8) {
       const double y = row + 0.5;
-      std::vector<Vec2> want = SilhouetteCrossingsBruteForce(s, map, y, 24);
-      std::erase_if(want, [&](const Vec2& p) { return OnCollapsedEdge(s, map, p); });
+      const std::vector<Vec2> want = ManyStartCrossings(s, map, y, 24);
       const std::vector<Vec2> got = SilhouetteCrossingsBySubdivision(s, map, y);
       for (const Vec2& w : want) {
         double best = INFINITY;
