@@ -354,11 +354,8 @@ bool PngEncoder::WriteRow(const float* pixels, int stride) {
   if (s.filling < 0) s.BeginBand();
   Band& b = s.Slot(s.filling);
   std::uint8_t* row = b.raw.data() + static_cast<std::size_t>(b.contextRows + b.rows) * s.rowBytes;
-  for (int x = 0; x < s.width; ++x) {
-    const float* p = pixels + static_cast<std::ptrdiff_t>(x) * stride;
-    // Straight alpha, sRGB-encoded colour (the sRGB chunk says so).
-    StraightSrgba8(p, p[3], row + static_cast<std::size_t>(x) * 4);
-  }
+  // Straight alpha, sRGB-encoded colour (the sRGB chunk says so).
+  StraightSrgba8Row(pixels, s.width, stride, row);
   std::memcpy(s.history.data() + static_cast<std::size_t>(s.nextRow % (s.dictRows + 1)) * s.rowBytes, row, s.rowBytes);
   ++s.nextRow;
   if (++b.rows == std::min(s.rowsPerBand, s.height - b.firstRow)) {

@@ -31,22 +31,35 @@ const std::array<std::uint8_t, kTableSteps + 1>& Table() {
   return table;
 }
 
-}  // namespace
+using Codes = std::array<std::uint8_t, kTableSteps + 1>;
 
-std::uint8_t SrgbCode(float v) {
+std::uint8_t CodeIn(const Codes& table, float v) {
   const float c = std::clamp(v, 0.0f, 1.0f);  // NaN: clamp keeps it, the cast below maps it to 0
   const int i = std::isnan(c) ? 0 : static_cast<int>(c * static_cast<float>(kTableSteps) + 0.5f);
-  return Table()[static_cast<std::size_t>(i)];
+  return table[static_cast<std::size_t>(i)];
 }
 
-void StraightSrgba8(const float* c, float a, std::uint8_t out[4]) {
+void StraightSrgba8(const Codes& table, const float* c, float a, std::uint8_t out[4]) {
   const float alpha = std::isnan(a) ? 0.0f : std::clamp(a, 0.0f, 1.0f);
   out[3] = static_cast<std::uint8_t>(alpha * 255.0f + 0.5f);
   if (out[3] == 0) {
     out[0] = out[1] = out[2] = 0;
-    return;
+  } else if (alpha == 1.0f) {  // most pixels: x / 1 is x
+    for (int k = 0; k < 3; ++k) out[k] = CodeIn(table, c[k]);
+  } else {
+    for (int k = 0; k < 3; ++k) out[k] = CodeIn(table, c[k] / alpha);
   }
-  for (int k = 0; k < 3; ++k) out[k] = SrgbCode(c[k] / alpha);
+}
+
+}  // namespace
+
+std::uint8_t SrgbCode(float v) { return CodeIn(Table(), v); }
+
+void StraightSrgba8(const float* c, float a, std::uint8_t out[4]) { StraightSrgba8(Table(), c, a, out); }
+
+void StraightSrgba8Row(const float* pixels, int n, std::ptrdiff_t stride, std::uint8_t* out) {
+  const Codes& table = Table();
+  for (int x = 0; x < n; ++x, pixels += stride, out += 4) StraightSrgba8(table, pixels, pixels[3], out);
 }
 
 }  // namespace patchscan::raster

@@ -3,6 +3,7 @@
 // JPEG's JFIF). EXR and 16-bit TIFF stay linear.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace patchscan::raster {
@@ -19,5 +20,8 @@ std::uint8_t SrgbCode(float v);
 // Premultiplied linear colour c (3) and alpha a as straight 8-bit RGBA: the colour divided
 // by alpha, sRGB-encoded; alpha linear. A pixel of alpha 0 is 0 0 0 0.
 void StraightSrgba8(const float* c, float a, std::uint8_t out[4]);
+// The same for a row of n pixels, each 4 floats (colour, alpha) of `stride` floats apart,
+// into 4 n bytes.
+void StraightSrgba8Row(const float* pixels, int n, std::ptrdiff_t stride, std::uint8_t* out);
 
 }  // namespace patchscan::raster
