@@ -34,56 +34,62 @@ std::uint32_t ChunkCrc(const char* type, const std::uint8_t* data, std::size_t s
   return static_cast<std::uint32_t>(size ? crc32_z(crc, data, size) : crc);  // zlib: null data restarts
 }
 
+// Byte i of `row` filtered by filter `Type` (ISO/IEC 15948 §9.2), `prev` the row above;
+// the bytes left of the row are zeros (Left: i >= bpp, there are bytes to the left).
+template <int Type, bool Left>
+std::uint8_t Filtered(const std::uint8_t* row, const std::uint8_t* prev, std::size_t i) {
+  constexpr std::size_t bpp = kBytesPerPixel;
+  const int x = row[i], a = Left ? row[i - bpp] : 0, b = prev[i], c = Left ? prev[i - bpp] : 0;
+  if constexpr (Type == 0) {
+    return static_cast<std::uint8_t>(x);
+  } else if constexpr (Type == 1) {  // Sub
+    return static_cast<std::uint8_t>(x - a);
+  } else if constexpr (Type == 2) {  // Up
+    return static_cast<std::uint8_t>(x - b);
+  } else if constexpr (Type == 3) {  // Average
+    return static_cast<std::uint8_t>(x - ((a + b) >> 1));
+  } else {  // Paeth (§9.4): the one of left, above, upper left nearest to left + above - upper left
+    const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
+    return static_cast<std::uint8_t>(x - ((pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c)));
+  }
+}
+
+// Calls f(i, filtered byte i) for filter Type across a row of n bytes: the first pixel's
+// bytes, then the rest in a loop of its own (no branches: the compiler vectorises it).
+template <int Type, class F>
+void ForEachFiltered(const std::uint8_t* row, const std::uint8_t* prev, std::size_t n, F&& f) {
+  const std::size_t head = std::min(n, static_cast<std::size_t>(kBytesPerPixel));
+  for (std::size_t i = 0; i < head; ++i) f(i, Filtered<Type, false>(row, prev, i));
+  for (std::size_t i = head; i < n; ++i) f(i, Filtered<Type, true>(row, prev, i));
+}
+
+// Filter Type's bytes of the row into f[0..n); returns the sum of their magnitudes, read as
+// signed.
+template <int Type>
+std::uint32_t FilterAndCost(const std::uint8_t* row, const std::uint8_t* prev, std::size_t n, std::uint8_t* f) {
+  std::uint32_t s = 0;  // at most 128 a byte: no overflow below 2^24 bytes a row
+  ForEachFiltered<Type>(row, prev, n, [&s, f](std::size_t i, std::uint8_t b) {
+    f[i] = b;
+    const int v = static_cast<std::int8_t>(b);
+    s += static_cast<std::uint32_t>(v < 0 ? -v : v);
+  });
+  return s;
+}
+
 // Filters `row` (with `prev` the row above, zeros for the first) into out[0] = filter type
 // and out[1..n]: of the five filters, the one whose bytes, read as signed, have the least sum
 // of magnitudes (the heuristic of the PNG specification's §12.8, libpng's default), ties to
-// the lowest type. Each filter is a loop of its own so that the compiler vectorises it, and
-// the trials stop at a filter of cost 0 (a row of background), which no other can beat.
-void FilterRow(const std::uint8_t* row, const std::uint8_t* prev, std::size_t n,
-               std::uint8_t* out, std::array<std::vector<std::uint8_t>, 5>& trial) {
-  constexpr std::size_t bpp = kBytesPerPixel;
-  auto cost = [n](const std::uint8_t* f) {
-    std::uint32_t s = 0;  // at most 128 a byte: no overflow below 2^24 bytes a row
-    for (std::size_t i = 0; i < n; ++i) {
-      const int v = static_cast<std::int8_t>(f[i]);
-      s += static_cast<std::uint32_t>(v < 0 ? -v : v);
-    }
-    return s;
-  };
-  auto filter = [&](int type, std::uint8_t* f) {
-    switch (type) {
-      case 0:
-        std::memcpy(f, row, n);
-        break;
-      case 1:  // Sub
-        for (std::size_t i = 0; i < bpp; ++i) f[i] = row[i];
-        for (std::size_t i = bpp; i < n; ++i) f[i] = static_cast<std::uint8_t>(row[i] - row[i - bpp]);
-        break;
-      case 2:  // Up
-        for (std::size_t i = 0; i < n; ++i) f[i] = static_cast<std::uint8_t>(row[i] - prev[i]);
-        break;
-      case 3:  // Average
-        for (std::size_t i = 0; i < bpp; ++i) f[i] = static_cast<std::uint8_t>(row[i] - (prev[i] >> 1));
-        for (std::size_t i = bpp; i < n; ++i)
-          f[i] = static_cast<std::uint8_t>(row[i] - ((row[i - bpp] + prev[i]) >> 1));
-        break;
-      default:  // Paeth (§9.4): the one of left, above, upper left nearest to left + above - upper left
-        for (std::size_t i = 0; i < bpp; ++i) f[i] = static_cast<std::uint8_t>(row[i] - prev[i]);
-        for (std::size_t i = bpp; i < n; ++i) {
-          const int a = row[i - bpp], b = prev[i], c = prev[i - bpp];
-          const int pa = std::abs(b - c), pb = std::abs(a - c), pc = std::abs(a + b - 2 * c);
-          const int pred = (pa <= pb && pa <= pc) ? a : (pb <= pc ? b : c);
-          f[i] = static_cast<std::uint8_t>(row[i] - pred);
-        }
-        break;
-    }
-  };
+// the lowest type. Each filter is one loop of its own, its bytes and their cost at once, so
+// that the compiler vectorises it; the trials stop at a filter of cost 0 (a row of
+// background), which no other can beat.
+void FilterRow(const std::uint8_t* row, const std::uint8_t* prev, std::size_t n, std::uint8_t* out,
+               std::array<std::vector<std::uint8_t>, 5>& trial) {
+  constexpr std::array<std::uint32_t (*)(const std::uint8_t*, const std::uint8_t*, std::size_t, std::uint8_t*), 5>
+      filters = {FilterAndCost<0>, FilterAndCost<1>, FilterAndCost<2>, FilterAndCost<3>, FilterAndCost<4>};
   int best = 0;
   std::uint32_t bestCost = 0;
   for (int type = 0; type < 5; ++type) {
-    std::uint8_t* f = trial[static_cast<std::size_t>(type)].data();
-    filter(type, f);
-    const std::uint32_t c = cost(f);
+    const std::uint32_t c = filters[static_cast<std::size_t>(type)](row, prev, n, trial[static_cast<std::size_t>(type)].data());
     if (type == 0 || c < bestCost) best = type, bestCost = c;
     if (bestCost == 0) break;
   }
