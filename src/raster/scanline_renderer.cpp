@@ -221,6 +221,7 @@ class FragmentGeometry final : public FragmentRow {
       if (d < best) best = d, nearest = k;
     }
     if (nearest >= 0) return store_.Interpolate(m[nearest].smp.handle - kTriangleHandle, cx, cy);
+    if (n == 1) return FragmentOf(rows, m[0], lat_.At(m[0].i));  // at aa 1, every pixel's
     // The members come row by row, each row's from left to right: a run of samples of one
     // chord is taken at its mean column, once (a chord's attributes are smooth along it,
     // so to second order as their mean), weighted by its length.
@@ -229,15 +230,11 @@ class FragmentGeometry final : public FragmentRow {
     for (int k = 0, run = 1; k < n; k += run) {
       const Member& x = m[k];
       run = 1;
-      Fragment g;
-      if (x.smp.handle >= kChordHandle) {
-        double sx = lat_.At(x.i);
+      double sx = lat_.At(x.i);
+      if (x.smp.handle >= kChordHandle)
         for (; k + run < n && m[k + run].r == x.r && m[k + run].smp.handle == x.smp.handle; ++run)
           sx += lat_.At(m[k + run].i);
-        g = rows.chords[static_cast<size_t>(x.r)][x.smp.handle - kChordHandle].At(sx / run);
-      } else {
-        g = rows.pools[static_cast<size_t>(x.r)][x.smp.handle];
-      }
+      const Fragment g = FragmentOf(rows, x, sx / run);
       // The first member's fragment is taken as it is (a lone sample, or exact mode's first
       // fragment: the sum starts from its values, signed zeros included, as it always has).
       if (k == 0) {
@@ -264,6 +261,12 @@ class FragmentGeometry final : public FragmentRow {
   }
 
  private:
+  // The fragment of an exact or chord sample; a chord's at screen x.
+  static Fragment FragmentOf(const Rows& rows, const Member& x, double sx) {
+    if (x.smp.handle >= kChordHandle) return rows.chords[static_cast<size_t>(x.r)][x.smp.handle - kChordHandle].At(sx);
+    return rows.pools[static_cast<size_t>(x.r)][x.smp.handle];
+  }
+
   // Whether a fragment's side lets it be seen: not culled, and a one-sided material's front.
   bool Shows(const Fragment& f) const {
     if (s_.cullBackFaces && f.normal.dot(s_.EyeFor(f.position) - f.position) < 0.0) return false;
