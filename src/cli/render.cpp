@@ -251,8 +251,7 @@ static int RenderFrame(const RenderOptions& o, std::ostream& err, std::set<std::
   const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
   const auto tLoaded = Clock::now();
   const std::string output = !o.output.empty() ? o.output : scene.image.displayName;
-  // RenderMan's depth displays: the frame's depth map, whatever the file's extension.
-  const bool depthMap = o.output.empty() && (scene.image.displayType == "zfile" || scene.image.displayType == "shadow");
+  const bool depthMap = WritesDepthMap(o, scene);
   if (output.empty()) {
     err << "patchscan: no output image: give -o IMAGE" << (scene.image.cameraFromWorld ? " (the scene has no Display file)" : "") << '\n';
     return kExitUsage;

@@ -96,6 +96,10 @@ std::string BackEndSetup::TextureReport() const {
          " lookups";
 }
 
+bool WritesDepthMap(const RenderOptions& o, const Scene& scene) {
+  return o.output.empty() && (scene.image.displayType == "zfile" || scene.image.displayType == "shadow");
+}
+
 std::variant<std::unique_ptr<BackEndSetup>, int> SetUpBackEnd(const RenderOptions& o, const Scene& scene,
                                                               const Camera& camera, int aa, std::ostream& err) {
   auto setup = std::make_unique<BackEndSetup>();
@@ -103,6 +107,7 @@ std::variant<std::unique_ptr<BackEndSetup>, int> SetUpBackEnd(const RenderOption
   s.width = camera.width;
   s.height = camera.height;
   s.aa = aa;
+  s.aovs = o.aov || WritesDepthMap(o, scene);
   s.shading = o.shading;
   s.cullBackFaces = o.cullBackFaces;
   s.hiddenLine = o.hiddenLine;

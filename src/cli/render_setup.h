@@ -32,8 +32,13 @@ struct BackEndSetup {
   std::string TextureReport() const;
 };
 
-// The settings for rendering `scene` through `camera` at `aa`. On a bad option or a missing
-// scene texture, prints the message to `err` and returns the exit code.
+// Whether the render writes the frame's depth map: RenderMan's depth displays ("zfile",
+// "shadow") when no -o is given, whatever the file's extension.
+bool WritesDepthMap(const RenderOptions& o, const Scene& scene);
+
+// The settings for rendering `scene` through `camera` at `aa` (the AOV channels made only
+// for an output that keeps them: --aov, a depth map). On a bad option or a missing scene
+// texture, prints the message to `err` and returns the exit code.
 std::variant<std::unique_ptr<BackEndSetup>, int> SetUpBackEnd(const RenderOptions& o, const Scene& scene,
                                                               const Camera& camera, int aa, std::ostream& err);
 

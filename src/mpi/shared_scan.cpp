@@ -751,9 +751,7 @@ std::unique_ptr<DirectScanSource> MakeSharedScan(MPI_Comm comm, const cli::Rende
   auto band = std::make_unique<Band>(comm, scene, camera, options, threads, nullptr);
   // The AOVs travel only when the image keeps them: an EXR with --aov, or a depth map
   // (a "zfile" or "shadow" Display, as render writes it when no -o is given).
-  const bool depthMap =
-      o.output.empty() && (scene.image.displayType == "zfile" || scene.image.displayType == "shadow");
-  band->SetFrame(o.camera.frame, aa, o.aov || depthMap ? raster::kChannels : 4);
+  band->SetFrame(o.camera.frame, aa, o.aov || cli::WritesDepthMap(o, scene) ? raster::kChannels : 4);
   return band;
 }
 

@@ -361,7 +361,10 @@ void ShadePixel(const Geometry& geo, const RenderSettings& s, const Lattice& lat
     colour += opacity * rgb;
     for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(colour[k]);
     out[3] = static_cast<float>(alpha);
-    writeAovs(f, surface);
+    if (s.aovs)
+      writeAovs(f, surface);
+    else
+      std::copy(background.begin() + 4, background.end(), out + 4);
     return;
   }
   // Group the pixel's samples by surface and layer: one shading call per group.
@@ -464,7 +467,7 @@ void ShadePixel(const Geometry& geo, const RenderSettings& s, const Lattice& lat
   }
   for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(colour[k]);
   out[3] = static_cast<float>(alpha / perPixel);
-  if (major < 0) {
+  if (major < 0 || !s.aovs) {
     std::copy(background.begin() + 4, background.end(), out + 4);
   } else {
     const Group& gr = groups[major];

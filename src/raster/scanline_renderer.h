@@ -37,6 +37,9 @@ struct RenderSettings {
   bool hiddenLine = false;  // white surfaces with their triangle edges in black, unshaded
   std::uint64_t seed = 1;   // of the stochastic extra shading calls (paper 000 §3.4.2)
   int threads = 1;          // rows are shaded on this many threads, a few in flight (same image for any)
+  // Whether the AOV channels are made (an EXR with them, a depth map); else each pixel's
+  // AOV channels hold the background's and only colour and alpha are the render's.
+  bool aovs = true;
   Vec3 eye = Vec3::Zero();
   // Orthographic: view rays all run along `forward`; triangles carry their depth in their
   // vertices (W = 1), and fragments' w is that depth.
@@ -71,7 +74,8 @@ constexpr int kChannels = 11;
 
 // Receives finished rows top to bottom: `pixels` holds width * kChannels floats: colour
 // premultiplied by alpha (= coverage), alpha, then the AOV channels above, taken from the
-// surface covering most of the pixel. Returning false stops the render.
+// surface covering most of the pixel (with RenderSettings::aovs; else the background's).
+// Returning false stops the render.
 class RowSink {
  public:
   virtual ~RowSink() = default;

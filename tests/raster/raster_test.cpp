@@ -502,6 +502,30 @@ TEST(ScanlineRenderer, OneSamplePixelsAreTheirFragmentShaded) {
   EXPECT_EQ(wrong, 0);
 }
 
+TEST(ScanlineRenderer, WithoutAovsColourAndAlphaAreTheSame) {
+  // An output that keeps no AOV channels (PNG, TIFF, JPEG, EXR without --aov) is rendered
+  // without them: colour and alpha the same bit for bit at one sample a pixel and at
+  // several, and every AOV channel the background's.
+  for (const int aa : {1, 3}) {
+    RenderSettings s = PinholeFrame(aa);
+    s.lights = DefaultLightRig(Vec3(0, 0, 1), Vec3(0, -1, 0), Vec3(1, 0, 0));
+    CrossingFragments source;
+    const std::vector<float> with = RenderAll(source, s);
+    s.aovs = false;
+    const std::vector<float> without = RenderAll(source, s);
+    long covered = 0, notBackground = 0;
+    for (std::size_t k = 3; k < with.size(); k += kChannels) covered += with[k] > 0.0f;
+    for (std::size_t k = 0; k < without.size(); k += kChannels)
+      notBackground += without[k + kChannelZ] != INFINITY || without[k + kChannelN] != 0.0f ||
+                       without[k + kChannelN + 1] != 0.0f || without[k + kChannelN + 2] != 0.0f ||
+                       without[k + kChannelUv] != 0.0f || without[k + kChannelUv + 1] != 0.0f ||
+                       without[k + kChannelId] != -1.0f;
+    EXPECT_GT(covered, 5000) << "aa " << aa;
+    for (int c = 0; c < 4; ++c) EXPECT_EQ(Differ(with, without, c), 0) << "aa " << aa << " channel " << c;
+    EXPECT_EQ(notBackground, 0) << "aa " << aa;
+  }
+}
+
 // A circular section seen by a pinhole at the origin looking along +z (focal f pixels):
 // the circle x² + (z - 5)² = 1 in the plane y = 0, its near side, at angle φ from the
 // view axis; its point, outward unit normal, screen x and their derivatives in φ.
