@@ -221,7 +221,7 @@ class FragmentGeometry final : public FragmentRow {
       if (d < best) best = d, nearest = k;
     }
     if (nearest >= 0) return store_.Interpolate(m[nearest].smp.handle - kTriangleHandle, cx, cy);
-    if (n == 1) return FragmentOf(rows, m[0], lat_.At(m[0].i));  // at aa 1, every pixel's
+    if (n == 1) return FragmentOf(rows, m[0], lat_.At(m[0].i));  // a lone sample (every pixel at aa 1)
     // The members come row by row, each row's from left to right: a run of samples of one
     // chord is taken at its mean column, once (a chord's attributes are smooth along it,
     // so to second order as their mean), weighted by its length.

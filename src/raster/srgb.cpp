@@ -19,10 +19,11 @@ double LinearFromSrgb(double e) {
 namespace {
 
 constexpr int kTableSteps = 65535;
+using Codes = std::array<std::uint8_t, kTableSteps + 1>;  // per linear step, its 8-bit code
 
-const std::array<std::uint8_t, kTableSteps + 1>& Table() {
+const Codes& Table() {
   static const auto table = [] {
-    std::array<std::uint8_t, kTableSteps + 1> t{};
+    Codes t{};
     for (int i = 0; i <= kTableSteps; ++i)
       t[static_cast<std::size_t>(i)] =
           static_cast<std::uint8_t>(std::lround(255.0 * SrgbFromLinear(static_cast<double>(i) / kTableSteps)));
@@ -30,8 +31,6 @@ const std::array<std::uint8_t, kTableSteps + 1>& Table() {
   }();
   return table;
 }
-
-using Codes = std::array<std::uint8_t, kTableSteps + 1>;
 
 std::uint8_t CodeIn(const Codes& table, float v) {
   const float c = std::clamp(v, 0.0f, 1.0f);  // NaN: clamp keeps it, the cast below maps it to 0
