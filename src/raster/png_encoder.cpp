@@ -55,7 +55,7 @@ std::uint8_t Filtered(const std::uint8_t* row, const std::uint8_t* prev, std::si
 }
 
 // Calls f(i, filtered byte i) for filter Type across a row of n bytes: the first pixel's
-// bytes, then the rest in a loop of its own (no branches: the compiler vectorises it).
+// bytes, then the rest in a loop of its own, without branches (for the compiler to vectorise).
 template <int Type, class F>
 void ForEachFiltered(const std::uint8_t* row, const std::uint8_t* prev, std::size_t n, F&& f) {
   const std::size_t head = std::min(n, static_cast<std::size_t>(kBytesPerPixel));

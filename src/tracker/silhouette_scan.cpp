@@ -203,8 +203,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   auto add = [&](const Vec2& start, Counter born) {
     Vec2 uv;
     if (!Solve(shape, yScan, start, &uv, DomainRule::Clip)) return false;
-    for (const SilhouetteTracker& t : trackers_)
-      if ((t.uv - uv).norm() < kSameTrackerUv) return true;  // already tracked
+    if (Tracked(uv)) return true;
     trackers_.push_back({uv, uv, false});
     births_.push_back(uv);
     ++counters_[born];
@@ -312,18 +311,20 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
 
 void SilhouetteScan::AddFound() {
   for (const Vec2& uv : searchFound_) {
-    bool tracked = false;
-    for (const SilhouetteTracker& t : trackers_) tracked = tracked || (t.uv - uv).norm() < kSameTrackerUv;
-    if (tracked) continue;
+    if (Tracked(uv)) continue;
     trackers_.push_back({uv, uv, false});
     births_.push_back(uv);
     ++counters_[Counter::RepairedBySearch];
   }
 }
 
+bool SilhouetteScan::Tracked(const Vec2& uv) const {
+  return std::any_of(trackers_.begin(), trackers_.end(),
+                     [&](const SilhouetteTracker& t) { return (t.uv - uv).norm() < kSameTrackerUv; });
+}
+
 void SilhouetteScan::Adopt(const Vec2& uv) {
-  for (const SilhouetteTracker& t : trackers_)
-    if ((t.uv - uv).norm() < kSameTrackerUv) return;
+  if (Tracked(uv)) return;
   trackers_.push_back({uv, uv, false});
   ++counters_[Counter::SilhouettesAdopted];
   ++events_;

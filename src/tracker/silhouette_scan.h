@@ -82,6 +82,8 @@ class SilhouetteScan {
   void AdvanceImpl(const ShapeT& shape, double yScan, const EdgeScan& edges);
   template <class ShapeT>
   bool Solve(const ShapeT& shape, double yScan, const Vec2& start, Vec2* uv, DomainRule domain);
+  // Whether a tracker is already at uv (within kSameTrackerUv).
+  bool Tracked(const Vec2& uv) const;
   // Tracks what the latest search found that no tracker holds.
   void AddFound();
 
