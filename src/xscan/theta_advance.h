@@ -30,7 +30,7 @@ bool ThetaWalker<ShapeT>::Suspicious(const Vertex& A, const Vertex& B, const Ver
   // x running the other way along the link, or the link stretched onto another stretch.
   const double dxTop = B.x - A.x, dx = b.x - a.x;
   if (std::abs(dxTop) > kColumnEpsPx && std::abs(dx) > kColumnEpsPx && (dxTop > 0) != (dx > 0)) return true;
-  return (b.f.uv - a.f.uv).norm() > 2.0 * (B.f.uv - A.f.uv).norm() + kLinkStretchUv;
+  return (b.uv - a.uv).norm() > 2.0 * (B.uv - A.uv).norm() + kLinkStretchUv;
 }
 
 template <class ShapeT>
@@ -58,7 +58,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
     if (A.size() < 2) return false;
     // A ring's last vertex repeats its first.
     const std::size_t n = c.closed ? A.size() - 1 : A.size();
-    if (c.closed && (A.back().f.uv - A.front().f.uv).norm() > kSameCrossingUv) return false;
+    if (c.closed && (A.back().uv - A.front().uv).norm() > kSameCrossingUv) return false;
     const auto begin = static_cast<std::uint32_t>(to->v.size());
     double sense = 1.0;  // along the chain's order (a ring is crawled with sense 1)
     LevelPoint last;      // the last vertex advanced, and its index in A
@@ -104,7 +104,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
         }
       }
       to->v.push_back(b);
-      to->before.push_back(A[k % A.size()].f.uv);
+      to->before.push_back(A[k % A.size()].uv);
       to->rate.push_back(uvRate);
       if (to->v.size() >= begin + 2) {
         const double d = Wrap(b.theta - to->v[to->v.size() - 2].theta);
@@ -126,8 +126,8 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
           skipped = true;
           continue;
         case ThetaVertex::Kind::Turn: {
-          const Vec2 start = extrapolate ? PredictedStart(V.f.uv, from.before[c.begin + k], from.rate[c.begin + k], dy)
-                                         : V.f.uv;
+          const Vec2 start = extrapolate ? PredictedStart(V.uv, from.before[c.begin + k], from.rate[c.begin + k], dy)
+                                         : V.uv;
           ++(*this->counters_)[Counter::ThetaTurnTrackers];
           // A turn tracker with no root near (its pair has met it and both are gone) is
           // dropped, and the link across its place repaired sideways.
@@ -139,7 +139,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
           break;
         }
         case ThetaVertex::Kind::End: {
-          const int e = nearest(t.edgePoints, edgeUsed, V.f.uv, DomainSide(V.f.uv));
+          const int e = nearest(t.edgePoints, edgeUsed, V.uv, DomainSide(V.uv));
           if (e < 0) return false;
           p = this->Eval(t.edgePoints[static_cast<std::size_t>(e)], DerivOrder::Second);  // for its slopes and rate
           if (!p.ok) return false;
@@ -148,7 +148,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
           break;
         }
         case ThetaVertex::Kind::Silhouette: {
-          const int e = nearest(t.silhouettePoints, silUsed, V.f.uv, -1);
+          const int e = nearest(t.silhouettePoints, silUsed, V.uv, -1);
           if (e < 0) return false;
           p = this->Eval(t.silhouettePoints[static_cast<std::size_t>(e)], DerivOrder::Second);
           if (!p.ok) return false;
@@ -156,8 +156,8 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
           break;
         }
         case ThetaVertex::Kind::Table: {
-          const Vec2 start = extrapolate ? PredictedStart(V.f.uv, from.before[c.begin + k], from.rate[c.begin + k], dy)
-                                         : V.f.uv;
+          const Vec2 start = extrapolate ? PredictedStart(V.uv, from.before[c.begin + k], from.rate[c.begin + k], dy)
+                                         : V.uv;
           ++(*this->counters_)[Counter::ThetaTrackers];
           // A tracker that leaves the patch or does not converge is dropped (§3.2: deleted
           // when it leaves [0,1]²); the link across its place is repaired sideways.
@@ -182,7 +182,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
     if (c.closed) {  // back round to the first vertex
       if (n + 1 > A.size() || to->v.size() == begin) return false;
       const Vertex first = to->v[begin];
-      LevelPoint p0 = this->Eval(first.f.uv);
+      LevelPoint p0 = this->Eval(first.uv);
       p0.jn = 0.0;
       if (!link(n, first, p0, NAN, Vec2(NAN, NAN))) return false;
     }

@@ -42,7 +42,7 @@ class ThetaWalker<ShapeT>::Crawler {
       if (std::isfinite(r)) lastTurn_ = r;
     }
     // A link ending at a turn tracker ends on the step that passes it.
-    if (target_ && target_->kind == ThetaVertex::Kind::Turn) turnTarget_ = w_.Eval(target_->f.uv);
+    if (target_ && target_->kind == ThetaVertex::Kind::Turn) turnTarget_ = w_.Eval(target_->uv);
   }
 
   // Walks until the boundary, the start again (a ring) or the link's target: true then;
@@ -125,7 +125,7 @@ class ThetaWalker<ShapeT>::Crawler {
     if (lastTurn_ != 0.0 && (d > 0) != (lastTurn_ > 0) && std::abs(at.jn) > ThetaWalker::kOnSilhouetteJn) {
       // A tilt vertex made at `at` gives way to the turn.
       const bool tiltAt =
-          chain_.size() > 1 && chain_.back().kind == ThetaVertex::Kind::Tilt && chain_.back().f.uv == at.uv;
+          chain_.size() > 1 && chain_.back().kind == ThetaVertex::Kind::Tilt && chain_.back().uv == at.uv;
       if (tiltAt) {
         chain_.pop_back();
         --w_.Count(Counter::ThetaTilts);
@@ -238,7 +238,7 @@ class ThetaWalker<ShapeT>::Crawler {
     }
     if (std::abs(tiltNext - tiltAtVertex_) >= w_.table_) {
       Vertex tilt{next.x, fn, ThetaVertex::Kind::Tilt, -1};
-      tilt.theta = thn, tilt.tilt = tiltNext;
+      tilt.theta = thn, tilt.tilt = tiltNext, tilt.uv = next.uv;
       chain_.push_back(tilt);
       ++w_.Count(Counter::ThetaTilts);
     }

@@ -68,12 +68,12 @@ bool PairChains(const ChainSet& top, const ChainSet& bottom, std::vector<ChainPa
       if (c.size() < 2 || CountAnchors(c) != anchors) continue;
       if (!top.chains[t].closed) {
         // The same boundary sides at the same ends, one way round or the other.
-        const int s0 = DomainSide(a.front().f.uv), s1 = DomainSide(a.back().f.uv);
+        const int s0 = DomainSide(a.front().uv), s1 = DomainSide(a.back().uv);
         for (const bool reversed : {false, true}) {
           const ThetaVertex& first = reversed ? c.back() : c.front();
           const ThetaVertex& last = reversed ? c.front() : c.back();
-          if (DomainSide(first.f.uv) != s0 || DomainSide(last.f.uv) != s1) continue;
-          const double cost = (first.f.uv - a.front().f.uv).norm() + (last.f.uv - a.back().f.uv).norm();
+          if (DomainSide(first.uv) != s0 || DomainSide(last.uv) != s1) continue;
+          const double cost = (first.uv - a.front().uv).norm() + (last.uv - a.back().uv).norm();
           if (cost < bestCost) bestCost = cost, best = static_cast<int>(b), bestReversed = reversed;
         }
       } else {
@@ -81,7 +81,7 @@ bool PairChains(const ChainSet& top, const ChainSet& bottom, std::vector<ChainPa
         // silhouette vertex nearest this chain's start (both run the same way round).
         for (std::size_t k = 0; k + 1 < c.size(); ++k) {
           if (c[k].kind != ThetaVertex::Kind::Silhouette) continue;
-          const double cost = (c[k].f.uv - a.front().f.uv).norm();
+          const double cost = (c[k].uv - a.front().uv).norm();
           if (cost < bestCost) bestCost = cost, best = static_cast<int>(b), bestStart = k;
         }
       }

@@ -57,7 +57,7 @@ namespace patchscan {
 struct ThetaVertex {
   enum class Kind : std::uint8_t { End, Table, Silhouette, Turn, Tilt };
   double x;
-  raster::Fragment f;
+  raster::Fragment f;  // f.uv: the texture coordinates (a face's "st" where it has them)
   Kind kind = Kind::End;
   int index = -1;  // Table: i in θ_i = 2πi/N, 0 < i < N, i != N/2
   // The unit normal's and the eye distance's derivatives per pixel along the row, the
@@ -67,6 +67,9 @@ struct ThetaVertex {
   // θ and the tilt of f's normal (ThetaFrame::Angles), found once when the vertex is made:
   // the advance's and the crawl's tests ask for them several times a vertex.
   double theta = NAN, tilt = NAN;
+  // The surface's parameters (u,v) at the vertex: what the trackers, the crawls and the
+  // trim curves work in. Not f.uv, which is the texture coordinates.
+  Vec2 uv = Vec2::Constant(NAN);
 };
 
 // Receives every θ chain as it is made (tests and diagnostics): one call per chain.
@@ -203,6 +206,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   Vertex MakeVertex(const LevelPoint& p, Make& make, ThetaVertex::Kind kind = ThetaVertex::Kind::End,
                     int index = -1) const {
     Vertex v{p.x, make(p), kind, index};
+    v.uv = p.uv;
     std::tie(v.theta, v.tilt) = frame_.Angles(v.f.position, v.f.normal);
     if (slopes_) {
       const Vec2 duv = p.UvPerPixelAlongRow();
@@ -269,21 +273,21 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   template <class Make, class Take>
   void TakeTrimmed(const std::vector<Vertex>& chain, bool closed, Make& make, Take& take) {
     if (!this->trim_ || chain.size() < 2) {
-      if (!this->trim_ || chain.empty() || this->trim_->Kept(chain.front().f.uv)) take(std::span<const Vertex>(chain), closed);
+      if (!this->trim_ || chain.empty() || this->trim_->Kept(chain.front().uv)) take(std::span<const Vertex>(chain), closed);
       return;
     }
     std::vector<Vertex>& piece = *piece_;
     std::vector<Vertex>& first = *first_;
     piece.clear();
     first.clear();
-    const Vec2 d0 = chain[1].f.uv - chain[0].f.uv;
-    this->StartTrimToward(chain[0].f.uv, d0.norm() > 0.0 ? Vec2(d0 / d0.norm()) : Vec2(1.0, 0.0));
+    const Vec2 d0 = chain[1].uv - chain[0].uv;
+    this->StartTrimToward(chain[0].uv, d0.norm() > 0.0 ? Vec2(d0 / d0.norm()) : Vec2(1.0, 0.0));
     const bool startKept = this->kept_;
     bool cut = false;
     if (this->kept_) piece.push_back(chain[0]);
     for (std::size_t k = 1; k < chain.size(); ++k) {
       const Vertex &a = chain[k - 1], &b = chain[k];
-      this->BeginArc(a.f.uv, a.x, b.f.uv, b.x);
+      this->BeginArc(a.uv, a.x, b.uv, b.x);
       for (const auto& [x, index] : this->trimScratch_->arc) {
         const LevelPoint q = this->Eval(this->trackers_->trimPoints[static_cast<std::size_t>(index)]);
         if (!q.ok) continue;

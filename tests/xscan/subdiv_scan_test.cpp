@@ -262,6 +262,48 @@ TEST(SubdivScan, FragmentsAndTessellationCarryTheTextureCoords) {
   EXPECT_LT(worst, kStTol);
 }
 
+TEST(SubdivScan, ThetaChainsDoNotDependOnTheTextureCoords) {
+  // The θ scan's trackers, crawls and repairs work in each face's (u,v); "st" only rides
+  // along to the fragments. Texture coordinates unrelated to (u,v) (each face mapped onto
+  // one small triangle of the map, as surfaces/cages.rib's tetrahedron) must leave every
+  // chain, counter and sample of the scan as they are without them.
+  auto scanOf = [](const SubdivMesh& m) {
+    std::vector<Surface> surfaces;
+    for (SubdivFace& f : PrepareSubdivFaces(m)) surfaces.push_back(Surface{std::move(f), Affine3::Identity()});
+    ExactScanOptions options;
+    options.thetaSteps = 8;
+    ExactScan scan(surfaces, test::View(Vec3(3.1, -4.2, 2.6), 64), options);
+    const raster::SampleColumns cols{0.5, 1.0, 64};
+    std::vector<double> depths;
+    std::vector<test::Nearest> row(64);
+    for (int j = 0; j < 64; ++j) {
+      std::fill(row.begin(), row.end(), test::Nearest{});
+      test::NearestRow out(&row);
+      EXPECT_TRUE(scan.ScanRow(j + 0.5, cols, out));
+      for (const auto& n : row) depths.push_back(n.w);
+    }
+    return std::pair(scan.Stats(), depths);
+  };
+  SubdivMesh plain = test::Pyramid(5), textured = plain;
+  textured.stClass = StClass::FaceVarying;
+  // Every face corner its own st: the face's k-th corner at the k-th corner of a small
+  // triangle of the map.
+  const Vec2 kCorners[3] = {Vec2(0.0, 1.0), Vec2(1.0, 1.0), Vec2(0.5, 0.0)};
+  for (int size : textured.faceSizes)
+    for (int k = 0; k < size; ++k) {
+      textured.stIndices.push_back(static_cast<int>(textured.st.size()));
+      textured.st.push_back(0.1 * kCorners[k % 3] + Vec2(0.3, 0.6));
+    }
+  const auto [plainStats, plainDepths] = scanOf(plain);
+  const auto [texturedStats, texturedDepths] = scanOf(textured);
+  EXPECT_GT(plainStats[Counter::ThetaRowsAdvanced], 100);
+  for (const Counter c : {Counter::Walks, Counter::ThetaRowsAdvanced, Counter::ThetaLineRepairs,
+                          Counter::ThetaLinkRepairs, Counter::ThetaTrackers, Counter::ThetaTrackerIterations,
+                          Counter::ThetaTrackersLost, Counter::ThetaCrawlIterations, Counter::Fragments})
+    EXPECT_EQ(texturedStats[c], plainStats[c]) << kCounterTable[static_cast<std::size_t>(c)].key;
+  EXPECT_EQ(texturedDepths, plainDepths);  // the same samples covered, at the same depths
+}
+
 INSTANTIATE_TEST_SUITE_P(SubdivScan, EveryCage, ::testing::Range<std::size_t>(0, test::Cages().size()),
                          [](const ::testing::TestParamInfo<std::size_t>& info) {
                            const std::vector<test::Cage> cages = test::Cages();

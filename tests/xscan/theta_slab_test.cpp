@@ -27,6 +27,7 @@ ThetaVertex V(double x, double w, ThetaVertex::Kind kind, bool front, Vec2 uv = 
   v.f.position = Vec3(0.01 * x, 0.0, w);  // the eye is at the origin, looking along +z
   v.f.normal = kind == ThetaVertex::Kind::Silhouette ? Vec3(1, 0, 0) : front ? Vec3(0, 0, -1) : Vec3(0, 0, 1);
   v.f.uv = uv;
+  v.uv = uv;
   return v;
 }
 
@@ -134,7 +135,7 @@ TEST(ThetaSlab, ChainsPairOnlyWhenTheyAgree) {
   ASSERT_TRUE(PairChains(ringTop, ringBottom, &pairs, &ordered));
   ASSERT_EQ(ordered.size(), 5u);
   EXPECT_EQ(ordered.front().x, 0.9);
-  EXPECT_EQ(ordered[1].f.uv.y(), 0.44);
+  EXPECT_EQ(ordered[1].uv.y(), 0.44);
   EXPECT_EQ(ordered.back().x, 0.9);
 }
 

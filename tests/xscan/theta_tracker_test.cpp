@@ -264,7 +264,7 @@ TEST(ThetaTracker, SolvedTrackersSitAtTheirAnglesOnTheirLines) {
             LevelPoint p;
             std::int64_t iterations = 0;
             const double angle = 2 * std::numbers::pi * v.index / 16;
-            if (!SolveThetaTracker(shape, scan.Map(), y, frame, Vec2(std::cos(angle), std::sin(angle)), v.f.uv, &p,
+            if (!SolveThetaTracker(shape, scan.Map(), y, frame, Vec2(std::cos(angle), std::sin(angle)), v.uv, &p,
                                    &iterations)) {
               ++lost;  // left the patch, or no convergence: the scan repairs sideways
               continue;
@@ -329,7 +329,7 @@ TEST(ThetaTracker, SolvedTurnTrackersSitAtTurnPoints) {
         for (const ThetaVertex& v : line.v) {
           if (v.kind != ThetaVertex::Kind::Turn) continue;
           LevelPoint p;
-          if (!SolveTurnTracker(shape, map, y, frame, v.f.uv, &p, &iterations)) {
+          if (!SolveTurnTracker(shape, map, y, frame, v.uv, &p, &iterations)) {
             ++lost;  // the turn pair met, or the turn left the patch: repaired sideways
             continue;
           }
