@@ -100,6 +100,10 @@ constexpr double kTurnTol = 1e-7;
 // make its relative error about 1e-6, which slows Newton's convergence by as little (the
 // residual, not the Jacobian, decides where it ends).
 constexpr double kTurnDiffUv = 1e-6;
+// Broyden's update of that gradient (SolveTurnTracker) is skipped for a step shorter than
+// this: the turn function's rounding (~1e-16 of its size) over a shorter step would be
+// more than 1e-6 of the gradient.
+constexpr double kTurnSecantMinUv = 1e-10;
 // A θ tracker's G_i is solved to this: the sine of the angle from θ_i (radians near 0),
 // far below the 1e-3 px a vertex may move for a section of radius 1e4 px.
 constexpr double kThetaTol = 1e-10;
@@ -167,8 +171,8 @@ bool SolveThetaTracker(const ShapeT& shape, const ScreenMap& map, double ys, con
 }
 
 // The turn tracker of scan line ys (§4.3: y = ys and the turn function zero) by Newton
-// from `start`, the turn function's gradient by forward differences: false if it does not
-// converge (a turn pair has met and gone) or leaves [0,1]². Adds its iterations to
+// from `start`, the turn function's gradient by secants and forward differences: false if
+// it does not converge (a turn pair has met and gone) or leaves [0,1]². Adds its iterations to
 // *iterations; `rate`, if given, receives its rate along the lines (RateAlongLines, NaN if
 // the solution was not the last point evaluated). Never allocates.
 template <class ShapeT>
@@ -179,18 +183,33 @@ bool SolveTurnTracker(const ShapeT& shape, const ScreenMap& map, double ys, cons
   opt.maxIterations = kThetaMaxIterations;
   opt.domain = DomainRule::Fail;
   Mat2 last;  // the Jacobian of the last evaluation, at out->uv
+  // The turn function's gradient: by Broyden's secant update from the last point
+  // evaluated, one evaluation a point instead of three (the residual, not the gradient,
+  // decides where Newton ends); by forward differences at the first point and wherever the
+  // turn function has not shrunk since the last (a step the secant misjudged).
+  bool known = false;
+  Vec2 uvKnown, gradKnown;
+  double tauKnown = NAN;
   const auto r = SolveNewton2(
       [&](const Vec2& uv, Vec2* f, Mat2* jac) {
         *out = EvalLevelPoint(shape, map, uv, DerivOrder::Second);
         const double tau = out->ok ? TurnFunction(out->object, out->gradY, world, frame) : NAN;
         *f = Vec2(out->y - ys, tau);
         jac->row(0) = out->gradY.transpose();
-        // Forward differences, stepping back from the domain's far edges.
-        const double hu = uv.x() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
-        const double hv = uv.y() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
-        (*jac)(1, 0) = (TurnAt(shape, map, frame, uv + Vec2(hu, 0.0)) - tau) / hu;
-        (*jac)(1, 1) = (TurnAt(shape, map, frame, uv + Vec2(0.0, hv)) - tau) / hv;
+        Vec2 grad = gradKnown;
+        const Vec2 s = uv - uvKnown;
+        if (!known || !(std::abs(tau) < std::abs(tauKnown))) {
+          // Forward differences, stepping back from the domain's far edges.
+          const double hu = uv.x() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
+          const double hv = uv.y() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
+          grad = Vec2((TurnAt(shape, map, frame, uv + Vec2(hu, 0.0)) - tau) / hu,
+                      (TurnAt(shape, map, frame, uv + Vec2(0.0, hv)) - tau) / hv);
+        } else if (s.norm() >= kTurnSecantMinUv) {
+          grad += ((tau - tauKnown) - gradKnown.dot(s)) / s.squaredNorm() * s;
+        }
+        jac->row(1) = grad.transpose();
         last = *jac;
+        if (std::isfinite(tau) && grad.allFinite()) known = true, uvKnown = uv, tauKnown = tau, gradKnown = grad;
         if (!out->ok) *f = Vec2(NAN, NAN);
       },
       start, Vec2(kEdgeTolPx, kTurnTol), opt);
