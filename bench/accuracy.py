@@ -30,11 +30,11 @@ SCENES = [  # name, file, extra camera options
     ("sphere", "surfaces/sphere.bpt", []),
     ("cage", None, []),  # bench/make_cage.py's torus cage of 2,176 faces, written into --out
 ]
-THETA_STEPS = [4, 8, 16, 32, 64]
+THETA_STEPS = [4, 6, 8, 12, 16, 32, 64]
 # θ with one-pixel slabs between lines of chains (--y-step 1) instead of the default chains
 # on every sample row: only differs with supersampling (at aa 1 every row is a line).
 THETA_SLAB_STEPS = [4, 8, 16, 32, 64]
-TESS_RATES = [2, 4, 8, 16, 32]
+TESS_RATES = [2, 4, 8, 12, 16, 24, 32]
 TESS_PIXELS = [16, 8, 4, 2, 1]
 AAS = [1, 4]
 # The accuracy levels the report asks about: maximum coverage-edge distance, pixels.

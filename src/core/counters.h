@@ -91,6 +91,8 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(Theta, ThetaTurnIterations, "theta_turn_iterations", "turn-tracker Newton iterations", "iterations", Sum)      \
   X(Theta, ThetaTurnsLost, "theta_turns_lost", "turn trackers lost (the turn pair met)", "trackers", Sum)          \
   X(Theta, ThetaLinkRepairs, "theta_link_repairs", "links repaired sideways (§4.2)", "links", Sum)                 \
+  X(Theta, ThetaLinksFilled, "theta_links_filled", "of those, links missing only tabulated vertices, filled by Newton", \
+    "links", Sum)                                                                                                      \
   X(Theta, ThetaLineRepairs, "theta_line_repairs", "quiet lines crawled afresh (a chain could not be advanced)", "lines", Sum) \
   X(Theta, ThetaRowsAdvanced, "theta_rows_advanced", "surface rows whose chains were advanced from the row before", "rows", Sum) \
   X(Slabs, SlabIntervals, "slab_intervals", "intervals between two lines taken as slabs", "intervals", Max)        \

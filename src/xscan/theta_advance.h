@@ -2,35 +2,82 @@
 // chain of the line before is carried over vertex by vertex, its θ and turn trackers
 // solved by Newton from extrapolated starts and its ends and silhouettes taken from the Y
 // scan's trackers, and a link that looks suspicious is repaired sideways by a crawl
-// (theta_crawl.h). Included by theta_walk.h; not for use on its own.
+// (theta_crawl.h), or, missing only tabulated vertices, filled by Newton. Included by
+// theta_walk.h; not for use on its own.
 #pragma once
 
 #include <cmath>
+#include <optional>
 #include <vector>
 
 namespace patchscan {
 
 template <class ShapeT>
-bool ThetaWalker<ShapeT>::Suspicious(const Vertex& A, const Vertex& B, const Vertex& a, const Vertex& b) const {
+typename ThetaWalker<ShapeT>::LinkCheck ThetaWalker<ShapeT>::CheckLink(const Vertex& A, const Vertex& B, const Vertex& a,
+                                                                      const Vertex& b) const {
   // A tabulated angle strictly between the link's ends (θ is monotone along a link with
-  // no turn point), or the tilt turning a table step: a vertex is missing.
+  // no turn point), or more than a table step between them: vertices are missing, which
+  // the link's other tests below may still find sound otherwise.
   constexpr double kOnAngleRad = 1e-8;
   const double ta = a.theta, tiltA = a.tilt, tb = b.theta, tiltB = b.tilt;
   const double d = Wrap(tb - ta);
-  if (std::abs(d) > table_ + kOnAngleRad) return true;
+  bool missing = std::abs(d) > table_ + kOnAngleRad;
   const double lo = std::min(ta, ta + d) + kOnAngleRad, hi = std::max(ta, ta + d) - kOnAngleRad;
-  for (double i = std::floor(lo / table_) + 1.0; i * table_ < hi; i += 1.0)
-    if (std::abs(std::sin(i * table_)) > 1e-12) return true;  // 0 and π are silhouettes
-  if (std::abs(tiltB - tiltA) >= table_) return true;
+  for (double i = std::floor(lo / table_) + 1.0; i * table_ < hi && !missing; i += 1.0)
+    missing = std::abs(std::sin(i * table_)) > 1e-12;  // 0 and π are silhouettes
+  if (std::abs(tiltB - tiltA) >= table_) return LinkCheck::Broken;
   // A silhouette between two vertices that are none.
   const bool silA = a.kind == ThetaVertex::Kind::Silhouette, silB = b.kind == ThetaVertex::Kind::Silhouette;
-  if (!silA && !silB && (a.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(a.f.position - frame_.eye)) > 0.0) !=
-                            (b.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(b.f.position - frame_.eye)) > 0.0))
-    return true;
+  if (!silA && !silB && Facing(a) != Facing(b)) return LinkCheck::Broken;
   // x running the other way along the link, or the link stretched onto another stretch.
   const double dxTop = B.x - A.x, dx = b.x - a.x;
-  if (std::abs(dxTop) > kColumnEpsPx && std::abs(dx) > kColumnEpsPx && (dxTop > 0) != (dx > 0)) return true;
-  return (b.uv - a.uv).norm() > 2.0 * (B.uv - A.uv).norm() + kLinkStretchUv;
+  if (std::abs(dxTop) > kColumnEpsPx && std::abs(dx) > kColumnEpsPx && (dxTop > 0) != (dx > 0)) return LinkCheck::Broken;
+  if ((b.uv - a.uv).norm() > 2.0 * (B.uv - A.uv).norm() + kLinkStretchUv) return LinkCheck::Broken;
+  return missing ? LinkCheck::MissingTable : LinkCheck::Sound;
+}
+
+template <class ShapeT>
+template <class Make>
+bool ThetaWalker<ShapeT>::FillLink(const Vertex& a, const Vertex& b, std::vector<Vertex>* out, Make& make) {
+  // θ runs one way from a to b (their rates agree with the link, CheckLink found nothing
+  // else amiss): each tabulated angle between is the θ tracker there, by Newton from the
+  // point that far along the link's chord in (u,v) by θ (the crawl's PassTable does the
+  // same within each of its steps). Each must lie between its neighbours in x and along
+  // the chord, face as the ends do, and leave no link turning a table step out of the
+  // plane; else false, and the link is crawled.
+  constexpr double kOnAngleRad = 1e-8;
+  const double d = Wrap(b.theta - a.theta);
+  if (std::abs(d) <= kTurnRad || std::abs(d) >= kFillMaxTurnSteps * table_) return false;
+  // How the ends face (a silhouette end faces neither way).
+  std::optional<bool> facing;
+  if (a.kind != ThetaVertex::Kind::Silhouette) facing = Facing(a);
+  else if (b.kind != ThetaVertex::Kind::Silhouette) facing = Facing(b);
+  out->clear();
+  out->push_back(a);
+  // The table angles passed going from a by d, in that order.
+  const double dir = d > 0.0 ? 1.0 : -1.0;
+  const double first = d > 0.0 ? std::floor((a.theta + kOnAngleRad) / table_) + 1.0
+                               : std::ceil((a.theta - kOnAngleRad) / table_) - 1.0;
+  for (double i = first; dir * (i * table_ - a.theta) < std::abs(d) - kOnAngleRad; i += dir) {
+    const double angle = i * table_;
+    if (std::abs(std::sin(angle)) < 1e-12) return false;  // a silhouette's angle: not a table vertex
+    const double t = (angle - a.theta) / d;
+    const long index = static_cast<long>(i) % steps_;
+    const int k = static_cast<int>(index < 0 ? index + steps_ : index);
+    LevelPoint v;
+    if (!SolveTable(k, a.uv + t * (b.uv - a.uv), &v, &Count(Counter::ThetaCrawlIterations))) return false;
+    const Vec2 chord = b.uv - a.uv, off = v.uv - a.uv;
+    const double along = off.dot(chord) / chord.squaredNorm();
+    if (!(along > 0.0 && along < 1.0) || std::abs(off.x() * chord.y() - off.y() * chord.x()) > 0.25 * chord.squaredNorm())
+      return false;
+    if (!Between(v.x, out->back().x, b.x)) return false;
+    out->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, k));
+    const Vertex &p = (*out)[out->size() - 2], &q = out->back();
+    if ((facing && Facing(q) != *facing) || std::abs(q.tilt - p.tilt) >= table_) return false;
+  }
+  if (out->size() < 2 || std::abs(b.tilt - out->back().tilt) >= table_) return false;
+  out->push_back(b);
+  return true;
 }
 
 template <class ShapeT>
@@ -90,12 +137,17 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
         const bool xBack = to->v.size() >= begin + 2 && a.kind != ThetaVertex::Kind::End &&
                            a.kind != ThetaVertex::Kind::Silhouette &&
                            (a.x - to->v[to->v.size() - 2].x) * (b.x - a.x) < 0.0;
-        if (skipped || xBack || turnsWrong(a, b) || againstRate(a, b, rateB) ||
-            Suspicious(A[lastK], A[k % A.size()], a, b)) {
+        const bool wrongWay = skipped || xBack || turnsWrong(a, b) || againstRate(a, b, rateB);
+        const LinkCheck check = wrongWay ? LinkCheck::Broken : CheckLink(A[lastK], A[k % A.size()], a, b);
+        if (check != LinkCheck::Sound) {
           ++(*this->counters_)[Counter::ThetaLinkRepairs];
-          scratch->clear();
-          if (!Crawl(last, sense, false, scratch, make, &b,
-                     a.kind == ThetaVertex::Kind::Turn ? -lastD : lastD)) return false;
+          // A link missing only tabulated vertices gets them by Newton; else, or if that
+          // fails, it is crawled.
+          const bool filled = check == LinkCheck::MissingTable && FillLink(a, b, scratch, make);
+          if (filled) ++(*this->counters_)[Counter::ThetaLinksFilled];
+          if (!filled) scratch->clear();
+          if (!filled && !Crawl(last, sense, false, scratch, make, &b,
+                                a.kind == ThetaVertex::Kind::Turn ? -lastD : lastD)) return false;
           for (std::size_t i = 1; i + 1 < scratch->size(); ++i) {
             to->v.push_back((*scratch)[i]);
             to->before.push_back(Vec2(NAN, NAN));

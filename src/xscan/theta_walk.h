@@ -122,6 +122,9 @@ constexpr double kLinkMatchPx = 1e-5;
 // (a tracker converged onto another stretch of the curve): a ring born at a maximum
 // widens as √(Δy), by at most √2 from its first line to its second.
 constexpr double kLinkStretchUv = 1e-3;
+// A link missing tabulated vertices is filled by Newton (ThetaWalker::FillLink) only while
+// θ turns less than this many table steps along it; a longer one is crawled.
+constexpr double kFillMaxTurnSteps = 3.0;
 
 template <class ShapeT>
 class ThetaWalker : public LevelWalker<ShapeT> {
@@ -255,8 +258,18 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   static bool SameVertex(const Vertex& v, const Vertex& target) {
     return v.kind == target.kind && v.index == target.index && std::abs(v.x - target.x) <= kLinkMatchPx;
   }
-  // Whether the link a-b advanced from A-B needs a sideways repair (see the top).
-  bool Suspicious(const Vertex& A, const Vertex& B, const Vertex& a, const Vertex& b) const;
+  // Whether the link a-b advanced from A-B needs a repair (theta_advance.h): sound, missing
+  // only tabulated vertices between its ends, or to be crawled sideways.
+  enum class LinkCheck { Sound, MissingTable, Broken };
+  LinkCheck CheckLink(const Vertex& A, const Vertex& B, const Vertex& a, const Vertex& b) const;
+  // The link a-b's missing tabulated vertices by Newton: *out = a, them, b; false if any is
+  // not found where it belongs (theta_advance.h).
+  template <class Make>
+  bool FillLink(const Vertex& a, const Vertex& b, std::vector<Vertex>* out, Make& make);
+  // Whether the vertex's normal faces the eye.
+  bool Facing(const Vertex& v) const {
+    return v.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(v.f.position - frame_.eye)) > 0.0;
+  }
 
   int steps_;
   ThetaFrame frame_;

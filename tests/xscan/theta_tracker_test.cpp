@@ -359,9 +359,9 @@ TEST(ThetaTracker, SolvedTurnTrackersSitAtTurnPoints) {
 }
 
 TEST(ThetaTracker, AdvancedChainsHaveTheCrawledChainsVertices) {
-  // Between lines with no Y-scan event the chains advanced as trackers must have, in
-  // order, the same ends, silhouettes and tabulated-angle vertices as chains crawled
-  // afresh on the same line, at the same places (the solves' tolerance, and the
+  // Between lines with no Y-scan event the chains advanced as trackers (their links
+  // repaired by a crawl or filled by Newton) must have, in order, the same ends,
+  // silhouettes and tabulated-angle vertices as chains crawled afresh on the same line, at the same places (the solves' tolerance, and the
   // advance's starting guesses' differences, are far below kSameVertexPx).
   constexpr double kSameVertexPx = 1e-5;
   long linesCompared = 0, linesAdvanced = 0, linesWithTurns = 0, turnLinesDiffering = 0, trackersWithoutExtrapolation = 0, iterationsWithout = 0;
@@ -430,6 +430,7 @@ TEST(ThetaTracker, AdvancedChainsHaveTheCrawledChainsVertices) {
         total[Counter::ThetaTrackers] += scan.counters[Counter::ThetaTrackers];
         total[Counter::ThetaTrackerIterations] += scan.counters[Counter::ThetaTrackerIterations];
         total[Counter::ThetaLinkRepairs] += scan.counters[Counter::ThetaLinkRepairs];
+        total[Counter::ThetaLinksFilled] += scan.counters[Counter::ThetaLinksFilled];
         total[Counter::ThetaTrackersLost] += scan.counters[Counter::ThetaTrackersLost];
       }
     }
@@ -439,13 +440,17 @@ TEST(ThetaTracker, AdvancedChainsHaveTheCrawledChainsVertices) {
   std::cout << linesAdvanced << " of " << linesCompared << " quiet lines advanced (" << linesWithTurns
             << " with turn points, " << turnLinesDiffering << " of them differing); " << total[Counter::ThetaTrackers]
             << " trackers, Newton iterations per tracker " << with << " extrapolated, " << without
-            << " from the last position; " << total[Counter::ThetaLinkRepairs] << " links repaired, " << total[Counter::ThetaTrackersLost]
+            << " from the last position; " << total[Counter::ThetaLinkRepairs] << " links repaired ("
+            << total[Counter::ThetaLinksFilled] << " filled by Newton), " << total[Counter::ThetaTrackersLost]
             << " trackers lost\n";
   // Most quiet lines advance; extrapolation (§3.5) saves iterations.
   EXPECT_GT(linesAdvanced, linesCompared * 9 / 10);
   EXPECT_LT(linesWithTurns, linesAdvanced / 4);
   EXPECT_LT(turnLinesDiffering, linesWithTurns / 10);
   EXPECT_LT(with, without);
+  // Links missing only tabulated vertices are filled by Newton (ThetaWalker::FillLink), and
+  // the lines compared above hold them: the same vertices as the crawl's.
+  EXPECT_GT(total[Counter::ThetaLinksFilled], 20);  // 54 of 745 repairs when measured
 }
 
 TEST(ThetaTracker, RatesAlongTheLinesPredictTheNextLine) {
