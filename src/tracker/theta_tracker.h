@@ -197,14 +197,13 @@ bool SolveTurnTracker(const ShapeT& shape, const ScreenMap& map, double ys, cons
         *f = Vec2(out->y - ys, tau);
         jac->row(0) = out->gradY.transpose();
         Vec2 grad = gradKnown;
-        const Vec2 s = uv - uvKnown;
         if (!known || !(std::abs(tau) < std::abs(tauKnown))) {
           // Forward differences, stepping back from the domain's far edges.
           const double hu = uv.x() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
           const double hv = uv.y() + kTurnDiffUv <= 1.0 ? kTurnDiffUv : -kTurnDiffUv;
           grad = Vec2((TurnAt(shape, map, frame, uv + Vec2(hu, 0.0)) - tau) / hu,
                       (TurnAt(shape, map, frame, uv + Vec2(0.0, hv)) - tau) / hv);
-        } else if (s.norm() >= kTurnSecantMinUv) {
+        } else if (const Vec2 s = uv - uvKnown; s.norm() >= kTurnSecantMinUv) {
           grad += ((tau - tauKnown) - gradKnown.dot(s)) / s.squaredNorm() * s;
         }
         jac->row(1) = grad.transpose();

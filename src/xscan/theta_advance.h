@@ -18,13 +18,10 @@ typename ThetaWalker<ShapeT>::LinkCheck ThetaWalker<ShapeT>::CheckLink(const Ver
   // A tabulated angle strictly between the link's ends (θ is monotone along a link with
   // no turn point), or more than a table step between them: vertices are missing, which
   // the link's other tests below may still find sound otherwise.
-  constexpr double kOnAngleRad = 1e-8;
-  const double ta = a.theta, tiltA = a.tilt, tb = b.theta, tiltB = b.tilt;
-  const double d = Wrap(tb - ta);
-  bool missing = std::abs(d) > table_ + kOnAngleRad;
-  const double lo = std::min(ta, ta + d) + kOnAngleRad, hi = std::max(ta, ta + d) - kOnAngleRad;
-  for (double i = std::floor(lo / table_) + 1.0; i * table_ < hi && !missing; i += 1.0)
-    missing = std::abs(std::sin(i * table_)) > 1e-12;  // 0 and π are silhouettes
+  const double ta = a.theta, tiltA = a.tilt, tiltB = b.tilt;
+  const double d = Wrap(b.theta - ta);
+  const bool missing = std::abs(d) > table_ + kOnAngleRad ||
+                       !ForEachTableAngle(ta, d, false, [](double angle, int) { return SilhouetteAngle(angle); });
   if (std::abs(tiltB - tiltA) >= table_) return LinkCheck::Broken;
   // A silhouette between two vertices that are none.
   const bool silA = a.kind == ThetaVertex::Kind::Silhouette, silB = b.kind == ThetaVertex::Kind::Silhouette;
@@ -45,7 +42,6 @@ bool ThetaWalker<ShapeT>::FillLink(const Vertex& a, const Vertex& b, std::vector
   // same within each of its steps). Each must lie between its neighbours in x and along
   // the chord, face as the ends do, and leave no link turning a table step out of the
   // plane; else false, and the link is crawled.
-  constexpr double kOnAngleRad = 1e-8;
   const double d = Wrap(b.theta - a.theta);
   if (std::abs(d) <= kTurnRad || std::abs(d) >= kFillMaxTurnSteps * table_) return false;
   // How the ends face (a silhouette end faces neither way).
@@ -54,27 +50,17 @@ bool ThetaWalker<ShapeT>::FillLink(const Vertex& a, const Vertex& b, std::vector
   else if (b.kind != ThetaVertex::Kind::Silhouette) facing = Facing(b);
   out->clear();
   out->push_back(a);
-  // The table angles passed going from a by d, in that order.
-  const double dir = d > 0.0 ? 1.0 : -1.0;
-  const double first = d > 0.0 ? std::floor((a.theta + kOnAngleRad) / table_) + 1.0
-                               : std::ceil((a.theta - kOnAngleRad) / table_) - 1.0;
-  for (double i = first; dir * (i * table_ - a.theta) < std::abs(d) - kOnAngleRad; i += dir) {
-    const double angle = i * table_;
-    if (std::abs(std::sin(angle)) < 1e-12) return false;  // a silhouette's angle: not a table vertex
-    const double t = (angle - a.theta) / d;
-    const long index = static_cast<long>(i) % steps_;
-    const int k = static_cast<int>(index < 0 ? index + steps_ : index);
+  const bool placed = ForEachTableAngle(a.theta, d, false, [&](double angle, int k) {
+    if (SilhouetteAngle(angle)) return false;  // not a table vertex
     LevelPoint v;
-    if (!SolveTable(k, a.uv + t * (b.uv - a.uv), &v, &Count(Counter::ThetaCrawlIterations))) return false;
-    const Vec2 chord = b.uv - a.uv, off = v.uv - a.uv;
-    const double along = off.dot(chord) / chord.squaredNorm();
-    if (!(along > 0.0 && along < 1.0) || std::abs(off.x() * chord.y() - off.y() * chord.x()) > 0.25 * chord.squaredNorm())
+    if (!SolveTable(k, a.uv + (angle - a.theta) / d * (b.uv - a.uv), &v, &Count(Counter::ThetaCrawlIterations)) ||
+        !WithinStep(a.uv, b.uv, v.uv) || !Between(v.x, out->back().x, b.x))
       return false;
-    if (!Between(v.x, out->back().x, b.x)) return false;
     out->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, k));
     const Vertex &p = (*out)[out->size() - 2], &q = out->back();
-    if ((facing && Facing(q) != *facing) || std::abs(q.tilt - p.tilt) >= table_) return false;
-  }
+    return (!facing || Facing(q) == *facing) && std::abs(q.tilt - p.tilt) < table_;
+  });
+  if (!placed) return false;
   if (out->size() < 2 || std::abs(b.tilt - out->back().tilt) >= table_) return false;
   out->push_back(b);
   return true;

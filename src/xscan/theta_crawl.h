@@ -86,24 +86,16 @@ class ThetaWalker<ShapeT>::Crawler {
   // The tabulated angles passed going from θ = a by d (|d| < π), silhouettes aside (they are
   // found by the sign of J), each as a vertex on the arc from `from` to `to`.
   void PassTable(const LevelPoint& from, double a, const LevelPoint& to, double d) {
-    const double table = w_.table_;
-    const double lo = std::min(a, a + d), hi = std::max(a, a + d);
-    for (double i = std::floor(lo / table) + 1.0; i * table <= hi; i += 1.0) {
-      const double angle = Wrap(i * table);
-      if (std::abs(std::sin(angle)) < 1e-12) continue;  // 0 or π: a silhouette
-      // A crawl that starts at a tracker (a link's repair) starts on its angle: that
-      // vertex is the start itself.
-      constexpr double kOnAngleRad = 1e-8;
-      if (std::abs(i * table - a) <= kOnAngleRad) continue;
-      const double t = (i * table - a) / d;
-      const long index = static_cast<long>(i) % w_.steps_;
-      const int k = static_cast<int>(index < 0 ? index + w_.steps_ : index);
+    // A crawl that starts at a tracker (a link's repair) starts on its angle: that vertex
+    // is the start itself, not passed.
+    w_.ForEachTableAngle(a, d, true, [&](double angle, int k) {
+      if (SilhouetteAngle(angle)) return true;
       // The vertex is the θ tracker itself (G_i = 0 on the line), by Newton from the
       // interpolated point; if that lands outside the step (near a turn point θ_i may be
       // crossed again close by), the interpolated point. It must also lie on from's side
       // of `to` after the chain's last vertex (x runs one way between anchors; a turn just
       // placed beyond `from` may have passed it).
-      const Vec2 guess = from.uv + t * (to.uv - from.uv);
+      const Vec2 guess = from.uv + (angle - a) / d * (to.uv - from.uv);
       LevelPoint v;
       auto inOrder = [&](const LevelPoint& q) {
         return q.ok && (q.x == chain_.back().x || Between(q.x, chain_.back().x, to.x));
@@ -112,7 +104,8 @@ class ThetaWalker<ShapeT>::Crawler {
           !inOrder(v))
         v = w_.Correct(guess);
       if (inOrder(v)) chain_.push_back(w_.MakeVertex(v, make_, ThetaVertex::Kind::Table, k));
-    }
+      return true;
+    });
   }
 
   // A turn point (§4.3: θ's derivative along the curve vanishes) between two steps is a

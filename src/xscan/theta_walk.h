@@ -240,17 +240,41 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // turn point within the first step is seen.
   bool Crawl(const LevelPoint& start, double sense, bool closed, std::vector<Vertex>* chain, Make& make,
              const Vertex* target = nullptr, double turning = 0.0);
-  // Whether v lies on the step from a to b: along the chord between its ends, and
+  // Whether v lies on the step from a to b in (u,v): along the chord between its ends, and
   // within a quarter of its length off it.
-  static bool WithinStep(const LevelPoint& a, const LevelPoint& b, const LevelPoint& v) {
-    const Vec2 d = b.uv - a.uv;
+  static bool WithinStep(const Vec2& a, const Vec2& b, const Vec2& v) {
+    const Vec2 d = b - a;
     const double len2 = d.squaredNorm();
-    if (!(len2 > 0.0)) return (v.uv - a.uv).norm() <= kSameCrossingUv;
-    const double t = (v.uv - a.uv).dot(d) / len2;
-    const double off = std::abs((v.uv - a.uv).x() * d.y() - (v.uv - a.uv).y() * d.x()) / std::sqrt(len2);
+    if (!(len2 > 0.0)) return (v - a).norm() <= kSameCrossingUv;
+    const double t = (v - a).dot(d) / len2;
+    const double off = std::abs((v - a).x() * d.y() - (v - a).y() * d.x()) / std::sqrt(len2);
     constexpr double kSlack = 1e-3;  // of the step: rounding at its ends
     return t >= -kSlack && t <= 1.0 + kSlack && off <= 0.25 * std::sqrt(len2) + kSameCrossingUv;
   }
+  static bool WithinStep(const LevelPoint& a, const LevelPoint& b, const LevelPoint& v) {
+    return WithinStep(a.uv, b.uv, v.uv);
+  }
+  // The tabulated angles i 2π/N passed going from θ = a by d, in that order: those beyond a
+  // by more than kOnAngleRad (a vertex made on a tabulated angle has it to within rounding)
+  // and short of a + d by as much, or up to a + d itself `withEnd`. visit(angle, k) gets
+  // each (unwrapped: a + t d) with its table index k in [0, N), silhouettes' angles (0 and
+  // π) included, and returns whether to go on; false if it stopped.
+  static constexpr double kOnAngleRad = 1e-8;
+  template <class Visit>
+  bool ForEachTableAngle(double a, double d, bool withEnd, Visit&& visit) const {
+    const double dir = d > 0.0 ? 1.0 : -1.0, reach = std::abs(d);
+    const double first = d > 0.0 ? std::floor((a + kOnAngleRad) / table_) + 1.0
+                                 : std::ceil((a - kOnAngleRad) / table_) - 1.0;
+    for (double i = first;; i += dir) {
+      const double along = dir * (i * table_ - a);
+      if (withEnd ? along > reach : along >= reach - kOnAngleRad) return true;
+      const long index = static_cast<long>(i) % steps_;
+      if (!visit(i * table_, static_cast<int>(index < 0 ? index + steps_ : index))) return false;
+    }
+  }
+  // Whether a tabulated angle is a silhouette's (0 or π: those vertices are found by the
+  // sign of J, not by θ).
+  static bool SilhouetteAngle(double angle) { return std::abs(std::sin(angle)) < 1e-12; }
   // Whether x lies strictly between a and b (the vertices of a chain between anchors
   // run one way in x).
   static bool Between(double x, double a, double b) { return (x - a) * (b - x) > 0.0; }
