@@ -23,6 +23,19 @@ typename ThetaWalker<ShapeT>::LinkCheck ThetaWalker<ShapeT>::CheckLink(const Ver
   const bool missing = std::abs(d) > table_ + kOnAngleRad ||
                        !ForEachTableAngle(ta, d, false, [](double angle, int) { return SilhouetteAngle(angle); });
   if (std::abs(tiltB - tiltA) >= table_) return LinkCheck::Broken;
+  // The tilt out of the scan plane along the link, as the cubic (Hermite's) from the ends'
+  // tilts and rates along the row, going a table step beyond both ends' tilts between
+  // them: an excursion of the normal the ends do not show, which a crawl would mark with
+  // tilt vertices (one wherever the tilt has turned a table step) and the chord would blend
+  // across. Not asked where an end's rate is unknown: without slopes (slabs), or at a
+  // silhouette (unbounded: x stands still there).
+  if (const double dx = b.x - a.x, ma = TiltRate(a) * dx, mb = TiltRate(b) * dx; std::isfinite(ma) && std::isfinite(mb)) {
+    const double lo = std::min(tiltA, tiltB) - table_, hi = std::max(tiltA, tiltB) + table_;
+    for (const double t : {0.25, 0.5, 0.75}) {
+      const double h = tiltA + t * (ma + t * (3.0 * (tiltB - tiltA) - 2.0 * ma - mb + t * (2.0 * (tiltA - tiltB) + ma + mb)));
+      if (h < lo || h > hi) return LinkCheck::Broken;
+    }
+  }
   // A silhouette between two vertices that are none.
   const bool silA = a.kind == ThetaVertex::Kind::Silhouette, silB = b.kind == ThetaVertex::Kind::Silhouette;
   if (!silA && !silB && Facing(a) != Facing(b)) return LinkCheck::Broken;

@@ -290,6 +290,12 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // not found where it belongs (theta_advance.h).
   template <class Make>
   bool FillLink(const Vertex& a, const Vertex& b, std::vector<Vertex>* out, Make& make);
+  // The rate of the vertex's tilt along the row, radians per pixel of x (NaN without
+  // slopes, or on a silhouette).
+  double TiltRate(const Vertex& v) const {
+    if (v.kind == ThetaVertex::Kind::Silhouette) return NAN;
+    return v.dndx.dot(frame_.ScanPlaneNormal(frame_.Ray(v.f.position))) / std::cos(v.tilt);
+  }
   // Whether the vertex's normal faces the eye.
   bool Facing(const Vertex& v) const {
     return v.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(v.f.position - frame_.eye)) > 0.0;

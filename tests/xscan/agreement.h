@@ -30,6 +30,7 @@ constexpr double kDepthJumpRel = 1e-4;
 struct Nearest {
   double w = INFINITY;
   std::uint32_t surface = 0;
+  Vec3 normal = Vec3::Zero();  // the fragment's (world, unit); zero from the ray caster
   bool covered() const { return std::isfinite(w); }
 };
 
@@ -42,7 +43,7 @@ class NearestRow final : public raster::FragmentRow {
     ASSERT_LT(column, static_cast<int>(row_->size()));
     EXPECT_TRUE(f.normal.allFinite() && f.position.allFinite() && std::isfinite(f.w));
     Nearest& n = (*row_)[column];
-    if (f.w < n.w) n = {f.w, f.surfaceId};
+    if (f.w < n.w) n = {f.w, f.surfaceId, f.normal};
   }
   // Per-row θ chains and the exact scan hand over fragments only.
   void AddTriangle(const raster::RasterVertex&, const raster::RasterVertex&, const raster::RasterVertex&,
