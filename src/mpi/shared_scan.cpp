@@ -141,7 +141,7 @@ class RowEncoder final : public raster::FragmentRow {
   void AddChord(const raster::Chord& c, const raster::SampleColumns&) override {
     const raster::Chord::Cubics* cubics = c.cubics();
     chords.insert(chords.end(), {Rank(c.a().surfaceId), c.xa(), c.xb(), c.orthographic() ? 1.0 : 0.0,
-                                 cubics ? 1.0 : 0.0});
+                                 cubics ? 1.0 + cubics->root : 0.0});
     PutFragment(chords, c.a());
     PutFragment(chords, c.b());
     const raster::Chord::Cubics none;
@@ -176,6 +176,7 @@ raster::Chord DecodeChord(const double* d) {
   const double* cubic = d + 5 + 2 * kFragmentBody;
   raster::Chord::Cubics k;
   for (int i = 0; i < 4; ++i) k.normal[i] = Get3(cubic + 3 * i), k.depth[i] = cubic[12 + i];
+  k.root = static_cast<int>(d[4]) - 1;
   return raster::Chord(d[1], GetFragment(d + 5), d[2], GetFragment(d + 5 + kFragmentBody), d[3] != 0.0,
                        d[4] != 0.0 ? &k : nullptr);
 }

@@ -44,10 +44,12 @@ struct SampleColumns {
 constexpr double kColumnEpsPx = 1e-6;
 
 // A chord end's unit normal and eye distance derivatives per pixel along the row (NaN:
-// unknown).
+// unknown), and whether it lies on a silhouette (x stands still there: the slopes are
+// infinite, and the attributes go as the square root of the distance in x from it).
 struct ChordSlope {
   Vec3 normal = Vec3::Constant(NAN);
   double depth = NAN;
+  bool silhouette = false;
 };
 
 // A chord of a surface's section along one sample row (θ mode, paper 001 §4: the link
@@ -57,7 +59,8 @@ struct ChordSlope {
 // (1/w affine in screen x; orthographic: w), except where the ends' slopes along the row
 // are known (Slope): there the normal and the eye distance (its inverse, in
 // perspective) follow cubics in screen x with those tangents (Hermite), whose error falls
-// as the fourth power of the chord's length where the blend's falls as the square. Made
+// as the fourth power of the chord's length where the blend's falls as the square. From a
+// silhouette end they follow quadratics in the square root of the distance from it. Made
 // whole by a constructor (its cubics follow from its ends), then only read.
 class Chord {
  public:
@@ -82,18 +85,33 @@ class Chord {
     const bool ka = fits(ta, sa), kb = fits(tb, sb);
     cubic_ = ka || kb;
     if (!cubic_) return;
+    if (slopeA.silhouette != slopeB.silhouette && (slopeA.silhouette ? kb : ka)) {
+      // One end on a silhouette, where the view ray is the section's tangent: near it the
+      // section is a parabola in (screen x, depth) and x - xs goes as the square of the
+      // distance along it, so the normal and the depth are smooth in p = √t from that end
+      // (their Puiseux series), not in t (their tangents there are infinite). The
+      // quadratics in p through both ends with the other end's tangent, dt/dp = 2 there.
+      // A blend in t is off near the silhouette by a fifth of the depth across the chord.
+      cubics_.root = slopeA.silhouette ? 1 : 2;
+      Coefficients(a.normal, b.normal, Vec3(2.0 * ta), Vec3(2.0 * tb), !slopeA.silhouette, !slopeB.silhouette,
+                   cubics_.normal);
+      Coefficients(Depth(a.w), Depth(b.w), 2.0 * sa, 2.0 * sb, !slopeA.silhouette, !slopeB.silhouette, cubics_.depth);
+      return;
+    }
     Coefficients(a.normal, b.normal, ta, tb, ka, kb, cubics_.normal);
     Coefficients(Depth(a.w), Depth(b.w), sa, sb, ka, kb, cubics_.depth);
   }
   static constexpr double kSlopeTurnRatio = 2.0, kSlopeFloor = 1e-3;
 
-  // The cubics in t (lowest power first) of the normal and of the interpolated depth (1/w
-  // in perspective, w orthographic), when the ends' slopes gave them. A chord's ends and
+  // The cubics (lowest power first) of the normal and of the interpolated depth (1/w in
+  // perspective, w orthographic), when the ends' slopes gave them, in p = t (root 0), √t
+  // from a silhouette at a (1), or 1 - √(1 - t) from one at b (2). A chord's ends and
   // cubics are the whole of it: a copy made from them (another process's) is the same
   // chord bit for bit.
   struct Cubics {
     Vec3 normal[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
     double depth[4] = {};
+    int root = 0;
   };
   const Cubics* cubics() const { return cubic_ ? &cubics_ : nullptr; }
   bool orthographic() const { return orthographic_; }
@@ -144,7 +162,7 @@ class Chord {
     Fragment f = a_;
     f.w = DepthAlong(t);
     f.position = wa * a_.position + wb * b_.position;
-    const Vec3 n = cubic_ ? Horner(cubics_.normal, t) : Vec3(wa * a_.normal + wb * b_.normal);
+    const Vec3 n = cubic_ ? Horner(cubics_.normal, Param(t)) : Vec3(wa * a_.normal + wb * b_.normal);
     f.normal = n.normalized();
     if (!f.normal.allFinite()) f.normal = a_.normal;
     f.uv = wa * a_.uv + wb * b_.uv;
@@ -161,10 +179,14 @@ class Chord {
   Cubics cubics_;
 
   double Along(double x) const { return std::clamp((x - xa_) / (xb_ - xa_), 0.0, 1.0); }
+  // The cubics' parameter at t (Cubics::root).
+  double Param(double t) const {
+    return cubics_.root == 0 ? t : cubics_.root == 1 ? std::sqrt(t) : 1.0 - std::sqrt(1.0 - t);
+  }
   // What is interpolated for the eye distance: 1/w in perspective, w orthographic.
   double Depth(double w) const { return orthographic_ ? w : 1.0 / w; }
   double DepthAlong(double t) const {
-    const double d = cubic_ ? Horner(cubics_.depth, t) : (1.0 - t) * Depth(a_.w) + t * Depth(b_.w);
+    const double d = cubic_ ? Horner(cubics_.depth, Param(t)) : (1.0 - t) * Depth(a_.w) + t * Depth(b_.w);
     return orthographic_ ? d : 1.0 / d;
   }
   template <class V>

@@ -410,7 +410,9 @@ inline long EmitThetaChain(std::span<const ThetaVertex> chain, const raster::Sam
   for (size_t k = 1; k < chain.size(); ++k) {
     const ThetaVertex &a = chain[k - 1], &b = chain[k];
     if (!(a.f.w > 0.0 && b.f.w > 0.0) || a.x == b.x) continue;
-    const raster::Chord c(a.x, a.f, b.x, b.f, orthographic, {a.dndx, a.dwdx}, {b.dndx, b.dwdx});
+    using K = ThetaVertex::Kind;
+    const raster::Chord c(a.x, a.f, b.x, b.f, orthographic, {a.dndx, a.dwdx, a.kind == K::Silhouette},
+                          {b.dndx, b.dwdx, b.kind == K::Silhouette});
     const int n = c.ColumnsOn(cols).count;
     covered += n;
     if (n > 0) out.AddChord(c, cols);

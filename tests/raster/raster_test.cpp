@@ -627,6 +627,53 @@ TEST(Chord, SlopeAtASilhouetteIsLeftOut) {
   }
 }
 
+// A chord to a silhouette, its depth and normal as quadratics in the root of x, against the
+// quadratic in x: at most this fraction of the error (1/12 to 1/84 measured at turns of 2π/8
+// and 2π/16), and falling at least as the square of the turn (7.2 and 9.0 measured per
+// halving; the quadratic in x, 2.0: first order).
+constexpr double kRootGainMin = 0.2, kRootOrderMin = 4.0;
+TEST(Chord, FromASilhouetteTheAttributesGoAsTheRootOfX) {
+  // At the silhouette (the ray grazing the circle) x stands still: the depth and the normal
+  // go as the square root of the distance in x from it, and no slope there fits a cubic in
+  // x. A chord with that end marked takes them as quadratics in the root, with the other
+  // end's slopes: second order in the root, where the quadratic in x with the other end's
+  // slope alone is off by a fixed fraction of what changes across the chord.
+  const double graze = M_PI / 2.0 - std::atan(1.0 / std::sqrt(CircleSection::kZ * CircleSection::kZ - 1.0));
+  const auto end = [](double phi) {
+    Fragment f;
+    f.w = CircleSection::Point(phi).z();
+    f.position = CircleSection::Point(phi);
+    f.normal = CircleSection::Normal(phi);
+    return f;
+  };
+  const auto slope = [](double phi) {
+    const double dx = CircleSection::DxDphi(phi);
+    return Chord::Slope{Vec3(Vec3(std::cos(phi), 0.0, std::sin(phi)) / dx), std::sin(phi) / dx};
+  };
+  const Chord::Slope onSilhouette{Vec3::Constant(NAN), NAN, true};
+  double root[2][2];
+  for (int k = 0; k < 2; ++k) {
+    const double pa = graze - 2.0 * M_PI / (k == 0 ? 8 : 16), pb = graze;
+    const Fragment a = end(pa), b = end(pb);
+    const Chord quadratic(CircleSection::X(pa), a, CircleSection::X(pb), b, false, slope(pa), {});
+    const Chord fromB(CircleSection::X(pa), a, CircleSection::X(pb), b, false, slope(pa), onSilhouette);
+    const Chord fromA(CircleSection::X(pb), b, CircleSection::X(pa), a, false, onSilhouette, slope(pa));
+    const auto [qa, qd] = CircleSection::Errors(quadratic, pa, pb);
+    const auto [ra, rd] = CircleSection::Errors(fromB, pa, pb);
+    const auto [sa, sd] = CircleSection::Errors(fromA, pa, pb);
+    std::cout << "chord to a silhouette, turn 2pi/" << (k == 0 ? 8 : 16) << ": normal (rad) and depth error, quadratic in x "
+              << qa << ", " << qd << "; in the root " << ra << ", " << rd << " (reversed " << sa << ", " << sd << ")\n";
+    EXPECT_NEAR(ra, sa, 1e-12);  // the same curve whichever end comes first
+    EXPECT_NEAR(rd, sd, 1e-12);
+    EXPECT_LT(ra, kRootGainMin * qa) << k;
+    EXPECT_LT(rd, kRootGainMin * qd) << k;
+    root[k][0] = ra, root[k][1] = rd;
+  }
+  // Halving the turn divides the root's errors by about 4 or more.
+  EXPECT_GT(root[0][0] / root[1][0], kRootOrderMin);
+  EXPECT_GT(root[0][1] / root[1][1], kRootOrderMin);
+}
+
 // Keeps rows as they come, refusing from row `refuseAt` on.
 class OrderedRows final : public RowSink {
  public:
