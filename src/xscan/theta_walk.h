@@ -267,7 +267,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
                                  : std::ceil((a - kOnAngleRad) / table_) - 1.0;
     for (double i = first;; i += dir) {
       const double along = dir * (i * table_ - a);
-      if (withEnd ? along > reach : along >= reach - kOnAngleRad) return true;
+      if (!(withEnd ? along <= reach : along < reach - kOnAngleRad)) return true;  // NaN too
       const long index = static_cast<long>(i) % steps_;
       if (!visit(i * table_, static_cast<int>(index < 0 ? index + steps_ : index))) return false;
     }
