@@ -44,12 +44,12 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(YScan, TrackerRows, "tracker_rows", "edge and silhouette trackers advanced, summed over rows", "tracker-rows", Sum) \
   X(YScan, EdgeNewtonCalls, "edge_newton_calls", "edge-tracker Newton solves", "calls", Sum)                        \
   X(YScan, EdgeNewtonIterations, "edge_newton_iterations", "edge-tracker Newton iterations", "iterations", Sum)     \
-  X(YScan, EdgeRepairs, "edge_repairs", "edge trackers repaired by bisection", "repairs", Sum)                      \
+  X(YScan, EdgeRepairs, "edge_repairs", "edge trackers repaired inside their piece", "repairs", Sum)                \
   X(YScan, EdgeBorn, "edge_trackers_born", "edge trackers born at the top of a monotone piece", "trackers", Sum)    \
   X(YScan, EdgeDied, "edge_trackers_died", "edge trackers died at the bottom of a piece", "trackers", Sum)          \
   X(YScan, TrimNewtonCalls, "trim_newton_calls", "trim-curve tracker Newton solves", "calls", Sum)               \
   X(YScan, TrimNewtonIterations, "trim_newton_iterations", "trim-curve tracker Newton iterations", "iterations", Sum) \
-  X(YScan, TrimRepairs, "trim_repairs", "trim-curve trackers repaired by bisection", "repairs", Sum)              \
+  X(YScan, TrimRepairs, "trim_repairs", "trim-curve trackers repaired inside their piece", "repairs", Sum)            \
   X(YScan, TrimBorn, "trim_trackers_born", "trim-curve trackers born at the top of a monotone piece", "trackers", Sum) \
   X(YScan, TrimDied, "trim_trackers_died", "trim-curve trackers died at the bottom of a piece", "trackers", Sum)   \
   X(YScan, Folds, "folds", "silhouettes crossing a boundary edge (J changed sign)", "folds", Sum)                  \

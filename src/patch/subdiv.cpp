@@ -173,7 +173,7 @@ struct BicubicPieces {
           for (int j = 2 * qj; j < 2 * qj + 2; ++j)
             for (int i = 2 * qi; i < 2 * qi + 2; ++i) Fit(surface, pts, map, tol, 2, i, j);
   }
-  bool Covers(double u, double v) const { return patchOf[static_cast<std::size_t>(4 * QuarterOf(v) + QuarterOf(u))] >= 0; }
+  int PatchAt(double u, double v) const { return patchOf[static_cast<std::size_t>(4 * QuarterOf(v) + QuarterOf(u))]; }
   // The polynomial at (u, v), if it covers that cell.
   bool Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const {
     const int i = QuarterOf(u), j = QuarterOf(v);
@@ -410,10 +410,11 @@ void SubdivFace::EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDeri
   EvaluateMapped(face.surface, face.patchPoints.data(), map_, u, v, order, out);
 }
 
-bool SubdivFace::BicubicAt(double u, double v) const {
-  const FaceData& face = cage_->Data(face_);
-  const BicubicPieces* pc = Pieces(face);
-  return pc && pc->Covers(u, v);
+bool SubdivFace::BicubicAt(double u, double v) const { return BicubicPieceAt(u, v) >= 0; }
+
+int SubdivFace::BicubicPieceAt(double u, double v) const {
+  const BicubicPieces* pc = Pieces(cage_->Data(face_));
+  return pc ? pc->PatchAt(u, v) : -1;
 }
 
 std::optional<TexCoords> SubdivFace::TextureCoords(double u, double v) const {

@@ -98,6 +98,10 @@ class SubdivFace {
   void EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
   // Whether Evaluate takes a bicubic at (u, v) (prepares the face).
   bool BicubicAt(double u, double v) const;
+  // Which of the fitted bicubic pieces Evaluate takes at (u, v), as an index that two points
+  // share exactly when one polynomial serves both; -1 where Bfr's evaluation serves (or
+  // before a fitting hold). Prepares the face.
+  int BicubicPieceAt(double u, double v) const;
   // The texture coordinates "st" at (u, v) with their derivatives, or nullopt when the cage
   // has none. Prepares as Evaluate does.
   std::optional<TexCoords> TextureCoords(double u, double v) const;

@@ -3,7 +3,9 @@
 #include "tracker/monotone_curve.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <type_traits>
 
 namespace patchscan {
 namespace {
@@ -62,8 +64,133 @@ double PredictedStart(const EdgeTracker& tr, double yNext, double tolerancePx) {
   return tr.t + first + (std::abs(second) <= 0.5 * std::abs(first) ? second : 0.0);
 }
 
+// Edge e cut where the shape's evaluation changes polynomial: span k is [breaks[k],
+// breaks[k + 1]], and cubic[k] says the shape evaluates one polynomial of degree <= 3 in t
+// there. A bicubic patch's edge (any basis) or a bilinear one's is one cubic span; a
+// subdivision face's has one span per fitted bicubic piece along it and one per quarter
+// that Bfr evaluates (its irregular cells); any other shape's edge is one span, not cubic.
+struct EdgeSpans {
+  int n = 1;
+  std::array<double, 5> breaks{0.0, 1.0};
+  std::array<bool, 4> cubic{};
+};
+
 template <class ShapeT>
-std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEdge e, double* collapsedY) {
+EdgeSpans SpansOf(const ShapeT& shape, PatchEdge e) {
+  EdgeSpans spans;
+  if constexpr (std::is_same_v<ShapeT, BicubicPatch> || std::is_same_v<ShapeT, BilinearPatch>) {
+    spans.cubic[0] = true;
+  } else if constexpr (std::is_same_v<ShapeT, SubdivFace>) {
+    spans.n = 0;
+    for (int q = 0, last = -1; q < 4; ++q) {  // the pieces are fitted per quarter of the domain
+      const Vec2 uv = EdgePoint(e, (q + 0.5) / 4.0);
+      const int k = shape.BicubicPieceAt(uv.x(), uv.y());
+      if (k < 0 || k != last) {
+        spans.breaks[static_cast<std::size_t>(spans.n)] = q / 4.0;
+        spans.cubic[static_cast<std::size_t>(spans.n++)] = k >= 0;
+      }
+      last = k;
+    }
+    spans.breaks[static_cast<std::size_t>(spans.n)] = 1.0;
+  }
+  return spans;
+}
+
+// The sign of y_t on [a, b], a span of edge e where the object point p(t) is a polynomial
+// of degree <= 3, if it is proven not to change; else 0. The homogeneous screen point
+// (X, Y, D, W) = M (p, 1) is such a polynomial too, and y_t = (Y_t W - Y W_t) / W^2 whose
+// numerator N has degree <= 4 (the t^5 terms cancel). N is found from five evaluations
+// inside the span and written in the Bernstein basis there: coefficients all of one sign,
+// each beyond kMonotoneMargin of the magnitudes of the terms N is summed from (rounding),
+// bound N away from 0 on the span (the convex-hull property), so y has no critical point
+// there.
+constexpr double kMonotoneMargin = 1e-9;
+
+template <class ShapeT>
+int MonotoneSign(const ShapeT& shape, const ScreenMap& map, PatchEdge e, double a, double b) {
+  // Nodes s_i = (2 i + 1) / 10 inside the span, and the inverse of the quartic Bernstein
+  // basis at them: coefficients = kToBernstein * (N at the nodes).
+  static const Eigen::Matrix<double, 5, 5> kToBernstein = [] {
+    Eigen::Matrix<double, 5, 5> basis;
+    constexpr double kBinomial[5] = {1, 4, 6, 4, 1};
+    for (int i = 0; i < 5; ++i) {
+      const double s = (2 * i + 1) / 10.0;
+      for (int j = 0; j < 5; ++j) basis(i, j) = kBinomial[j] * std::pow(s, j) * std::pow(1.0 - s, 4 - j);
+    }
+    return Eigen::Matrix<double, 5, 5>(basis.inverse());
+  }();
+  const Mat4& m = map.ScreenFromObject();
+  const Vec4 rowAbs = m.block<4, 3>(0, 0).cwiseAbs().rowwise().sum();
+  const bool alongV = e == PatchEdge::U0 || e == PatchEdge::U1;
+  Eigen::Matrix<double, 5, 1> n;
+  double scale = 0.0;
+  for (int i = 0; i < 5; ++i) {
+    const Vec2 uv = EdgePoint(e, a + (b - a) * (2 * i + 1) / 10.0);
+    SurfaceDerivs d;
+    shape.Evaluate(uv.x(), uv.y(), DerivOrder::First, &d);
+    const Vec3& pt = alongV ? d.dpdv : d.dpdu;
+    const Vec4 h = m.block<4, 3>(0, 0) * d.p + m.col(3);
+    const Vec4 ht = m.block<4, 3>(0, 0) * pt;
+    n[i] = ht.y() * h.w() - h.y() * ht.w();
+    // What rounding scales with: the magnitudes of the terms, the point's and tangent's
+    // largest coordinate standing for each of their coordinates (an edge level on the
+    // screen has a tangent whose y is the evaluation's rounding, and N of rounding alone).
+    const Vec4 hAbs = rowAbs * d.p.cwiseAbs().maxCoeff() + m.col(3).cwiseAbs();
+    const Vec4 htAbs = rowAbs * pt.cwiseAbs().maxCoeff();
+    scale = std::max(scale, htAbs.y() * hAbs.w() + hAbs.y() * htAbs.w());
+  }
+  const Eigen::Matrix<double, 5, 1> c = kToBernstein * n;
+  const double margin = kMonotoneMargin * scale;
+  return (c.array() > margin).all() ? 1 : (c.array() < -margin).all() ? -1 : 0;
+}
+
+// The signs MonotoneSign proves on the edge's spans (0: not proven); two proven
+// neighbours of opposite signs would meet at a critical point, so neither counts.
+template <class ShapeT>
+std::array<int, 4> SpanSigns(const ShapeT& shape, const ScreenMap& map, PatchEdge e, const EdgeSpans& spans) {
+  std::array<int, 4> sign{};
+  for (std::size_t k = 0; k < static_cast<std::size_t>(spans.n); ++k)
+    if (spans.cubic[k]) sign[k] = MonotoneSign(shape, map, e, spans.breaks[k], spans.breaks[k + 1]);
+  for (std::size_t k = 0; k + 1 < static_cast<std::size_t>(spans.n); ++k)
+    if (sign[k] * sign[k + 1] < 0) sign[k] = sign[k + 1] = 0;
+  return sign;
+}
+
+// The critical points of y along edge e, appended to *cuts in increasing order: none on
+// the spans MonotoneSign proves, and on each run of the others the sign changes of y_t
+// between samples kEdgeCriticalSamples to the edge apart, refined by Newton on y_t = 0
+// inside the bracket (bisection when Newton leaves it); the samples need y_t alone, Newton
+// y_tt too. The samples are those of the whole edge's sampling, and a proven span has no
+// sign change among them (its ends' y_t are beyond the margin, and the neighbouring
+// piece's y_t agrees there to rounding: both pieces are the limit surface), so the cuts
+// are the ones sampling the whole edge finds, for a fraction of the evaluations where
+// the edge is cubic.
+template <class ShapeT>
+void CriticalPoints(const ShapeT& shape, const ScreenMap& map, PatchEdge e, EdgeSampling sampling,
+                    std::vector<double>* cuts) {
+  const EdgeSpans spans = sampling == EdgeSampling::SampleAll ? EdgeSpans{} : SpansOf(shape, e);
+  const std::array<int, 4> sign = SpanSigns(shape, map, e, spans);
+  for (int k = 0; k < spans.n;) {
+    if (sign[static_cast<std::size_t>(k)] != 0) {
+      ++k;
+      continue;
+    }
+    const double t0 = spans.breaks[static_cast<std::size_t>(k)];
+    while (k < spans.n && sign[static_cast<std::size_t>(k)] == 0) ++k;
+    const double t1 = spans.breaks[static_cast<std::size_t>(k)];
+    const int samples = static_cast<int>(std::lround(kEdgeCriticalSamples * (t1 - t0)));
+    SignChanges([&](double t) { return SampleEdge(shape, map, e, t, DerivOrder::First).yt; },
+                [&](double t) {
+                  const EdgeSample s = SampleEdge(shape, map, e, t);
+                  return std::pair(s.yt, s.ytt);
+                },
+                t0, t1, samples, cuts);
+  }
+}
+
+template <class ShapeT>
+std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEdge e, double* collapsedY,
+                              EdgeSampling sampling) {
   // Step 1: collapsed edges (kCollapsedRel everywhere along them) have no crossing to track.
   bool collapsed = true;
   for (int k = 0; k <= 4 && collapsed; ++k) {
@@ -72,16 +199,9 @@ std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEd
   }
   if (collapsedY) *collapsedY = collapsed ? SampleEdge(shape, map, e, 0.5, DerivOrder::Position).y : NAN;
   if (collapsed) return {};
-  // Step 2: critical points of y(t): sign changes of y_t between samples, refined by
-  // Newton on y_t = 0 inside the bracket (bisection when Newton leaves it): the samples
-  // need y_t alone, Newton y_tt too.
+  // Step 2: the critical points of y(t).
   std::vector<double> cuts = {0.0};
-  SignChanges([&](double t) { return SampleEdge(shape, map, e, t, DerivOrder::First).yt; },
-              [&](double t) {
-                const EdgeSample s = SampleEdge(shape, map, e, t);
-                return std::pair(s.yt, s.ytt);
-              },
-              0.0, 1.0, kEdgeCriticalSamples, &cuts);
+  CriticalPoints(shape, map, e, sampling, &cuts);
   cuts.push_back(1.0);
   std::vector<EdgePiece> pieces;
   for (size_t k = 0; k + 1 < cuts.size(); ++k) {
@@ -94,8 +214,17 @@ std::vector<EdgePiece> Pieces(const ShapeT& shape, const ScreenMap& map, PatchEd
 
 }  // namespace
 
-std::vector<EdgePiece> MonotoneEdgePieces(const Surface& s, const ScreenMap& map, PatchEdge e, double* collapsedY) {
-  return VisitShape(s, [&](const auto& shape) { return Pieces(shape, map, e, collapsedY); });
+std::vector<EdgePiece> MonotoneEdgePieces(const Surface& s, const ScreenMap& map, PatchEdge e, double* collapsedY,
+                                          EdgeSampling sampling) {
+  return VisitShape(s, [&](const auto& shape) { return Pieces(shape, map, e, collapsedY, sampling); });
+}
+
+bool EdgeProvenMonotone(const Surface& s, const ScreenMap& map, PatchEdge e) {
+  return VisitShape(s, [&](const auto& shape) {
+    const EdgeSpans spans = SpansOf(shape, e);
+    const std::array<int, 4> sign = SpanSigns(shape, map, e, spans);
+    return std::all_of(sign.begin(), sign.begin() + spans.n, [](int g) { return g != 0; });
+  });
 }
 
 EdgeScan::EdgeScan(const Surface& s, const ScreenMap& map, Counters& counters, bool extrapolate, double tolerancePx)
@@ -155,7 +284,7 @@ void EdgeScan::Advance(double yScan) {
       ++counters_[Counter::EdgeBorn];
       ++events_;
     }
-    // Step 3: Newton from the extrapolated start (§3.5), bisection on the piece if it fails.
+    // Step 3: Newton from the extrapolated start (§3.5), CrossingOnPiece if it fails.
     for (EdgeTracker& tr : trackers_) {
       const EdgePiece& p = pieces_[tr.piece];
       const double start = extrapolate_ ? PredictedStart(tr, yScan, tolerancePx_) : tr.t;
@@ -164,9 +293,9 @@ void EdgeScan::Advance(double yScan) {
         *v = s.y - yScan;
         *d = s.yt;
       };
-      // The piece is monotone and holds yScan, so it brackets the crossing: bisection
-      // there seeds a new tracker (whose start is a critical point, where Newton divides
-      // by zero) and repairs a failed Newton step.
+      // The piece is monotone and holds yScan, so it brackets the crossing: Newton kept
+      // inside it (CrossingOnPiece) seeds a new tracker (whose start is a critical point,
+      // where plain Newton divides by zero) and repairs a failed Newton step.
       if (tr.hasPrev) ++counters_[Counter::EdgeNewtonCalls];
       bool repaired = false;
       const double t = TrackOnPiece(f, p.t0, p.t1, start, tr.hasPrev, tolerancePx_,

@@ -6,8 +6,8 @@
 // Each edge is first cut into pieces on which y is monotone (its critical points are the
 // edge and corner maxima and minima of §3.2.2): a tracker is created when the scan line
 // passes the top of a piece and deleted when it passes the bottom, and inside a piece
-// there is exactly one crossing, so a failed Newton step is repaired by bisection on the
-// piece, never by guessing.
+// there is exactly one crossing, so a failed Newton step is repaired inside the piece
+// (Newton kept in the bracket, CrossingOnPiece), never by guessing.
 #pragma once
 
 #include <array>
@@ -45,10 +45,19 @@ constexpr int kEdgeCriticalSamples = 64;
 // Convergence of edge trackers in screen y: far below the 1e-3 px the exact mode allows.
 constexpr double kEdgeTolPx = 1e-7;
 
+// How an edge's critical points of y are found: spans where the surface is a cubic
+// polynomial proven monotone without sampling, the rest sampled (what the scans do); or
+// the whole edge sampled (to test the one against the other).
+enum class EdgeSampling { ProveCubicSpans, SampleAll };
+
 // The monotone pieces of one edge of `s` (none for a collapsed edge; then *collapsedY,
 // when given, is set to the screen y of the point the edge collapses to, else NaN).
 std::vector<EdgePiece> MonotoneEdgePieces(const Surface& s, const ScreenMap& map, PatchEdge e,
-                                          double* collapsedY = nullptr);
+                                          double* collapsedY = nullptr,
+                                          EdgeSampling sampling = EdgeSampling::ProveCubicSpans);
+// Whether y is proven monotone along all of edge e (no sample taken): every span of it is
+// cubic and of one sign of y_t (edge_scan.cpp, MonotoneSign).
+bool EdgeProvenMonotone(const Surface& s, const ScreenMap& map, PatchEdge e);
 
 // A piece whose y range is this small lies along its scan line: a straight boundary edge
 // level on the screen (a full quadric's seam seen edge-on, a cylinder's ruling), whose

@@ -3,8 +3,8 @@
 // boundary edges are (tracker/edge_scan.h, paper 001 §3.2.1): each curve, clipped to the
 // piece's domain, is cut where screen y turns; a tracker is born where the scan line
 // passes the top of a piece and dies at its bottom, and in between follows its crossing by
-// univariate Newton along the curve from an extrapolated start (§3.5), repaired by
-// bisection on the piece. The X scans toggle between kept and cut at these points.
+// univariate Newton along the curve from an extrapolated start (§3.5), repaired inside
+// the piece, which brackets it. The X scans toggle between kept and cut at these points.
 #pragma once
 
 #include <vector>

@@ -1,8 +1,10 @@
-// Newton solvers: convergence order, damping, caps, domain rules, and no NaN ever.
+// Newton solvers: convergence order, damping, caps, domain rules, and no NaN ever; the
+// bracketed crossing on a monotone piece (tracker births and repairs).
 #include <gtest/gtest.h>
 
 #include <random>
 
+#include "tracker/monotone_curve.h"
 #include "tracker/newton.h"
 
 namespace patchscan {
@@ -69,6 +71,55 @@ struct CircleLine {
     *j << 2 * p.x(), 2 * p.y(), 1, -1;
   }
 };
+
+// A tracker is born at the top of its piece, where y' may vanish: the crossing of y = t^2
+// with 0.09 on [0, 1] from there. Bisection to rounding took ~53 evaluations; Newton kept
+// in the bracket reaches the root to a few ulps in under a dozen (kEvaluationsAtMost).
+TEST(CrossingOnPiece, NewtonInsideTheBracketFindsTheRootToRounding) {
+  constexpr int kEvaluationsAtMost = 12;
+  constexpr double kUlps = 4e-16;  // t in [0, 1]: a few units in the last place
+  int evaluations = 0;
+  auto f = [&](double t, double* v, double* d) {
+    ++evaluations;
+    *v = t * t - 0.09;
+    *d = 2 * t;
+  };
+  EXPECT_NEAR(CrossingOnPiece(f, 0.0, 1.0, 1e-9), 0.3, kUlps);
+  EXPECT_LE(evaluations, kEvaluationsAtMost);
+  // Decreasing on its piece, and with the root at a piece end.
+  evaluations = 0;
+  auto g = [&](double t, double* v, double* d) {
+    ++evaluations;
+    *v = std::cos(t) - std::cos(1.0);
+    *d = -std::sin(t);
+  };
+  EXPECT_NEAR(CrossingOnPiece(g, 0.0, 1.0, 1e-9), 1.0, kUlps);
+  EXPECT_LE(evaluations, 60);  // bisection toward an end: about one per bit
+}
+
+// Where Newton's step leaves the bracket or stalls (a flat run, a NaN derivative) the
+// bracket is bisected, so the search always ends on the crossing.
+TEST(CrossingOnPiece, BisectsWhereNewtonCannotStep) {
+  // atan: Newton from far out overshoots the bracket.
+  auto a = [](double t, double* v, double* d) {
+    *v = std::atan(40.0 * (t - 0.7));
+    *d = 40.0 / (1.0 + 1600.0 * (t - 0.7) * (t - 0.7));
+  };
+  EXPECT_NEAR(CrossingOnPiece(a, 0.0, 1.0, 1e-12), 0.7, 1e-15);
+  // No derivative at all.
+  auto n = [](double t, double* v, double* d) {
+    *v = t - 0.123;
+    *d = NAN;
+  };
+  EXPECT_NEAR(CrossingOnPiece(n, 0.0, 1.0, 1e-12), 0.123, 1e-15);
+  // A cube root's derivative is infinite at its root: steps that do not halve fall back.
+  auto c = [](double t, double* v, double* d) {
+    const double x = t - 0.41;
+    *v = std::cbrt(x);
+    *d = x == 0.0 ? INFINITY : 1.0 / (3.0 * std::cbrt(x * x));
+  };
+  EXPECT_NEAR(CrossingOnPiece(c, 0.0, 1.0, 1e-6), 0.41, 1e-12);
+}
 
 TEST(Newton2, ConvergesQuadraticallyToTheIntersection) {
   const CircleLine f{0.5, 0.1};
