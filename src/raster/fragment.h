@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "core/hermite.h"
 #include "raster/mesh.h"
 
 namespace patchscan::raster {
@@ -93,13 +94,14 @@ class Chord {
       // quadratics in p through both ends with the other end's tangent, dt/dp = 2 there.
       // A blend in t is off near the silhouette by a fifth of the depth across the chord.
       cubics_.root = slopeA.silhouette ? 1 : 2;
-      Coefficients(a.normal, b.normal, Vec3(2.0 * ta), Vec3(2.0 * tb), !slopeA.silhouette, !slopeB.silhouette,
-                   cubics_.normal);
-      Coefficients(Depth(a.w), Depth(b.w), 2.0 * sa, 2.0 * sb, !slopeA.silhouette, !slopeB.silhouette, cubics_.depth);
+      HermiteCoefficients(a.normal, b.normal, Vec3(2.0 * ta), Vec3(2.0 * tb), !slopeA.silhouette, !slopeB.silhouette,
+                          cubics_.normal);
+      HermiteCoefficients(Depth(a.w), Depth(b.w), 2.0 * sa, 2.0 * sb, !slopeA.silhouette, !slopeB.silhouette,
+                          cubics_.depth);
       return;
     }
-    Coefficients(a.normal, b.normal, ta, tb, ka, kb, cubics_.normal);
-    Coefficients(Depth(a.w), Depth(b.w), sa, sb, ka, kb, cubics_.depth);
+    HermiteCoefficients(a.normal, b.normal, ta, tb, ka, kb, cubics_.normal);
+    HermiteCoefficients(Depth(a.w), Depth(b.w), sa, sb, ka, kb, cubics_.depth);
   }
   static constexpr double kSlopeTurnRatio = 2.0, kSlopeFloor = 1e-3;
 
@@ -188,29 +190,6 @@ class Chord {
   double DepthAlong(double t) const {
     const double d = cubic_ ? Horner(cubics_.depth, Param(t)) : (1.0 - t) * Depth(a_.w) + t * Depth(b_.w);
     return orthographic_ ? d : 1.0 / d;
-  }
-  template <class V>
-  static V Horner(const V (&c)[4], double t) {
-    return ((c[3] * t + c[2]) * t + c[1]) * t + c[0];
-  }
-  // The cubic from va at t = 0 to vb at 1 with tangents ta and tb (per unit t) where both
-  // are known (ka, kb: Hermite's), else the quadratic with the one known.
-  template <class V>
-  static void Coefficients(const V& va, const V& vb, const V& ta, const V& tb, bool ka, bool kb, V (&c)[4]) {
-    const V d = vb - va;
-    c[0] = va;
-    c[3] = 0.0 * va;
-    if (ka && kb) {
-      c[1] = ta;
-      c[2] = 3.0 * d - 2.0 * ta - tb;
-      c[3] = -2.0 * d + ta + tb;
-    } else if (ka) {
-      c[1] = ta;
-      c[2] = d - ta;
-    } else {
-      c[1] = 2.0 * d - tb;
-      c[2] = tb - d;
-    }
   }
 };
 

@@ -1,5 +1,6 @@
 #include "tracker/edge_scan.h"
 
+#include "core/hermite.h"
 #include "tracker/monotone_curve.h"
 
 #include <algorithm>
@@ -55,9 +56,8 @@ double PredictedStart(const EdgeTracker& tr, double yNext, double tolerancePx) {
   constexpr double kEqualStepSlack = 1e-3;
   const double s = std::abs(h) > 0.0 ? (yNext - tr.yPrev) / h : 0.0;
   if (tr.nSolved >= 2 && std::abs(tr.ytPrev) > 0.0 && s > 1.0 && s <= 2.0 + kEqualStepSlack) {
-    const double s2 = s * s, s3 = s2 * s;
-    return (2 * s3 - 3 * s2 + 1) * tr.tPrev + (s3 - 2 * s2 + s) * h / tr.ytPrev + (-2 * s3 + 3 * s2) * tr.t +
-           (s3 - s2) * h / tr.yt;
+    const std::array<double, 4> w = HermiteWeights(s);
+    return w[0] * tr.tPrev + w[1] * h / tr.ytPrev + w[2] * tr.t + w[3] * h / tr.yt;
   }
   const double dy = yNext - tr.y, inv = 1.0 / tr.yt;
   const double first = dy * inv, second = -0.5 * tr.ytt * dy * dy * inv * inv * inv;

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <cstdint>
@@ -20,6 +21,7 @@
 #include <vector>
 
 #include "core/counters.h"
+#include "core/hermite.h"
 #include "patch/screen.h"
 #include "raster/fragment.h"
 #include "tracker/edge_scan.h"
@@ -224,9 +226,8 @@ class LevelWalker {
     const double s = std::abs(h) > 0.0 ? (x - q0.x) / h : 0.0;
     Vec2 d0, d1;
     if (!(s > 1.0 && s <= 2.0 + kEqualStepSlack) || !slope(q0, &d0) || !slope(q1, &d1)) return std::nullopt;
-    const double s2 = s * s, s3 = s2 * s;
-    return Vec2((2 * s3 - 3 * s2 + 1) * q0.uv + (s3 - 2 * s2 + s) * h * d0 + (-2 * s3 + 3 * s2) * q1.uv +
-                (s3 - s2) * h * d1);
+    const std::array<double, 4> w = HermiteWeights(s);
+    return Vec2(w[0] * q0.uv + w[1] * h * d0 + w[2] * q1.uv + w[3] * h * d1);
   }
 
   template <class Emit>

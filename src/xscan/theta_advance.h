@@ -10,6 +10,8 @@
 #include <optional>
 #include <vector>
 
+#include "core/hermite.h"
+
 namespace patchscan {
 
 template <class ShapeT>
@@ -29,10 +31,12 @@ typename ThetaWalker<ShapeT>::LinkCheck ThetaWalker<ShapeT>::CheckLink(const Ver
   // tilt vertices (one wherever the tilt has turned a table step) and the chord would blend
   // across. Not asked where an end's rate is unknown: without slopes (slabs), or at a
   // silhouette (unbounded: x stands still there).
-  if (const double dx = b.x - a.x, ma = TiltRate(a) * dx, mb = TiltRate(b) * dx; std::isfinite(ma) && std::isfinite(mb)) {
+  if (const double dx = b.x - a.x, ma = a.tiltRate * dx, mb = b.tiltRate * dx; std::isfinite(ma) && std::isfinite(mb)) {
     const double lo = std::min(tiltA, tiltB) - table_, hi = std::max(tiltA, tiltB) + table_;
+    double cubic[4];
+    HermiteCoefficients(tiltA, tiltB, ma, mb, true, true, cubic);
     for (const double t : {0.25, 0.5, 0.75}) {
-      const double h = tiltA + t * (ma + t * (3.0 * (tiltB - tiltA) - 2.0 * ma - mb + t * (2.0 * (tiltA - tiltB) + ma + mb)));
+      const double h = Horner(cubic, t);
       if (h < lo || h > hi) return LinkCheck::Broken;
     }
   }
@@ -73,8 +77,10 @@ bool ThetaWalker<ShapeT>::FillLink(const Vertex& a, const Vertex& b, std::vector
     const Vertex &p = (*out)[out->size() - 2], &q = out->back();
     return (!facing || Facing(q) == *facing) && std::abs(q.tilt - p.tilt) < table_;
   });
-  if (!placed) return false;
-  if (out->size() < 2 || std::abs(b.tilt - out->back().tilt) >= table_) return false;
+  // No tabulated angle passed after all (the ends' θ a table step apart, each within
+  // kOnAngleRad of one): nothing to fill, the link is crawled.
+  if (!placed || out->size() == 1) return false;
+  if (std::abs(b.tilt - out->back().tilt) >= table_) return false;
   out->push_back(b);
   return true;
 }

@@ -42,7 +42,6 @@
 #include <cstdint>
 #include <numbers>
 #include <span>
-#include <tuple>
 #include <vector>
 
 #include "tracker/theta_tracker.h"
@@ -65,8 +64,10 @@ struct ThetaVertex {
   Vec3 dndx = Vec3::Constant(NAN);
   double dwdx = NAN;
   // θ and the tilt of f's normal (ThetaFrame::Angles), found once when the vertex is made:
-  // the advance's and the crawl's tests ask for them several times a vertex.
-  double theta = NAN, tilt = NAN;
+  // the advance's and the crawl's tests ask for them several times a vertex; and the
+  // tilt's rate along the row, radians per pixel of x (NaN without slopes, or on a
+  // silhouette, where x stands still).
+  double theta = NAN, tilt = NAN, tiltRate = NAN;
   // The surface's parameters (u,v) at the vertex: what the trackers, the crawls and the
   // trim curves work in. Not f.uv, which is the texture coordinates.
   Vec2 uv = Vec2::Constant(NAN);
@@ -210,7 +211,9 @@ class ThetaWalker : public LevelWalker<ShapeT> {
                     int index = -1) const {
     Vertex v{p.x, make(p), kind, index};
     v.uv = p.uv;
-    std::tie(v.theta, v.tilt) = frame_.Angles(v.f.position, v.f.normal);
+    const Vec3 ray = frame_.Ray(v.f.position), plane = frame_.ScanPlaneNormal(ray);
+    v.theta = ThetaFrame::ThetaOn(ray, plane, v.f.normal);
+    v.tilt = ThetaFrame::TiltOn(plane, v.f.normal);
     if (slopes_) {
       const Vec2 duv = p.UvPerPixelAlongRow();
       v.dwdx = this->map_.ViewDepthChange(p.object.dpdu * duv.x() + p.object.dpdv * duv.y());
@@ -221,6 +224,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
         this->shape_.Evaluate(p.uv.x(), p.uv.y(), DerivOrder::Second, &o);
         v.dndx = NormalSlope(o, duv, frame_.World());
       }
+      if (kind != ThetaVertex::Kind::Silhouette) v.tiltRate = v.dndx.dot(plane) / std::cos(v.tilt);
     }
     return v;
   }
@@ -290,12 +294,6 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // not found where it belongs (theta_advance.h).
   template <class Make>
   bool FillLink(const Vertex& a, const Vertex& b, std::vector<Vertex>* out, Make& make);
-  // The rate of the vertex's tilt along the row, radians per pixel of x (NaN without
-  // slopes, or on a silhouette).
-  double TiltRate(const Vertex& v) const {
-    if (v.kind == ThetaVertex::Kind::Silhouette) return NAN;
-    return v.dndx.dot(frame_.ScanPlaneNormal(frame_.Ray(v.f.position))) / std::cos(v.tilt);
-  }
   // Whether the vertex's normal faces the eye.
   bool Facing(const Vertex& v) const {
     return v.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(v.f.position - frame_.eye)) > 0.0;
