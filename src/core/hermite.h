@@ -4,13 +4,14 @@
 // the cubic from p0 at s = 0 to p1 at s = 1 with tangents m0 and m1 there (per unit s).
 #pragma once
 
-#include <array>
-
 namespace patchscan {
 
-// The Hermite basis at s: the cubic is w[0] p0 + w[1] m0 + w[2] p1 + w[3] m1 (for s past
-// 1 too: the extrapolations one step on).
-inline std::array<double, 4> HermiteWeights(double s) {
+// The Hermite basis at s: the cubic is w0 p0 + w1 m0 + w2 p1 + w3 m1 (for s past 1 too:
+// the extrapolations one step on).
+struct HermiteBlend {
+  double w0, w1, w2, w3;
+};
+constexpr HermiteBlend HermiteWeights(double s) {
   const double s2 = s * s, s3 = s2 * s;
   return {2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s, -2 * s3 + 3 * s2, s3 - s2};
 }

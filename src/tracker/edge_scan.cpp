@@ -46,8 +46,10 @@ EdgeSample SampleEdge(const ShapeT& shape, const ScreenMap& map, PatchEdge e, do
 //    expansion no longer holds).
 // Measured on the teapot at 1024x768 (--stats newton_iterations_per_tracker_row, edge and
 // silhouette trackers together): exact aa 3 1.199 -> 0.813, θ aa 4 2.103 -> 0.847; the
-// images the same bit for bit.
-double PredictedStart(const EdgeTracker& tr, double yNext, double tolerancePx) {
+// images the same bit for bit. `yttAt()` gives y_tt at the last solution: asked only by
+// the expansion, so that equal steps cost no second-order evaluation.
+template <class YttAt>
+double PredictedStart(const EdgeTracker& tr, double yNext, double tolerancePx, YttAt&& yttAt) {
   if (tr.nSolved < 1 || !(std::abs(tr.yt) > 0.0))
     return ExtrapolatedStart(tr.t, tr.tPrev, tr.tPrev2, tr.nSolved, tolerancePx <= kQuadraticExtrapolationTolPx);
   const double h = tr.y - tr.yPrev;
@@ -56,11 +58,11 @@ double PredictedStart(const EdgeTracker& tr, double yNext, double tolerancePx) {
   constexpr double kEqualStepSlack = 1e-3;
   const double s = std::abs(h) > 0.0 ? (yNext - tr.yPrev) / h : 0.0;
   if (tr.nSolved >= 2 && std::abs(tr.ytPrev) > 0.0 && s > 1.0 && s <= 2.0 + kEqualStepSlack) {
-    const std::array<double, 4> w = HermiteWeights(s);
-    return w[0] * tr.tPrev + w[1] * h / tr.ytPrev + w[2] * tr.t + w[3] * h / tr.yt;
+    const HermiteBlend w = HermiteWeights(s);
+    return w.w0 * tr.tPrev + w.w1 * h / tr.ytPrev + w.w2 * tr.t + w.w3 * h / tr.yt;
   }
   const double dy = yNext - tr.y, inv = 1.0 / tr.yt;
-  const double first = dy * inv, second = -0.5 * tr.ytt * dy * dy * inv * inv * inv;
+  const double first = dy * inv, second = -0.5 * yttAt() * dy * dy * inv * inv * inv;
   return tr.t + first + (std::abs(second) <= 0.5 * std::abs(first) ? second : 0.0);
 }
 
@@ -287,11 +289,15 @@ void EdgeScan::Advance(double yScan) {
     // Step 3: Newton from the extrapolated start (§3.5), CrossingOnPiece if it fails.
     for (EdgeTracker& tr : trackers_) {
       const EdgePiece& p = pieces_[tr.piece];
-      const double start = extrapolate_ ? PredictedStart(tr, yScan, tolerancePx_) : tr.t;
+      const auto yttAtLast = [&] { return SampleEdge(shape, map_, p.edge, tr.t, DerivOrder::Second).ytt; };
+      const double start = extrapolate_ ? PredictedStart(tr, yScan, tolerancePx_, yttAtLast) : tr.t;
+      EdgeSample last{NAN};  // the solve's latest evaluation, at lastT
+      double lastT = NAN;
       auto f = [&](double t, double* v, double* d) {
-        const EdgeSample s = SampleEdge(shape, map_, p.edge, t, DerivOrder::First);
-        *v = s.y - yScan;
-        *d = s.yt;
+        last = SampleEdge(shape, map_, p.edge, t, DerivOrder::First);
+        lastT = t;
+        *v = last.y - yScan;
+        *d = last.yt;
       };
       // The piece is monotone and holds yScan, so it brackets the crossing: Newton kept
       // inside it (CrossingOnPiece) seeds a new tracker (whose start is a critical point,
@@ -304,7 +310,9 @@ void EdgeScan::Advance(double yScan) {
         ++counters_[Counter::EdgeRepairs];
         ++events_;
       }
-      const EdgeSample at = SampleEdge(shape, map_, p.edge, t);
+      // y, y_t and J at the solution: Newton's last evaluation was there (a bracketed search
+      // may end on a point it did not evaluate); y_tt only if the next prediction asks.
+      const EdgeSample at = t == lastT ? last : SampleEdge(shape, map_, p.edge, t, DerivOrder::First);
       const double j = at.j;
       tr.folded = (j > 0 && tr.j < 0) || (j < 0 && tr.j > 0);
       counters_[Counter::Folds] += tr.folded;
@@ -317,7 +325,6 @@ void EdgeScan::Advance(double yScan) {
       tr.ytPrev = tr.yt;
       tr.y = at.y;
       tr.yt = at.yt;
-      tr.ytt = at.ytt;
       ++tr.nSolved;
       tr.t = t;
       tr.hasPrev = true;

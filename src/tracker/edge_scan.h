@@ -76,9 +76,9 @@ struct EdgeTracker {
                         // piece's top for a new tracker (§3.2.2.3)
   double tPrev2 = 0.0;  // on the scan line before the previous one (when nSolved >= 3)
   int nSolved = 0;      // scan lines on which this tracker has been solved
-  // Screen y and its first and second derivatives along the edge at the latest solution t,
-  // and y and y_t at tPrev: the predictor's data (PredictedStart in edge_scan.cpp).
-  double y = 0.0, yt = 0.0, ytt = 0.0, yPrev = 0.0, ytPrev = 0.0;
+  // Screen y and its derivative along the edge at the latest solution t, and at tPrev:
+  // the predictor's data (PredictedStart in edge_scan.cpp, which finds y_tt when it needs it).
+  double y = 0.0, yt = 0.0, yPrev = 0.0, ytPrev = 0.0;
 };
 
 // All boundary-edge trackers of one surface, advanced scan line by scan line.

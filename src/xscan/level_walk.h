@@ -13,7 +13,6 @@
 #pragma once
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <optional>
 #include <cstdint>
@@ -226,8 +225,8 @@ class LevelWalker {
     const double s = std::abs(h) > 0.0 ? (x - q0.x) / h : 0.0;
     Vec2 d0, d1;
     if (!(s > 1.0 && s <= 2.0 + kEqualStepSlack) || !slope(q0, &d0) || !slope(q1, &d1)) return std::nullopt;
-    const std::array<double, 4> w = HermiteWeights(s);
-    return Vec2(w[0] * q0.uv + w[1] * h * d0 + w[2] * q1.uv + w[3] * h * d1);
+    const HermiteBlend w = HermiteWeights(s);
+    return Vec2(w.w0 * q0.uv + w.w1 * h * d0 + w.w2 * q1.uv + w.w3 * h * d1);
   }
 
   template <class Emit>
