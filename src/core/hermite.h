@@ -17,7 +17,8 @@ constexpr HermiteBlend HermiteWeights(double s) {
 }
 
 // The cubic's coefficients, lowest power first, where both tangents are known (k0, k1);
-// with one of them, the quadratic through both ends with that tangent.
+// with one of them, the quadratic through both ends with that tangent; with neither, the
+// line.
 template <class V>
 void HermiteCoefficients(const V& p0, const V& p1, const V& m0, const V& m1, bool k0, bool k1, V (&c)[4]) {
   const V d = p1 - p0;
@@ -30,9 +31,12 @@ void HermiteCoefficients(const V& p0, const V& p1, const V& m0, const V& m1, boo
   } else if (k0) {
     c[1] = m0;
     c[2] = d - m0;
-  } else {
+  } else if (k1) {
     c[1] = 2.0 * d - m1;
     c[2] = m1 - d;
+  } else {
+    c[1] = d;
+    c[2] = 0.0 * p0;
   }
 }
 

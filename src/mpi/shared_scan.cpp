@@ -86,7 +86,8 @@ constexpr std::size_t kHeader = 5;     // row, ok, fragments, chords, triangles
 constexpr std::size_t kFragmentBody = 17;  // w, position, normal, uv, duvdx, duvdy, id, colour
 constexpr std::size_t kFragment = 2 + kFragmentBody;  // rank, column, fragment
 // rank, xa, xb, orthographic, cubic, the ends' fragments, the normal's and depth's cubics
-constexpr std::size_t kChord = 5 + 2 * kFragmentBody + 16;
+// and the root's u0
+constexpr std::size_t kChord = 5 + 2 * kFragmentBody + 17;
 constexpr std::size_t kVertex = 15;    // h, position, normal, uv, depth, colour
 constexpr std::size_t kTriangle = 3 + 3 * kVertex;  // origin row, rank, id, three vertices
 
@@ -148,6 +149,7 @@ class RowEncoder final : public raster::FragmentRow {
     const raster::Chord::Cubics& k = cubics ? *cubics : none;
     for (const Vec3& n : k.normal) Put(chords, n);
     chords.insert(chords.end(), std::begin(k.depth), std::end(k.depth));
+    chords.push_back(k.u0);
   }
   void AddTriangle(const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c,
                    std::uint32_t surfaceId) override {
@@ -177,6 +179,7 @@ raster::Chord DecodeChord(const double* d) {
   raster::Chord::Cubics k;
   for (int i = 0; i < 4; ++i) k.normal[i] = Get3(cubic + 3 * i), k.depth[i] = cubic[12 + i];
   k.root = static_cast<int>(d[4]) - 1;
+  k.u0 = cubic[16];
   return raster::Chord(d[1], GetFragment(d + 5), d[2], GetFragment(d + 5 + kFragmentBody), d[3] != 0.0,
                        d[4] != 0.0 ? &k : nullptr);
 }

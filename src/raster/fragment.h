@@ -45,12 +45,13 @@ struct SampleColumns {
 constexpr double kColumnEpsPx = 1e-6;
 
 // A chord end's unit normal and eye distance derivatives per pixel along the row (NaN:
-// unknown), and whether it lies on a silhouette (x stands still there: the slopes are
-// infinite, and the attributes go as the square root of the distance in x from it).
+// unknown), and how far past it, away from the chord, the section has a silhouette: x
+// stands still there, the slopes are infinite, and the attributes go as the square root
+// of the distance in x from it (0: the end lies on one; infinite: none near).
 struct ChordSlope {
   Vec3 normal = Vec3::Constant(NAN);
   double depth = NAN;
-  bool silhouette = false;
+  double silhouette = INFINITY;  // pixels
 };
 
 // A chord of a surface's section along one sample row (θ mode, paper 001 §4: the link
@@ -60,9 +61,9 @@ struct ChordSlope {
 // (1/w affine in screen x; orthographic: w), except where the ends' slopes along the row
 // are known (Slope): there the normal and the eye distance (its inverse, in
 // perspective) follow cubics in screen x with those tangents (Hermite), whose error falls
-// as the fourth power of the chord's length where the blend's falls as the square. From a
-// silhouette end they follow quadratics in the square root of the distance from it. Made
-// whole by a constructor (its cubics follow from its ends), then only read.
+// as the fourth power of the chord's length where the blend's falls as the square. Near a
+// silhouette they follow cubics in the square root of the distance from it. Made whole by
+// a constructor (its cubics follow from its ends), then only read.
 class Chord {
  public:
   using Slope = ChordSlope;
@@ -72,7 +73,7 @@ class Chord {
   // From xa to xb. An end's slopes are kept where its normal slope would turn the normal
   // by at most kSlopeTurnRatio times the turn between the ends across the chord (plus
   // kSlopeFloor radians): on a silhouette, or near one, the section turns as the square
-  // root of x and the slopes there are infinite or huge, no tangents for a cubic.
+  // root of x and the slopes there are infinite or huge, no tangents for a cubic in x.
   Chord(double xa, const Fragment& a, double xb, const Fragment& b, bool orthographic, const Slope& slopeA = {},
         const Slope& slopeB = {})
       : xa_(xa), xb_(xb), a_(a), b_(b), orthographic_(orthographic) {
@@ -83,37 +84,55 @@ class Chord {
     const auto fits = [&](const Vec3& t, double s) {
       return t.norm() <= kSlopeTurnRatio * turn + kSlopeFloor && std::isfinite(s);  // false for NaN
     };
+    const bool nearA = slopeA.silhouette <= kSilhouetteNear * std::abs(span);
+    const bool nearB = slopeB.silhouette <= kSilhouetteNear * std::abs(span);
+    if (nearA != nearB) {
+      // One end on a silhouette or near one, where the view ray is the section's tangent:
+      // near it the section is a parabola in (screen x, depth), and x - xs goes as the
+      // square of the distance along it, so the normal and the depth are smooth in
+      // √(x - xs) (their Puiseux series), not in x (their tangents at xs are infinite).
+      // With the silhouette a gap g past the end (a fraction u0 = g / (g + |span|) of the
+      // way from it to the far end), the parameter is p = √(u0 + (1 - u0) t') mapped onto
+      // [0, 1] (t' = t from that end), and the cubics in it take both ends' tangents,
+      // dt'/dp = 2 √u0 / (1 + √u0) at the near end (none on the silhouette, where it is 0
+      // against an infinite slope) and 2 / (1 + √u0) at the far end. A blend in t is off
+      // near the silhouette by a fifth of the depth across the chord.
+      const double g = nearA ? slopeA.silhouette : slopeB.silhouette;
+      cubics_.u0 = g / (g + std::abs(span));
+      const double r0 = std::sqrt(cubics_.u0), atNear = 2.0 * r0 / (1.0 + r0), atFar = 2.0 / (1.0 + r0);
+      const double fa = nearA ? atNear : atFar, fb = nearA ? atFar : atNear;
+      const Vec3 pa = fa * ta, pb = fb * tb;
+      const double qa = fa * sa, qb = fb * sb;
+      const bool ka = (!nearA || g > 0.0) && fits(pa, qa), kb = (!nearB || g > 0.0) && fits(pb, qb);
+      cubic_ = true;
+      cubics_.root = nearA ? 1 : 2;
+      HermiteCoefficients(a.normal, b.normal, pa, pb, ka, kb, cubics_.normal);
+      HermiteCoefficients(Depth(a.w), Depth(b.w), qa, qb, ka, kb, cubics_.depth);
+      return;
+    }
     const bool ka = fits(ta, sa), kb = fits(tb, sb);
     cubic_ = ka || kb;
     if (!cubic_) return;
-    if (slopeA.silhouette != slopeB.silhouette && (slopeA.silhouette ? kb : ka)) {
-      // One end on a silhouette, where the view ray is the section's tangent: near it the
-      // section is a parabola in (screen x, depth) and x - xs goes as the square of the
-      // distance along it, so the normal and the depth are smooth in p = √t from that end
-      // (their Puiseux series), not in t (their tangents there are infinite). The
-      // quadratics in p through both ends with the other end's tangent, dt/dp = 2 there.
-      // A blend in t is off near the silhouette by a fifth of the depth across the chord.
-      cubics_.root = slopeA.silhouette ? 1 : 2;
-      HermiteCoefficients(a.normal, b.normal, Vec3(2.0 * ta), Vec3(2.0 * tb), !slopeA.silhouette, !slopeB.silhouette,
-                          cubics_.normal);
-      HermiteCoefficients(Depth(a.w), Depth(b.w), 2.0 * sa, 2.0 * sb, !slopeA.silhouette, !slopeB.silhouette,
-                          cubics_.depth);
-      return;
-    }
     HermiteCoefficients(a.normal, b.normal, ta, tb, ka, kb, cubics_.normal);
     HermiteCoefficients(Depth(a.w), Depth(b.w), sa, sb, ka, kb, cubics_.depth);
   }
   static constexpr double kSlopeTurnRatio = 2.0, kSlopeFloor = 1e-3;
+  // A silhouette this many times the chord's length past an end, or nearer, makes the
+  // chord's parameter the root of the distance from it.
+  static constexpr double kSilhouetteNear = 1.0;
 
   // The cubics (lowest power first) of the normal and of the interpolated depth (1/w in
-  // perspective, w orthographic), when the ends' slopes gave them, in p = t (root 0), √t
-  // from a silhouette at a (1), or 1 - √(1 - t) from one at b (2). A chord's ends and
+  // perspective, w orthographic), when the ends' slopes or a silhouette gave them, in
+  // p = t (root 0), or in the root of the distance from a silhouette near a (1) or near b
+  // (2): p = R(t) or 1 - R(1 - t), R(t) = (√(u0 + (1 - u0) t) - √u0) / (1 - √u0), u0 the
+  // silhouette's gap as a fraction of its distance to the far end. A chord's ends and
   // cubics are the whole of it: a copy made from them (another process's) is the same
   // chord bit for bit.
   struct Cubics {
     Vec3 normal[4] = {Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
     double depth[4] = {};
     int root = 0;
+    double u0 = 0.0;
   };
   const Cubics* cubics() const { return cubic_ ? &cubics_ : nullptr; }
   bool orthographic() const { return orthographic_; }
@@ -183,7 +202,11 @@ class Chord {
   double Along(double x) const { return std::clamp((x - xa_) / (xb_ - xa_), 0.0, 1.0); }
   // The cubics' parameter at t (Cubics::root).
   double Param(double t) const {
-    return cubics_.root == 0 ? t : cubics_.root == 1 ? std::sqrt(t) : 1.0 - std::sqrt(1.0 - t);
+    if (cubics_.root == 0) return t;
+    if (cubics_.u0 == 0.0) return cubics_.root == 1 ? std::sqrt(t) : 1.0 - std::sqrt(1.0 - t);
+    const double r0 = std::sqrt(cubics_.u0), s = cubics_.root == 1 ? t : 1.0 - t;
+    const double r = (std::sqrt(cubics_.u0 + (1.0 - cubics_.u0) * s) - r0) / (1.0 - r0);
+    return cubics_.root == 1 ? r : 1.0 - r;
   }
   // What is interpolated for the eye distance: 1/w in perspective, w orthographic.
   double Depth(double w) const { return orthographic_ ? w : 1.0 / w; }

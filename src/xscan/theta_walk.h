@@ -68,6 +68,10 @@ struct ThetaVertex {
   // tilt's rate along the row, radians per pixel of x (NaN without slopes, or on a
   // silhouette, where x stands still).
   double theta = NAN, tilt = NAN, tiltRate = NAN;
+  // Where along the row the section's silhouette nearest the vertex is estimated to lie
+  // (x itself on one; NaN without slopes): its chords take their attributes as roots of
+  // the distance from it when it is near (raster::Chord).
+  double silhouetteX = NAN;
   // The surface's parameters (u,v) at the vertex: what the trackers, the crawls and the
   // trim curves work in. Not f.uv, which is the texture coordinates.
   Vec2 uv = Vec2::Constant(NAN);
@@ -216,7 +220,8 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     v.tilt = ThetaFrame::TiltOn(plane, v.f.normal);
     if (slopes_) {
       const Vec2 duv = p.UvPerPixelAlongRow();
-      v.dwdx = this->map_.ViewDepthChange(p.object.dpdu * duv.x() + p.object.dpdv * duv.y());
+      const Vec3 dpdx = p.object.dpdu * duv.x() + p.object.dpdv * duv.y();  // object space
+      v.dwdx = this->map_.ViewDepthChange(dpdx);
       if (p.second) {
         v.dndx = NormalSlope(p.object, duv, frame_.World());
       } else {
@@ -224,9 +229,31 @@ class ThetaWalker : public LevelWalker<ShapeT> {
         this->shape_.Evaluate(p.uv.x(), p.uv.y(), DerivOrder::Second, &o);
         v.dndx = NormalSlope(o, duv, frame_.World());
       }
-      if (kind != ThetaVertex::Kind::Silhouette) v.tiltRate = v.dndx.dot(plane) / std::cos(v.tilt);
+      if (kind != ThetaVertex::Kind::Silhouette) {
+        v.tiltRate = v.dndx.dot(plane) / std::cos(v.tilt);
+        v.silhouetteX = SilhouetteX(v, ray, plane, frame_.World().linear() * dpdx);
+      }
     }
+    if (kind == ThetaVertex::Kind::Silhouette) v.silhouetteX = v.x;
     return v;
+  }
+  // Where along the row the silhouette nearest vertex v lies, from θ's distance ε to the
+  // nearest silhouette angle (0 or π) and ε's rate along the row, as if the section were a
+  // circle there (orthographic: x - xs = R (1 - cos ε), dε/dx = 1 / (R sin ε)), so that
+  // |x - xs| = tan(ε/2) / |dε/dx|; near a silhouette any section is that parabola. θ's rate
+  // is the normal's turning in the scan plane less the view ray's (in perspective the ray
+  // to the point turns within the plane by dpdx·side / |p - eye| radians per pixel, where
+  // `dpdx` is the point's world motion per pixel along the row).
+  double SilhouetteX(const Vertex& v, const Vec3& ray, const Vec3& plane, const Vec3& dpdx) const {
+    const Vec3 side = ray.cross(plane);
+    const double a = -v.f.normal.dot(ray), b = v.f.normal.dot(side);
+    double rate = (b * -v.dndx.dot(ray) - a * v.dndx.dot(side)) / (a * a + b * b);  // dθ/dx
+    if (!frame_.orthographic) rate -= dpdx.dot(side) / (v.f.position - frame_.eye).norm();
+    const double at = std::abs(v.theta);
+    const bool toZero = at < 0.5 * std::numbers::pi;
+    const double eps = toZero ? at : std::numbers::pi - at;
+    const double epsRate = (toZero == (v.theta >= 0.0) ? 1.0 : -1.0) * rate;
+    return v.x - std::tan(0.5 * eps) / epsRate;  // NaN or ±inf where ε stands still
   }
   // The turn function at (u,v) (NaN where undefined).
   double TurnAt(const Vec2& uv) const { return patchscan::TurnAt(this->shape_, this->map_, frame_, uv); }
@@ -396,6 +423,23 @@ void ThetaWalker<ShapeT>::WalkAll(const RowTrackers& t, std::vector<char>* edgeU
   }
 }
 
+// θ's distance from the nearest silhouette angle, 0 or π.
+inline double SilhouetteAngle(double theta) {
+  const double a = std::abs(theta);
+  return std::min(a, std::numbers::pi - a);
+}
+
+// How far past vertex v, away from its chord's other end `to`, the silhouette nearest it
+// lies (ThetaVertex::silhouetteX): 0 on one; infinite where it lies the other way, is not
+// known, or `to` is no farther from a silhouette in θ (v then lies nearer the middle of
+// the section, where the estimate says little).
+inline double SilhouetteGap(const ThetaVertex& v, const ThetaVertex& to) {
+  if (v.kind == ThetaVertex::Kind::Silhouette) return 0.0;
+  if (!(SilhouetteAngle(v.theta) < SilhouetteAngle(to.theta))) return INFINITY;
+  const double gap = (v.x - v.silhouetteX) * (to.x > v.x ? 1.0 : -1.0);
+  return gap >= 0.0 ? gap : INFINITY;  // false for NaN
+}
+
 // The fragments of a chain on its own scan line, handed to `out` as chords (raster::Chord):
 // the first vertex's own column, then each link's columns, interpolated perspective-
 // correctly (orthographic: linearly). Returns the number of samples covered.
@@ -408,9 +452,8 @@ inline long EmitThetaChain(std::span<const ThetaVertex> chain, const raster::Sam
   for (size_t k = 1; k < chain.size(); ++k) {
     const ThetaVertex &a = chain[k - 1], &b = chain[k];
     if (!(a.f.w > 0.0 && b.f.w > 0.0) || a.x == b.x) continue;
-    using K = ThetaVertex::Kind;
-    const raster::Chord c(a.x, a.f, b.x, b.f, orthographic, {a.dndx, a.dwdx, a.kind == K::Silhouette},
-                          {b.dndx, b.dwdx, b.kind == K::Silhouette});
+    const raster::Chord c(a.x, a.f, b.x, b.f, orthographic, {a.dndx, a.dwdx, SilhouetteGap(a, b)},
+                          {b.dndx, b.dwdx, SilhouetteGap(b, a)});
     const int n = c.ColumnsOn(cols).count;
     covered += n;
     if (n > 0) out.AddChord(c, cols);

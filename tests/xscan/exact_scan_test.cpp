@@ -324,6 +324,21 @@ class ChainChecker final : public ThetaChainSink {
   ThetaFrame frame_;
 };
 
+// A θ scan of every row at pixel centres with `steps` table angles, its chains to `sink`.
+bool ScanEveryRow(std::span<const Surface> surfaces, const Camera& camera, int steps, ThetaChainSink& sink) {
+  ExactScanOptions o;
+  o.thetaSteps = steps;
+  ExactScan scan(surfaces, camera, o);
+  scan.SetThetaChainSink(&sink);
+  const raster::SampleColumns cols{0.5, 1.0, camera.width};
+  std::vector<Nearest> row(static_cast<size_t>(camera.width));
+  for (int j = 0; j < camera.height; ++j) {
+    NearestRow out(&row);
+    if (!scan.ScanRow(j + 0.5, cols, out)) return false;
+  }
+  return true;
+}
+
 TEST(ThetaScan, ChainInvariantsHoldOnTheTestSurfaces) {
   std::vector<std::tuple<std::string, std::vector<Surface>, Camera>> cases;
   cases.push_back({"sphere", {Surface{Sphere(1.0, -1.0, 1.0, 360), Affine3::Identity()}}, View(Vec3(3, -2, 1.5), 128)});
@@ -338,17 +353,8 @@ TEST(ThetaScan, ChainInvariantsHoldOnTheTestSurfaces) {
                    Orthographic(Vec3(2.5, -2.0, 2.2), 1.5)});
   for (const int steps : {16, 64})
     for (const auto& [name, surfaces, camera] : cases) {
-      ExactScanOptions o;
-      o.thetaSteps = steps;
-      ExactScan scan(surfaces, camera, o);
       ChainChecker check(camera);
-      scan.SetThetaChainSink(&check);
-      const raster::SampleColumns cols{0.5, 1.0, camera.width};
-      std::vector<Nearest> row(static_cast<size_t>(camera.width));
-      for (int j = 0; j < camera.height; ++j) {
-        NearestRow out(&row);
-        ASSERT_TRUE(scan.ScanRow(j + 0.5, cols, out));
-      }
+      ASSERT_TRUE(ScanEveryRow(surfaces, camera, steps, check));
       std::cout << name << " N=" << steps << ": " << check.nChains << " chains, " << check.nTable
                 << " table vertices, " << check.nPairs << " consecutive pairs, " << check.violations
                 << " violations; worst |theta - theta_i| " << check.worstThetaOff << " of a step; worst tilt between vertices "
@@ -360,6 +366,59 @@ TEST(ThetaScan, ChainInvariantsHoldOnTheTestSurfaces) {
       // since the last vertex, and a crawl step turns it by at most half a step more.
       EXPECT_LE(check.worstTiltSteps, kTiltBetweenVerticesTolSteps) << name;
     }
+}
+
+// Records, for every table or end vertex next to a silhouette vertex on its chain and
+// within a table step of it in θ (the chords that take their attributes in the root of
+// the distance from the silhouette), its estimate of where the silhouette lies
+// (ThetaVertex::silhouetteX) against where it does.
+class SilhouetteEstimates final : public ThetaChainSink {
+ public:
+  void Chain(double, int steps, std::span<const ThetaVertex> chain) override {
+    using K = ThetaVertex::Kind;
+    for (size_t k = 0; k < chain.size(); ++k) {
+      if (chain[k].kind != K::Silhouette) continue;
+      for (const size_t j : {k - 1, k + 1}) {
+        if (j >= chain.size()) continue;  // k - 1 wraps for k = 0
+        const ThetaVertex& v = chain[j];
+        if ((v.kind != K::Table && v.kind != K::End) || !(SilhouetteAngle(v.theta) < 2.0 * M_PI / steps) ||
+            std::abs(chain[k].x - v.x) < kFarEnoughPx)
+          continue;
+        ++n;
+        if (!std::isfinite(v.silhouetteX)) ++unknown;
+        const double e = std::abs(v.silhouetteX - chain[k].x) / std::abs(chain[k].x - v.x);
+        (std::abs(v.tilt) < kSteepTilt ? worst : worstSteep) = std::max(std::abs(v.tilt) < kSteepTilt ? worst : worstSteep, e);
+      }
+    }
+  }
+  // Nearer than this the gap is the solves' rounding.
+  static constexpr double kFarEnoughPx = 0.05;
+  // Beyond this tilt (radians) the normal's angle in the scan plane, θ, is ill-conditioned.
+  static constexpr double kSteepTilt = 1.0;
+  long n = 0, unknown = 0;
+  double worst = 0.0, worstSteep = 0.0;  // |estimate - silhouette| / |vertex - silhouette|
+};
+
+// Within a table step (N = 16) of a silhouette angle, the estimate's error relative to the
+// vertex's distance from the silhouette. Exact for a circle (rounding and the solves'
+// tolerance; measured 0.007 on the sphere); on the torus, whose sections' curvature
+// changes along them, measured 0.24. Where the normal is tilted more than a radian out
+// of the scan plane, θ's rate is ill-conditioned (measured 2.3 on the torus): reported,
+// not bounded.
+constexpr double kCircleEstimateTol = 0.02, kTorusEstimateTol = 0.35;
+TEST(ThetaScan, VerticesNearASilhouetteKnowWhereItLies) {
+  std::vector<std::tuple<std::string, Surface, double>> cases;
+  cases.push_back({"sphere", Surface{Sphere(1.0, -1.0, 1.0, 360), Affine3::Identity()}, kCircleEstimateTol});
+  cases.push_back({"torus", Surface{Torus(1.0, 0.35, 0, 360, 360), Affine3::Identity()}, kTorusEstimateTol});
+  for (const auto& [name, surface, tol] : cases) {
+    SilhouetteEstimates check;
+    ASSERT_TRUE(ScanEveryRow(std::span<const Surface>(&surface, 1), View(Vec3(3, -2, 1.5), 128), 16, check));
+    std::cout << name << ": " << check.n << " vertices next to a silhouette, worst relative error of its estimate "
+              << check.worst << " (tilted more than a radian " << check.worstSteep << ")\n";
+    EXPECT_GT(check.n, 20) << name;
+    EXPECT_EQ(check.unknown, 0) << name;
+    EXPECT_LT(check.worst, tol) << name;  // NaN fails
+  }
 }
 
 TEST(ThetaScan, CoverageIsExactAndDepthErrorFallsAsOneOverNSquared) {
@@ -380,9 +439,11 @@ TEST(ThetaScan, CoverageIsExactAndDepthErrorFallsAsOneOverNSquared) {
   std::cout << "sphere depth error (world units): N=16 rms " << rms16 << " max " << a16.maxDepth
             << "; N=32 rms " << rms32 << " max " << a32.maxDepth << "; bound 1-cos(pi/N): "
             << 1 - std::cos(M_PI / 16) << ", " << 1 - std::cos(M_PI / 32) << '\n';
-  // Chord error is second order in the step: halving it quarters the error.
+  // Chord error is second order in the step where the chords are blended, fourth where
+  // their ends' slopes make them cubics (near the silhouettes in the root of the distance
+  // from them): halving the step divides it by 4 to 16 (measured 7.7).
   EXPECT_GT(rms16 / rms32, 2.5);
-  EXPECT_LT(rms16 / rms32, 6.0);
+  EXPECT_LT(rms16 / rms32, 20.0);
 }
 
 TEST(ThetaScan, FlatPatchIsExact) {
