@@ -99,7 +99,8 @@ class Chord {
       // near the silhouette by a fifth of the depth across the chord.
       const double g = nearA ? slopeA.silhouette : slopeB.silhouette;
       cubics_.u0 = g / (g + std::abs(span));
-      const double r0 = std::sqrt(cubics_.u0), atNear = 2.0 * r0 / (1.0 + r0), atFar = 2.0 / (1.0 + r0);
+      r0_ = std::sqrt(cubics_.u0);
+      const double r0 = r0_, atNear = 2.0 * r0 / (1.0 + r0), atFar = 2.0 / (1.0 + r0);
       const double fa = nearA ? atNear : atFar, fb = nearA ? atFar : atNear;
       const Vec3 pa = fa * ta, pb = fb * tb;
       const double qa = fa * sa, qb = fb * sb;
@@ -138,7 +139,7 @@ class Chord {
   bool orthographic() const { return orthographic_; }
   Chord(double xa, const Fragment& a, double xb, const Fragment& b, bool orthographic, const Cubics* cubics)
       : xa_(xa), xb_(xb), a_(a), b_(b), orthographic_(orthographic), cubic_(cubics != nullptr) {
-    if (cubics) cubics_ = *cubics;
+    if (cubics) cubics_ = *cubics, r0_ = std::sqrt(cubics_.u0);
   }
 
   double xa() const { return xa_; }
@@ -170,6 +171,29 @@ class Chord {
     for (int k = 0, c = r.first; k < r.count; ++k, c += r.step) f(c);
     return r.count;
   }
+  // Calls f(column, w) for each column covered, in order from xa, with the eye distance
+  // there (DepthAt's, bit for bit: the same arithmetic, its choices made once per chord
+  // instead of once per column); returns how many.
+  template <class F>
+  int ForEachColumnDepth(const SampleColumns& cols, F&& f) const {
+    const Columns r = ColumnsOn(cols);
+    const auto each = [&](auto depth) {
+      for (int k = 0, c = r.first; k < r.count; ++k, c += r.step) f(c, depth(Along(cols.At(c))));
+    };
+    if (xa_ == xb_) {
+      each([&](double) { return a_.w; });
+    } else if (!cubic_) {
+      const double da = Depth(a_.w), db = Depth(b_.w);
+      if (orthographic_) each([&](double t) { return (1.0 - t) * da + t * db; });
+      else each([&](double t) { return 1.0 / ((1.0 - t) * da + t * db); });
+    } else if (cubics_.root == 0) {
+      if (orthographic_) each([&](double t) { return Horner(cubics_.depth, t); });
+      else each([&](double t) { return 1.0 / Horner(cubics_.depth, t); });
+    } else {
+      each([&](double t) { return DepthAlong(t); });
+    }
+    return r.count;
+  }
   // The eye distance at screen x (a column it covers).
   double DepthAt(double x) const { return xa_ == xb_ ? a_.w : DepthAlong(Along(x)); }
   // The fragment at screen x (a column it covers): a point chord's own, or the ends'
@@ -180,10 +204,11 @@ class Chord {
     const double t = Along(x);
     const double ia = orthographic_ ? 1.0 - t : (1.0 - t) / a_.w, ib = orthographic_ ? t : t / b_.w;
     const double wa = ia / (ia + ib), wb = ib / (ia + ib);
+    const double p = cubic_ ? Param(t) : t;
     Fragment f = a_;
-    f.w = DepthAlong(t);
+    f.w = DepthAlong(t, p);
     f.position = wa * a_.position + wb * b_.position;
-    const Vec3 n = cubic_ ? Horner(cubics_.normal, Param(t)) : Vec3(wa * a_.normal + wb * b_.normal);
+    const Vec3 n = cubic_ ? Horner(cubics_.normal, p) : Vec3(wa * a_.normal + wb * b_.normal);
     f.normal = n.normalized();
     if (!f.normal.allFinite()) f.normal = a_.normal;
     f.uv = wa * a_.uv + wb * b_.uv;
@@ -198,22 +223,25 @@ class Chord {
   // With slopes: the normal's and the depth's (Depth) cubics.
   bool cubic_ = false;
   Cubics cubics_;
+  double r0_ = 0.0;  // √cubics_.u0
 
   double Along(double x) const { return std::clamp((x - xa_) / (xb_ - xa_), 0.0, 1.0); }
   // The cubics' parameter at t (Cubics::root).
   double Param(double t) const {
     if (cubics_.root == 0) return t;
     if (cubics_.u0 == 0.0) return cubics_.root == 1 ? std::sqrt(t) : 1.0 - std::sqrt(1.0 - t);
-    const double r0 = std::sqrt(cubics_.u0), s = cubics_.root == 1 ? t : 1.0 - t;
-    const double r = (std::sqrt(cubics_.u0 + (1.0 - cubics_.u0) * s) - r0) / (1.0 - r0);
+    const double s = cubics_.root == 1 ? t : 1.0 - t;
+    const double r = (std::sqrt(cubics_.u0 + (1.0 - cubics_.u0) * s) - r0_) / (1.0 - r0_);
     return cubics_.root == 1 ? r : 1.0 - r;
   }
   // What is interpolated for the eye distance: 1/w in perspective, w orthographic.
   double Depth(double w) const { return orthographic_ ? w : 1.0 / w; }
-  double DepthAlong(double t) const {
-    const double d = cubic_ ? Horner(cubics_.depth, Param(t)) : (1.0 - t) * Depth(a_.w) + t * Depth(b_.w);
+  // The eye distance at t, where the cubics' parameter is p = Param(t).
+  double DepthAlong(double t, double p) const {
+    const double d = cubic_ ? Horner(cubics_.depth, p) : (1.0 - t) * Depth(a_.w) + t * Depth(b_.w);
     return orthographic_ ? d : 1.0 / d;
   }
+  double DepthAlong(double t) const { return DepthAlong(t, cubic_ ? Param(t) : t); }
 };
 
 // Receives the fragments of one sample row (implemented by the back end), and triangles:

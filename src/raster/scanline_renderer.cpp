@@ -170,14 +170,19 @@ class FragmentGeometry final : public FragmentRow {
   void AddChord(const Chord& c, const SampleColumns& columns) override {
     const auto handle = kChordHandle + static_cast<std::int32_t>(chords_->size());
     bool kept = false;
-    c.ForEachColumn(columns, [&](int column) {
-      const double x = columns.At(column), w = c.DepthAt(x);
-      if (sided_ && Hidden(column, w)) return;
-      ++stats_[Counter::SamplesTested];
-      if (sided_ && !Shows(c.At(x))) return;
-      if (w >= s_.hither && InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / w, handle))
-        kept = true;
-    });
+    if (!sided_) {
+      stats_[Counter::SamplesTested] += c.ForEachColumnDepth(columns, [&](int column, double w) {
+        kept |= w >= s_.hither && InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / w, handle);
+      });
+    } else {
+      c.ForEachColumnDepth(columns, [&](int column, double w) {
+        if (Hidden(column, w)) return;
+        ++stats_[Counter::SamplesTested];
+        if (!Shows(c.At(columns.At(column)))) return;
+        if (w >= s_.hither && InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / w, handle))
+          kept = true;
+      });
+    }
     if (kept) chords_->push_back(c);
   }
 
