@@ -76,7 +76,7 @@ class Chord {
   // root of x and the slopes there are infinite or huge, no tangents for a cubic in x.
   Chord(double xa, const Fragment& a, double xb, const Fragment& b, bool orthographic, const Slope& slopeA = {},
         const Slope& slopeB = {})
-      : xa_(xa), xb_(xb), a_(a), b_(b), orthographic_(orthographic) {
+      : xa_(xa), xb_(xb), invSpan_(1.0 / (xb - xa)), a_(a), b_(b), orthographic_(orthographic) {
     const double span = xb - xa, turn = (b.normal - a.normal).norm();
     const Vec3 ta = span * slopeA.normal, tb = span * slopeB.normal;
     const double sa = span * (orthographic ? slopeA.depth : -slopeA.depth / (a.w * a.w));
@@ -99,7 +99,7 @@ class Chord {
       // near the silhouette by a fifth of the depth across the chord.
       const double g = nearA ? slopeA.silhouette : slopeB.silhouette;
       cubics_.u0 = g / (g + std::abs(span));
-      r0_ = std::sqrt(cubics_.u0);
+      r0_ = std::sqrt(cubics_.u0), inv1r0_ = 1.0 / (1.0 - r0_);
       const double r0 = r0_, atNear = 2.0 * r0 / (1.0 + r0), atFar = 2.0 / (1.0 + r0);
       const double fa = nearA ? atNear : atFar, fb = nearA ? atFar : atNear;
       const Vec3 pa = fa * ta, pb = fb * tb;
@@ -138,8 +138,9 @@ class Chord {
   const Cubics* cubics() const { return cubic_ ? &cubics_ : nullptr; }
   bool orthographic() const { return orthographic_; }
   Chord(double xa, const Fragment& a, double xb, const Fragment& b, bool orthographic, const Cubics* cubics)
-      : xa_(xa), xb_(xb), a_(a), b_(b), orthographic_(orthographic), cubic_(cubics != nullptr) {
-    if (cubics) cubics_ = *cubics, r0_ = std::sqrt(cubics_.u0);
+      : xa_(xa), xb_(xb), invSpan_(1.0 / (xb - xa)), a_(a), b_(b), orthographic_(orthographic),
+        cubic_(cubics != nullptr) {
+    if (cubics) cubics_ = *cubics, r0_ = std::sqrt(cubics_.u0), inv1r0_ = 1.0 / (1.0 - r0_);
   }
 
   double xa() const { return xa_; }
@@ -171,26 +172,27 @@ class Chord {
     for (int k = 0, c = r.first; k < r.count; ++k, c += r.step) f(c);
     return r.count;
   }
-  // Calls f(column, w) for each column covered, in order from xa, with the eye distance
-  // there (DepthAt's, bit for bit: the same arithmetic, its choices made once per chord
-  // instead of once per column); returns how many.
+  // Calls f(column, 1/w) for each column covered, in order from xa, with the inverse of
+  // the eye distance there: the depth test's key, which in perspective is what the chord
+  // interpolates (no division; DepthAt's w is its inverse, within rounding). Its choices
+  // (point, cubic, root, projection) are made once per chord. Returns how many.
   template <class F>
-  int ForEachColumnDepth(const SampleColumns& cols, F&& f) const {
+  int ForEachColumnInverseDepth(const SampleColumns& cols, F&& f) const {
     const Columns r = ColumnsOn(cols);
     const auto each = [&](auto depth) {
       for (int k = 0, c = r.first; k < r.count; ++k, c += r.step) f(c, depth(Along(cols.At(c))));
     };
+    const auto key = [this](double d) { return orthographic_ ? 1.0 / d : d; };
     if (xa_ == xb_) {
-      each([&](double) { return a_.w; });
+      const double inv = 1.0 / a_.w;
+      each([&](double) { return inv; });
     } else if (!cubic_) {
       const double da = Depth(a_.w), db = Depth(b_.w);
-      if (orthographic_) each([&](double t) { return (1.0 - t) * da + t * db; });
-      else each([&](double t) { return 1.0 / ((1.0 - t) * da + t * db); });
+      each([&](double t) { return key((1.0 - t) * da + t * db); });
     } else if (cubics_.root == 0) {
-      if (orthographic_) each([&](double t) { return Horner(cubics_.depth, t); });
-      else each([&](double t) { return 1.0 / Horner(cubics_.depth, t); });
+      each([&](double t) { return key(Horner(cubics_.depth, t)); });
     } else {
-      each([&](double t) { return DepthAlong(t); });
+      each([&](double t) { return key(Horner(cubics_.depth, Param(t))); });
     }
     return r.count;
   }
@@ -218,20 +220,21 @@ class Chord {
 
  private:
   double xa_ = 0.0, xb_ = 0.0;
+  double invSpan_ = 0.0;  // 1 / (xb - xa)
   Fragment a_, b_;
   bool orthographic_ = false;
   // With slopes: the normal's and the depth's (Depth) cubics.
   bool cubic_ = false;
   Cubics cubics_;
-  double r0_ = 0.0;  // √cubics_.u0
+  double r0_ = 0.0, inv1r0_ = 1.0;  // √cubics_.u0 and 1 / (1 - √cubics_.u0)
 
-  double Along(double x) const { return std::clamp((x - xa_) / (xb_ - xa_), 0.0, 1.0); }
+  double Along(double x) const { return std::clamp((x - xa_) * invSpan_, 0.0, 1.0); }
   // The cubics' parameter at t (Cubics::root).
   double Param(double t) const {
     if (cubics_.root == 0) return t;
     if (cubics_.u0 == 0.0) return cubics_.root == 1 ? std::sqrt(t) : 1.0 - std::sqrt(1.0 - t);
     const double s = cubics_.root == 1 ? t : 1.0 - t;
-    const double r = (std::sqrt(cubics_.u0 + (1.0 - cubics_.u0) * s) - r0_) / (1.0 - r0_);
+    const double r = (std::sqrt(cubics_.u0 + (1.0 - cubics_.u0) * s) - r0_) * inv1r0_;
     return cubics_.root == 1 ? r : 1.0 - r;
   }
   // What is interpolated for the eye distance: 1/w in perspective, w orthographic.

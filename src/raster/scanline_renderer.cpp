@@ -170,17 +170,18 @@ class FragmentGeometry final : public FragmentRow {
   void AddChord(const Chord& c, const SampleColumns& columns) override {
     const auto handle = kChordHandle + static_cast<std::int32_t>(chords_->size());
     bool kept = false;
+    const double nearest = 1.0 / s_.hither;  // the largest 1/w in front of the hither plane
+    const auto inFront = [&](double invW) { return invW > 0.0 && invW <= nearest; };  // false for NaN
     if (!sided_) {
-      stats_[Counter::SamplesTested] += c.ForEachColumnDepth(columns, [&](int column, double w) {
-        kept |= w >= s_.hither && InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / w, handle);
+      stats_[Counter::SamplesTested] += c.ForEachColumnInverseDepth(columns, [&](int column, double invW) {
+        kept |= inFront(invW) && InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, invW, handle);
       });
     } else {
-      c.ForEachColumnDepth(columns, [&](int column, double w) {
-        if (Hidden(column, w)) return;
+      c.ForEachColumnInverseDepth(columns, [&](int column, double invW) {
+        if (!inFront(invW) || Behind(&row_[static_cast<size_t>(column) * layers_], layers_, invW)) return;
         ++stats_[Counter::SamplesTested];
         if (!Shows(c.At(columns.At(column)))) return;
-        if (w >= s_.hither && InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / w, handle))
-          kept = true;
+        if (InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, invW, handle)) kept = true;
       });
     }
     if (kept) chords_->push_back(c);
