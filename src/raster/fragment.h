@@ -76,7 +76,8 @@ class Chord {
   // root of x and the slopes there are infinite or huge, no tangents for a cubic in x.
   Chord(double xa, const Fragment& a, double xb, const Fragment& b, bool orthographic, const Slope& slopeA = {},
         const Slope& slopeB = {})
-      : xa_(xa), xb_(xb), invSpan_(1.0 / (xb - xa)), a_(a), b_(b), orthographic_(orthographic) {
+      : xa_(xa), xb_(xb), invSpan_(1.0 / (xb - xa)), invWa_(1.0 / a.w), invWb_(1.0 / b.w), a_(a), b_(b),
+        orthographic_(orthographic) {
     const double span = xb - xa, turn = (b.normal - a.normal).norm();
     const Vec3 ta = span * slopeA.normal, tb = span * slopeB.normal;
     const double sa = span * (orthographic ? slopeA.depth : -slopeA.depth / (a.w * a.w));
@@ -138,8 +139,8 @@ class Chord {
   const Cubics* cubics() const { return cubic_ ? &cubics_ : nullptr; }
   bool orthographic() const { return orthographic_; }
   Chord(double xa, const Fragment& a, double xb, const Fragment& b, bool orthographic, const Cubics* cubics)
-      : xa_(xa), xb_(xb), invSpan_(1.0 / (xb - xa)), a_(a), b_(b), orthographic_(orthographic),
-        cubic_(cubics != nullptr) {
+      : xa_(xa), xb_(xb), invSpan_(1.0 / (xb - xa)), invWa_(1.0 / a.w), invWb_(1.0 / b.w), a_(a), b_(b),
+        orthographic_(orthographic), cubic_(cubics != nullptr) {
     if (cubics) cubics_ = *cubics, r0_ = std::sqrt(cubics_.u0), inv1r0_ = 1.0 / (1.0 - r0_);
   }
 
@@ -204,14 +205,16 @@ class Chord {
   Fragment At(double x) const {
     if (xa_ == xb_) return a_;
     const double t = Along(x);
-    const double ia = orthographic_ ? 1.0 - t : (1.0 - t) / a_.w, ib = orthographic_ ? t : t / b_.w;
-    const double wa = ia / (ia + ib), wb = ib / (ia + ib);
+    // The ends' weights: 1/w's share in perspective, whose sum is the blended 1/w itself.
+    const double ia = orthographic_ ? 1.0 - t : (1.0 - t) * invWa_, ib = orthographic_ ? t : t * invWb_;
+    const double sum = ia + ib, inv = 1.0 / sum;
+    const double wa = ia * inv, wb = ib * inv;
     const double p = cubic_ ? Param(t) : t;
     Fragment f = a_;
-    f.w = DepthAlong(t, p);
+    f.w = cubic_ || orthographic_ ? DepthAlong(t, p) : inv;
     f.position = wa * a_.position + wb * b_.position;
     const Vec3 n = cubic_ ? Horner(cubics_.normal, p) : Vec3(wa * a_.normal + wb * b_.normal);
-    f.normal = n.normalized();
+    f.normal = n * (1.0 / n.norm());
     if (!f.normal.allFinite()) f.normal = a_.normal;
     f.uv = wa * a_.uv + wb * b_.uv;
     if (t > 0.5) f.duvdx = b_.duvdx, f.duvdy = b_.duvdy;
@@ -221,6 +224,7 @@ class Chord {
  private:
   double xa_ = 0.0, xb_ = 0.0;
   double invSpan_ = 0.0;  // 1 / (xb - xa)
+  double invWa_ = 0.0, invWb_ = 0.0;  // 1 / a.w and 1 / b.w
   Fragment a_, b_;
   bool orthographic_ = false;
   // With slopes: the normal's and the depth's (Depth) cubics.
