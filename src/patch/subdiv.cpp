@@ -99,6 +99,24 @@ SubFaceMap MapOf(const osd::Bfr::Parameterization& param, int subFace) {
   return map;
 }
 
+// Whether a patch fitted to `at` matches it within `tol`, position and derivatives up to
+// `order`, at the 9 points (s, t in {1/6, 1/2, 5/6}) between the fits' nodes.
+template <class At, class Patch>
+bool MatchesBetweenNodes(const At& at, const Patch& patch, DerivOrder order, double tol) {
+  const auto off = [&](const Vec3& a, const Vec3& b) { return !((a - b).cwiseAbs().maxCoeff() <= tol); };
+  for (const double s : {0.5, 1.0 / 6.0, 5.0 / 6.0})
+    for (const double t : {0.5, 1.0 / 6.0, 5.0 / 6.0}) {
+      SurfaceDerivs d, e;
+      at(s, t, order, &d);
+      patch.Evaluate(s, t, order, &e);
+      if (off(d.p, e.p) || off(d.dpdu, e.dpdu) || off(d.dpdv, e.dpdv)) return false;
+      if (Wants(order, DerivOrder::Second) &&
+          (off(d.d2pdu2, e.d2pdu2) || off(d.d2pduv, e.d2pduv) || off(d.d2pdv2, e.d2pdv2)))
+        return false;
+    }
+  return true;
+}
+
 // The bicubic polynomial `at` (position and derivatives, at (s, t) in [0,1]^2) is, if it is
 // one: its values at the 4 x 4 nodes s, t in {0, 1/3, 2/3, 1} give the Bézier points (b =
 // M^-1 P M^-T, M the Bernstein collocation matrix), kept only if they match `at`'s position
@@ -129,62 +147,222 @@ std::optional<BicubicPatch> FitBicubic(const At& at, double tol) {
       bezier[static_cast<std::size_t>(4 * l + k)] = b;
     }
   BicubicPatch patch(bezier);
-  const auto off = [&](const Vec3& a, const Vec3& b) { return !((a - b).cwiseAbs().maxCoeff() <= tol); };
-  for (const double s : {0.5, 1.0 / 6.0, 5.0 / 6.0})
-    for (const double t : {0.5, 1.0 / 6.0, 5.0 / 6.0}) {
-      SurfaceDerivs e;
-      at(s, t, DerivOrder::Second, &d);
-      patch.Evaluate(s, t, DerivOrder::Second, &e);
-      if (off(d.p, e.p) || off(d.dpdu, e.dpdu) || off(d.dpdv, e.dpdv) || off(d.d2pdu2, e.d2pdu2) ||
-          off(d.d2pduv, e.d2pduv) || off(d.d2pdv2, e.d2pdv2))
-        return std::nullopt;
-    }
+  if (!MatchesBetweenNodes(at, patch, DerivOrder::Second, tol)) return std::nullopt;
   return patch;
 }
 
 // Which quarter of [0, 1] u lies in (0 to 3; outside, the nearest; NaN: 3).
 int QuarterOf(double u) { return u < 0.25 ? 0 : u < 0.5 ? 1 : u < 0.75 ? 2 : 3; }
 
+// The cubic Bernstein polynomials at x and their first and second derivatives.
+void Bernstein3(double x, double b[4], double d[4], double dd[4]) {
+  const double y = 1.0 - x;
+  b[0] = y * y * y, b[1] = 3.0 * x * y * y, b[2] = 3.0 * x * x * y, b[3] = x * x * x;
+  d[0] = -3.0 * y * y, d[1] = 3.0 * y * (y - 2.0 * x), d[2] = 3.0 * x * (2.0 * y - x), d[3] = 3.0 * x * x;
+  dd[0] = 6.0 * y, dd[1] = 6.0 * (3.0 * x - 2.0), dd[2] = 6.0 * (1.0 - 3.0 * x), dd[3] = 6.0 * x;
+}
+
+// A Gregory patch, as OpenSubdiv makes its irregular patches (Bfr's cells at an
+// extraordinary corner, below its approximation level): a bicubic Bézier patch over
+// (s, t) in [0,1]^2 whose four interior points are each a blend of two, F_a and F_b,
+// weighted by the distances σ and τ from the nearest corner's two edges: (σ F_a + τ F_b) /
+// (σ + τ), with (σ, τ) = (s, t), (1 - s, t), (s, 1 - t) or (1 - s, 1 - t). Its position is
+// that rational function exactly. Its first derivatives are OpenSubdiv's, the Bézier
+// patch's with the blend weights held where they are (what Bfr returns, and what Newton's
+// iterations on it have always taken), and its second derivatives are those of that
+// first-derivative field (the cross one the mean of its two), which the forward
+// differences of Bfr's first derivatives approximated before: consistent with the first
+// derivatives, as the silhouette trackers need.
+class GregoryPatch {
+ public:
+  // Points 0-15: the Bézier grid, [4 j + i] for s index i and t index j (an interior one
+  // is F_a); 16-19: F_b of the interior points (1,1), (2,1), (1,2), (2,2).
+  static constexpr int kPoints = 20;
+  explicit GregoryPatch(const std::array<Vec3, kPoints>& points) : p_(points) {}
+
+  // The blend of interior point (i, j) (i, j in {1, 2}) at (s, t): F_a's weight G and its
+  // derivatives (F_b's are 1 - G and the negated derivatives). At the corner itself, where
+  // the blend is undefined, G = 0 (its Bernstein product vanishes there).
+  struct Blend {
+    double g, gs, gt;
+  };
+  static Blend BlendAt(int i, int j, double s, double t) {
+    const double sigma = i == 1 ? s : 1.0 - s, tau = j == 1 ? t : 1.0 - t;
+    const double ds = i == 1 ? 1.0 : -1.0, dt = j == 1 ? 1.0 : -1.0;
+    const double sum = sigma + tau, inv = sum > 0.0 ? 1.0 / sum : 1.0;
+    return {sigma * inv, ds * tau * inv * inv, -dt * sigma * inv * inv};
+  }
+  static int Second(int i, int j) { return 16 + (i - 1) + 2 * (j - 1); }
+
+  // The weights of the 20 points in the position at (s, t).
+  static void PositionWeights(double s, double t, double w[kPoints]) {
+    double bs[4], ds[4], dds[4], bt[4], dt[4], ddt[4];
+    Bernstein3(s, bs, ds, dds);
+    Bernstein3(t, bt, dt, ddt);
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) w[4 * j + i] = bs[i] * bt[j];
+    for (int j = 1; j < 3; ++j)
+      for (int i = 1; i < 3; ++i) {
+        const double g = BlendAt(i, j, s, t).g, b = w[4 * j + i];
+        w[4 * j + i] = b * g;
+        w[Second(i, j)] = b * (1.0 - g);
+      }
+  }
+
+  void Evaluate(double s, double t, DerivOrder order, SurfaceDerivs* out) const {
+    double bs[4], ds[4], dds[4], bt[4], dt[4], ddt[4];
+    Bernstein3(s, bs, ds, dds);
+    Bernstein3(t, bt, dt, ddt);
+    // The Bézier patch with the blends where they are at (s, t), and for the second
+    // derivatives the blends' change: G_x (F_a - F_b) per interior point.
+    std::array<Vec3, 16> q;
+    Vec3 diff[4];
+    Blend blend[4];
+    for (int k = 0; k < 16; ++k) q[static_cast<std::size_t>(k)] = p_[static_cast<std::size_t>(k)];
+    for (int j = 1; j < 3; ++j)
+      for (int i = 1; i < 3; ++i) {
+        const int m = (i - 1) + 2 * (j - 1);
+        blend[m] = BlendAt(i, j, s, t);
+        const Vec3& a = p_[static_cast<std::size_t>(4 * j + i)];
+        const Vec3& b = p_[static_cast<std::size_t>(Second(i, j))];
+        q[static_cast<std::size_t>(4 * j + i)] = blend[m].g * a + (1.0 - blend[m].g) * b;
+        diff[m] = a - b;
+      }
+    out->p.setZero();
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) out->p += bs[i] * bt[j] * q[static_cast<std::size_t>(4 * j + i)];
+    if (!Wants(order, DerivOrder::First)) return;
+    out->dpdu.setZero(), out->dpdv.setZero();
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) {
+        out->dpdu += ds[i] * bt[j] * q[static_cast<std::size_t>(4 * j + i)];
+        out->dpdv += bs[i] * dt[j] * q[static_cast<std::size_t>(4 * j + i)];
+      }
+    if (!Wants(order, DerivOrder::Second)) return;
+    out->d2pdu2.setZero(), out->d2pduv.setZero(), out->d2pdv2.setZero();
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) {
+        const Vec3& x = q[static_cast<std::size_t>(4 * j + i)];
+        out->d2pdu2 += dds[i] * bt[j] * x;
+        out->d2pduv += ds[i] * dt[j] * x;
+        out->d2pdv2 += bs[i] * ddt[j] * x;
+      }
+    for (int j = 1; j < 3; ++j)
+      for (int i = 1; i < 3; ++i) {
+        const int m = (i - 1) + 2 * (j - 1);
+        const Blend& g = blend[m];
+        out->d2pdu2 += ds[i] * bt[j] * g.gs * diff[m];
+        out->d2pdv2 += bs[i] * dt[j] * g.gt * diff[m];
+        out->d2pduv += 0.5 * (ds[i] * bt[j] * g.gt + bs[i] * dt[j] * g.gs) * diff[m];
+      }
+  }
+
+ private:
+  std::array<Vec3, kPoints> p_;
+};
+
+// The Gregory patch `at` (position and derivatives, at (s, t) in [0,1]^2) is, if it is
+// one: its positions on a 6 x 6 grid give the 20 points by least squares, kept only if
+// they match `at`'s position and first derivatives within `tol` at 9 points between the
+// nodes. The grid's nodes differ in s and t and lie symmetrically about no corner's
+// diagonal: there a blend's two points weigh alike, and a grid with too many such nodes
+// (5 x 5, the same in s and t) left one combination of the 20 points unseen.
+template <class At>
+std::optional<GregoryPatch> FitGregory(const At& at, double tol) {
+  static constexpr std::array<double, 6> kS = {0.0, 0.13, 0.37, 0.58, 0.81, 1.0};
+  static constexpr std::array<double, 6> kT = {0.0, 0.17, 0.41, 0.63, 0.86, 1.0};
+  static constexpr int kNodes = 36;
+  static const Eigen::Matrix<double, GregoryPatch::kPoints, kNodes> kSolve = [] {
+    Eigen::Matrix<double, kNodes, GregoryPatch::kPoints> a;
+    for (int j = 0; j < 6; ++j)
+      for (int i = 0; i < 6; ++i) {
+        double w[GregoryPatch::kPoints];
+        GregoryPatch::PositionWeights(kS[static_cast<std::size_t>(i)], kT[static_cast<std::size_t>(j)], w);
+        for (int k = 0; k < GregoryPatch::kPoints; ++k) a(6 * j + i, k) = w[k];
+      }
+    return Eigen::Matrix<double, GregoryPatch::kPoints, kNodes>(a.completeOrthogonalDecomposition().pseudoInverse());
+  }();
+  Eigen::Matrix<double, kNodes, 3> node;
+  SurfaceDerivs d;
+  for (int j = 0; j < 6; ++j)
+    for (int i = 0; i < 6; ++i) {
+      at(kS[static_cast<std::size_t>(i)], kT[static_cast<std::size_t>(j)], DerivOrder::Position, &d);
+      node.row(6 * j + i) = d.p.transpose();
+    }
+  const Eigen::Matrix<double, GregoryPatch::kPoints, 3> fitted = kSolve * node;
+  std::array<Vec3, GregoryPatch::kPoints> points;
+  for (int k = 0; k < GregoryPatch::kPoints; ++k) points[static_cast<std::size_t>(k)] = fitted.row(k).transpose();
+  const GregoryPatch patch(points);
+  if (!MatchesBetweenNodes(at, patch, DerivOrder::First, tol)) return std::nullopt;
+  return patch;
+}
+
+
 }  // namespace
 
 // Where a (sub-)face's limit surface is a bicubic polynomial, as bicubic patches: the
 // whole face for a regular Catmull-Clark quadrilateral (at a boundary too: Bfr extends the
 // missing points linearly, which keeps it bicubic) or a bilinear one; else the cells of
-// Bfr's patch tree away from the extraordinary corners, which are regular B-spline patches
-// (at its approximation level 2, only the cell of 1/4 x 1/4 at such a corner is a Gregory
-// patch): BicubicPatch evaluates them by Horner's rule in a fraction of Bfr's time (its
-// basis weights and point combination), and the rest is left to Bfr. Found from Bfr itself
-// (FitBicubic), independently of how it orders and builds its points: the face whole, else
-// each quadrant, else each quarter of a quadrant.
+// Bfr's patch tree away from the extraordinary corners, which are regular B-spline patches;
+// and the cells at those corners, Gregory patches at Bfr's approximation level 2 (the cell
+// of 1/4 x 1/4 at such a corner of a quadrilateral, the quadrant at the centre of a
+// non-quadrilateral's sub-face), as Gregory patches. BicubicPatch and GregoryPatch
+// evaluate them in a fraction of Bfr's time (its patch tree, basis weights and point
+// combination; at a Gregory cell three evaluations of it where second derivatives are
+// asked, SubdivFace::Evaluate's differences). Found from Bfr itself (FitBicubic,
+// FitGregory), independently of how it orders and builds its points: the face whole, else
+// each quadrant, else each quarter of a quadrant; what fits neither is left to Bfr.
 struct BicubicPieces {
   std::vector<BicubicPatch> patches;
   // Per cell of the 4 x 4 grid of quarters, [4 j + i] for u in quarter i and v in quarter j:
   // the patch covering it (-1: none, Bfr) and that patch's level (0: the whole face, over
   // [0,1]^2; 1: a quadrant; 2: the cell).
   std::array<std::int8_t, 16> patchOf{}, levelOf{};
+  // Where no bicubic covers a cell, the Gregory patch that does (-1: none, Bfr), with its
+  // level as above: Bfr's irregular cells, at an extraordinary corner (a quadrant of a
+  // non-quadrilateral face's sub-face, whose centre corner is one, or a cell of a
+  // quadrilateral's).
+  std::vector<GregoryPatch> gregory;
+  std::array<std::int8_t, 16> gregoryOf{};
 
   BicubicPieces(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
                 double tol) {
     patchOf.fill(-1);
+    gregoryOf.fill(-1);
     if (surface.IsRegular() && Fit(surface, pts, map, tol, 0, 0, 0)) return;
     for (int qj = 0; qj < 2; ++qj)
-      for (int qi = 0; qi < 2; ++qi)
-        if (!Fit(surface, pts, map, tol, 1, qi, qj))
-          for (int j = 2 * qj; j < 2 * qj + 2; ++j)
-            for (int i = 2 * qi; i < 2 * qi + 2; ++i) Fit(surface, pts, map, tol, 2, i, j);
+      for (int qi = 0; qi < 2; ++qi) {
+        // A quadrant is one bicubic, or one Gregory patch (a non-quadrilateral face's
+        // sub-face at its centre, an extraordinary corner: Bfr's cells there are the
+        // quadrants), or cells of either.
+        if (Fit(surface, pts, map, tol, 1, qi, qj) || FitIrregular(surface, pts, map, tol, 1, qi, qj)) continue;
+        for (int j = 2 * qj; j < 2 * qj + 2; ++j)
+          for (int i = 2 * qi; i < 2 * qi + 2; ++i)
+            if (!Fit(surface, pts, map, tol, 2, i, j)) FitIrregular(surface, pts, map, tol, 2, i, j);
+      }
   }
   int PatchAt(double u, double v) const { return patchOf[static_cast<std::size_t>(4 * QuarterOf(v) + QuarterOf(u))]; }
-  // The polynomial at (u, v), if it covers that cell.
+  int GregoryAt(double u, double v) const { return gregoryOf[static_cast<std::size_t>(4 * QuarterOf(v) + QuarterOf(u))]; }
+  // The polynomial or Gregory patch at (u, v), if one covers that cell.
   bool Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const {
     const int i = QuarterOf(u), j = QuarterOf(v);
-    const int k = patchOf[static_cast<std::size_t>(4 * j + i)];
-    if (k < 0) return false;
-    const BicubicPatch& patch = patches[static_cast<std::size_t>(k)];
-    const int level = levelOf[static_cast<std::size_t>(4 * j + i)];
-    if (level == 0) {
-      patch.Evaluate(u, v, order, out);
-      return true;
+    const auto cell = static_cast<std::size_t>(4 * j + i);
+    const int level = levelOf[cell];
+    if (const int k = patchOf[cell]; k >= 0) {
+      if (level == 0) {
+        patches[static_cast<std::size_t>(k)].Evaluate(u, v, order, out);
+        return true;
+      }
+      return Scaled(patches[static_cast<std::size_t>(k)], level, i, j, u, v, order, out);
     }
+    if (const int k = gregoryOf[cell]; k >= 0) return Scaled(gregory[static_cast<std::size_t>(k)], level, i, j, u, v, order, out);
+    return false;
+  }
+
+ private:
+  // A patch over a cell of `level` holding quarter (i, j), at (u, v).
+  template <class Patch>
+  static bool Scaled(const Patch& patch, int level, int i, int j, double u, double v, DerivOrder order, SurfaceDerivs* out) {
     // The patch's own (s, t) = n (u - u0, v - v0): derivatives along u are n times those along s.
     const int shift = 2 - level;
     const double n = static_cast<double>(1 << level);
@@ -198,13 +376,11 @@ struct BicubicPieces {
     out->d2pdv2 *= n * n;
     return true;
   }
-
- private:
-  // Fits the cell (ci, cj) of level `level`; covers its quarters if it is bicubic.
-  bool Fit(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
-           double tol, int level, int ci, int cj) {
+  // Bfr on cell (ci, cj) of `level`, in the cell's own (s, t).
+  static auto CellOf(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
+                     int level, int ci, int cj) {
     const double n = static_cast<double>(1 << level);
-    const auto at = [&](double s, double t, DerivOrder order, SurfaceDerivs* d) {
+    return [&surface, &pts, &map, n, ci, cj](double s, double t, DerivOrder order, SurfaceDerivs* d) {
       EvaluateMapped(surface, pts.data(), map, (ci + s) / n, (cj + t) / n, order, d);
       if (!Wants(order, DerivOrder::First)) return;
       d->dpdu /= n;
@@ -214,16 +390,32 @@ struct BicubicPieces {
       d->d2pduv /= n * n;
       d->d2pdv2 /= n * n;
     };
-    std::optional<BicubicPatch> patch = FitBicubic(at, tol);
-    if (!patch) return false;
-    const int k = static_cast<int>(patches.size());
-    patches.push_back(*patch);
+  }
+  // Marks the quarters of cell (ci, cj) of `level` as covered by patch k of `of`.
+  void Cover(std::array<std::int8_t, 16>& of, int k, int level, int ci, int cj) {
     const int width = 4 >> level;
     for (int j = cj * width; j < (cj + 1) * width; ++j)
       for (int i = ci * width; i < (ci + 1) * width; ++i) {
-        patchOf[static_cast<std::size_t>(4 * j + i)] = static_cast<std::int8_t>(k);
+        of[static_cast<std::size_t>(4 * j + i)] = static_cast<std::int8_t>(k);
         levelOf[static_cast<std::size_t>(4 * j + i)] = static_cast<std::int8_t>(level);
       }
+  }
+  // Fits the cell (ci, cj) of `level` as a bicubic (Fit) or a Gregory patch
+  // (FitIrregular); covers its quarters if it is one.
+  bool Fit(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
+           double tol, int level, int ci, int cj) {
+    return Keep(FitBicubic(CellOf(surface, pts, map, level, ci, cj), tol), patches, patchOf, level, ci, cj);
+  }
+  bool FitIrregular(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
+                    double tol, int level, int ci, int cj) {
+    return Keep(FitGregory(CellOf(surface, pts, map, level, ci, cj), tol), gregory, gregoryOf, level, ci, cj);
+  }
+  template <class Patch>
+  bool Keep(const std::optional<Patch>& patch, std::vector<Patch>& into, std::array<std::int8_t, 16>& of, int level,
+            int ci, int cj) {
+    if (!patch) return false;
+    into.push_back(*patch);
+    Cover(of, static_cast<int>(into.size()) - 1, level, ci, cj);
     return true;
   }
 };
@@ -411,6 +603,11 @@ void SubdivFace::EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDeri
 }
 
 bool SubdivFace::BicubicAt(double u, double v) const { return BicubicPieceAt(u, v) >= 0; }
+
+bool SubdivFace::GregoryAt(double u, double v) const {
+  const BicubicPieces* pc = Pieces(cage_->Data(face_));
+  return pc && pc->GregoryAt(u, v) >= 0;
+}
 
 int SubdivFace::BicubicPieceAt(double u, double v) const {
   const BicubicPieces* pc = Pieces(cage_->Data(face_));

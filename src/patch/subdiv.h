@@ -92,7 +92,9 @@ class SubdivFace {
   // Where the limit surface is a bicubic polynomial (a regular Catmull-Clark or bilinear
   // quadrilateral, or the cells of an irregular Catmull-Clark face away from its
   // extraordinary corners), it is evaluated as that bicubic once a hold that fits has
-  // fitted it (Hold), elsewhere by Bfr.
+  // fitted it (Hold); at an extraordinary corner, where Bfr's surface is a Gregory patch,
+  // as that patch (fitted too: Bfr's position and first derivatives, and the second
+  // derivatives of those); elsewhere (Loop's faces, or before such a hold) by Bfr.
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
   // Bfr's own evaluation, even where Evaluate takes the bicubic (to test one against the other).
   void EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
@@ -102,6 +104,8 @@ class SubdivFace {
   // share exactly when one polynomial serves both; -1 where Bfr's evaluation serves (or
   // before a fitting hold). Prepares the face.
   int BicubicPieceAt(double u, double v) const;
+  // Whether Evaluate takes a fitted Gregory patch at (u, v) (prepares the face).
+  bool GregoryAt(double u, double v) const;
   // The texture coordinates "st" at (u, v) with their derivatives, or nullopt when the cage
   // has none. Prepares as Evaluate does.
   std::optional<TexCoords> TextureCoords(double u, double v) const;
@@ -120,8 +124,9 @@ class SubdivFace {
   // face evaluated without a hold stays prepared until a hold on it ends. A face must not be
   // evaluated by one thread while another releases its last hold.
   // fit: the holder evaluates the face many times (a scan: thousands of times), so the
-  // bicubic pieces Evaluate takes are fitted first (~25 evaluations of a regular face, ~200
-  // of an irregular one) if they are not yet; without, Evaluate is Bfr's.
+  // bicubic and Gregory pieces Evaluate takes are fitted first (~25 evaluations of a
+  // regular face, ~150 to ~250 of an irregular one) if they are not yet; without, Evaluate
+  // is Bfr's.
   void Hold(bool fit = false) const;
   void Release() const;
   // Base faces of this face's cage prepared now, preparations so far and the most prepared

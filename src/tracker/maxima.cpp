@@ -176,17 +176,22 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
       // Step 3: saddles, by Newton on grad h = 0 from the same seed (§3.2.2.4).
       NewtonOptions opt;
       opt.domain = DomainRule::Fail;
+      // Newton starts where the climb did (the seed is in the domain, so not clipped), and
+      // a converged solve ends on the point it evaluated last: both evaluations are kept,
+      // not repeated (a subdivision face's cost most of the pre-pass).
       const double gtol = 1e-10 * std::max(atSeed.H.norm(), 1e-300);
+      Vec2 lastUv = seed;
+      Height last = atSeed;
       const auto r = SolveNewton2(
           [&](const Vec2& p, Vec2* f, Mat2* j) {
-            const Height e = EvalHeight(shape, map, p);
-            *f = e.g;
-            *j = e.H;
+            if (p != lastUv) last = EvalHeight(shape, map, p), lastUv = p;
+            *f = last.g;
+            *j = last.H;
           },
           seed, Vec2(gtol, gtol), opt);
       st[Counter::MaximaNewtonIterations] += r.iterations;
       if (r.status == NewtonStatus::Converged && (r.uv.array() > 0).all() && (r.uv.array() < 1).all()) {
-        const Height e = EvalHeight(shape, map, r.uv);
+        const Height e = r.uv == lastUv ? last : EvalHeight(shape, map, r.uv);
         if (e.H.determinant() < -kCylinderRelDet * e.H.squaredNorm())
           found.push_back({StationaryKind::Saddle, r.uv, -e.h, e.g, e.H, -1});
       }
@@ -199,6 +204,12 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
     bool dup = false;
     for (const Stationary& u : unique) {
       if (u.kind != s.kind || std::abs(u.y - s.y) > kDuplicateY) continue;
+      // Climbs ending on one corner end on the very same uv (clamped to it): their midpoint
+      // is that point, whose y both already hold.
+      if (u.uv == s.uv && u.y == s.y) {
+        dup = true;
+        break;
+      }
       const double yMid = -EvalH(shape, map, 0.5 * (u.uv + s.uv));
       if (std::abs(yMid - s.y) <= kDuplicateY && std::abs(yMid - u.y) <= kDuplicateY) {
         dup = true;

@@ -126,8 +126,8 @@ TEST(Subdiv, BicubicPiecesAreBfrsOwnSurface) {
   // extraordinary corners, as bicubic patches fitted to Bfr's values: in every cell it covers it must be Bfr's surface, position and
   // derivatives (edges and corners too, where boundary faces extrapolate), to rounding of
   // points of size ~1 (kSameRel of the face's extent; Bfr and Horner's rule sum the same
-  // cubic differently). Loop's regular triangles are quartic, and stay with Bfr; so does
-  // the Gregory cell at an extraordinary corner.
+  // cubic differently). Loop's regular triangles are quartic, and stay with Bfr; the
+  // Gregory cells at an extraordinary corner are the next test's.
   constexpr double kSameRel = 1e-10;
   int whole = 0, partly = 0, cellsOfPartly = 0;
   for (const test::Cage& c : test::Cages()) {
@@ -171,6 +171,68 @@ TEST(Subdiv, BicubicPiecesAreBfrsOwnSurface) {
             << cellsOfPartly << " of their " << 16 * partly << " cells)\n";
   EXPECT_GT(whole, 0);
   EXPECT_GT(partly, 0);
+}
+
+TEST(Subdiv, GregoryPiecesAreBfrsOwnSurface) {
+  // At an extraordinary corner Bfr's Catmull-Clark surface is a Gregory patch (a rational
+  // blend), which a hold that fits fits as one: there Evaluate must be Bfr's position and
+  // first derivatives (OpenSubdiv's, which hold the blend fixed) to rounding (kSameRel of
+  // the face's extent; the fit is a least-squares solve of 36 positions), and its second
+  // derivatives those of the first-derivative field: against central differences of
+  // Evaluate's own first derivatives (step 1e-5: truncation ~1e-10 of their size, rounding
+  // ~1e-11), within kFdRel. Every cell of an irregular Catmull-Clark face without creases
+  // or sharp corners is one piece or the other, none left to Bfr (next to a sharp feature
+  // Bfr's cells are other shapes: 3 cells of the creased cube's faces stay Bfr's).
+  constexpr double kSameRel = 1e-10, kFdRel = 1e-6, h = 1e-5;
+  int faces = 0, gregoryCells = 0, bfrCells = 0;
+  for (const test::Cage& c : test::Cages()) {
+    if (c.mesh.scheme != SubdivScheme::CatmullClark) continue;
+    for (const SubdivFace& f : PrepareSubdivFaces(c.mesh)) {
+      if (f.Regular()) continue;
+      ++faces;
+      f.Hold(/*fit=*/true);
+      double extent = 0.0;
+      for (const Vec3& q : f.Hull()) extent = std::max(extent, q.cwiseAbs().maxCoeff());
+      const double tol = kSameRel * std::max(extent, 1.0);
+      for (int ci = 0; ci < 4; ++ci)
+        for (int cj = 0; cj < 4; ++cj) {
+          if (!f.GregoryAt((ci + 0.5) / 4.0, (cj + 0.5) / 4.0)) {
+            const bool bfr = !f.BicubicAt((ci + 0.5) / 4.0, (cj + 0.5) / 4.0);
+            bfrCells += bfr;
+            EXPECT_FALSE(bfr && c.mesh.creases.empty() && c.mesh.corners.empty()) << c.name << ", " << f.Describe();
+            continue;
+          }
+          ++gregoryCells;
+          for (const double a : {0.0, 0.23, 0.5, 0.77})
+            for (const double b : {0.0, 0.31, 0.5, 0.88}) {
+              const double u = (ci + a) / 4.0, v = (cj + b) / 4.0;
+              const std::string at = c.name + ", " + f.Describe() + " at " + std::to_string(u) + ", " + std::to_string(v);
+              SurfaceDerivs e, r;
+              f.Evaluate(u, v, DerivOrder::Second, &e);
+              f.EvaluateByBfr(u, v, DerivOrder::First, &r);
+              EXPECT_LT((e.p - r.p).cwiseAbs().maxCoeff(), tol) << at;
+              EXPECT_LT((e.dpdu - r.dpdu).cwiseAbs().maxCoeff(), tol) << at;
+              EXPECT_LT((e.dpdv - r.dpdv).cwiseAbs().maxCoeff(), tol) << at;
+              if (a == 0.0 || b == 0.0) continue;  // differences across a cell's edge
+              SurfaceDerivs pu, mu, pv, mv;
+              f.Evaluate(u + h, v, DerivOrder::First, &pu);
+              f.Evaluate(u - h, v, DerivOrder::First, &mu);
+              f.Evaluate(u, v + h, DerivOrder::First, &pv);
+              f.Evaluate(u, v - h, DerivOrder::First, &mv);
+              const double scale = e.dpdu.norm() + e.dpdv.norm() + e.d2pdu2.norm() + e.d2pduv.norm() + e.d2pdv2.norm();
+              const Vec3 duu = (pu.dpdu - mu.dpdu) / (2 * h), dvv = (pv.dpdv - mv.dpdv) / (2 * h);
+              const Vec3 duv = 0.5 * ((pu.dpdv - mu.dpdv) / (2 * h) + (pv.dpdu - mv.dpdu) / (2 * h));
+              EXPECT_LT((duu - e.d2pdu2).norm() / scale, kFdRel) << at;
+              EXPECT_LT((dvv - e.d2pdv2).norm() / scale, kFdRel) << at;
+              EXPECT_LT((duv - e.d2pduv).norm() / scale, kFdRel) << at;
+            }
+        }
+      f.Release();
+    }
+  }
+  std::cout << faces << " irregular Catmull-Clark faces: " << gregoryCells << " cells as Gregory patches, " << bfrCells
+            << " left to Bfr\n";
+  EXPECT_GT(gregoryCells, 0);
 }
 
 TEST(Subdiv, NeighboursMeetAlongSharedEdges) {
