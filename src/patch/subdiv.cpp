@@ -210,51 +210,48 @@ class GregoryPatch {
   }
 
   void Evaluate(double s, double t, DerivOrder order, SurfaceDerivs* out) const {
+    const bool first = Wants(order, DerivOrder::First), second = Wants(order, DerivOrder::Second);
     double bs[4], ds[4], dds[4], bt[4], dt[4], ddt[4];
     Bernstein3(s, bs, ds, dds);
     Bernstein3(t, bt, dt, ddt);
-    // The Bézier patch with the blends where they are at (s, t), and for the second
-    // derivatives the blends' change: G_x (F_a - F_b) per interior point.
-    std::array<Vec3, 16> q;
-    Vec3 diff[4];
+    // The Bézier patch with the blends where they are at (s, t): its interior points.
     Blend blend[4];
-    for (int k = 0; k < 16; ++k) q[static_cast<std::size_t>(k)] = p_[static_cast<std::size_t>(k)];
-    for (int j = 1; j < 3; ++j)
-      for (int i = 1; i < 3; ++i) {
-        const int m = (i - 1) + 2 * (j - 1);
-        blend[m] = BlendAt(i, j, s, t);
-        const Vec3& a = p_[static_cast<std::size_t>(4 * j + i)];
-        const Vec3& b = p_[static_cast<std::size_t>(Second(i, j))];
-        q[static_cast<std::size_t>(4 * j + i)] = blend[m].g * a + (1.0 - blend[m].g) * b;
-        diff[m] = a - b;
-      }
-    out->p.setZero();
-    for (int j = 0; j < 4; ++j)
-      for (int i = 0; i < 4; ++i) out->p += bs[i] * bt[j] * q[static_cast<std::size_t>(4 * j + i)];
-    if (!Wants(order, DerivOrder::First)) return;
-    out->dpdu.setZero(), out->dpdv.setZero();
-    for (int j = 0; j < 4; ++j)
-      for (int i = 0; i < 4; ++i) {
-        out->dpdu += ds[i] * bt[j] * q[static_cast<std::size_t>(4 * j + i)];
-        out->dpdv += bs[i] * dt[j] * q[static_cast<std::size_t>(4 * j + i)];
-      }
-    if (!Wants(order, DerivOrder::Second)) return;
-    out->d2pdu2.setZero(), out->d2pduv.setZero(), out->d2pdv2.setZero();
-    for (int j = 0; j < 4; ++j)
-      for (int i = 0; i < 4; ++i) {
-        const Vec3& x = q[static_cast<std::size_t>(4 * j + i)];
-        out->d2pdu2 += dds[i] * bt[j] * x;
-        out->d2pduv += ds[i] * dt[j] * x;
-        out->d2pdv2 += bs[i] * ddt[j] * x;
-      }
-    for (int j = 1; j < 3; ++j)
-      for (int i = 1; i < 3; ++i) {
-        const int m = (i - 1) + 2 * (j - 1);
-        const Blend& g = blend[m];
-        out->d2pdu2 += ds[i] * bt[j] * g.gs * diff[m];
-        out->d2pdv2 += bs[i] * dt[j] * g.gt * diff[m];
-        out->d2pduv += 0.5 * (ds[i] * bt[j] * g.gt + bs[i] * dt[j] * g.gs) * diff[m];
-      }
+    Vec3 inner[4];
+    for (int m = 0; m < 4; ++m) {
+      const int i = 1 + (m & 1), j = 1 + (m >> 1);
+      blend[m] = BlendAt(i, j, s, t);
+      const Vec3& a = p_[static_cast<std::size_t>(4 * j + i)];
+      const Vec3& b = p_[static_cast<std::size_t>(16 + m)];
+      inner[m] = b + blend[m].g * (a - b);
+    }
+    const auto point = [&](int i, int j) -> const Vec3& {
+      return (i == 1 || i == 2) && (j == 1 || j == 2) ? inner[(i - 1) + 2 * (j - 1)] : p_[static_cast<std::size_t>(4 * j + i)];
+    };
+    // Collapse s row by row (with its derivatives), then t.
+    Vec3 r[4], rs[4], rss[4];
+    for (int j = 0; j < 4; ++j) {
+      const Vec3 &q0 = point(0, j), &q1 = point(1, j), &q2 = point(2, j), &q3 = point(3, j);
+      r[j] = bs[0] * q0 + bs[1] * q1 + bs[2] * q2 + bs[3] * q3;
+      if (first) rs[j] = ds[0] * q0 + ds[1] * q1 + ds[2] * q2 + ds[3] * q3;
+      if (second) rss[j] = dds[0] * q0 + dds[1] * q1 + dds[2] * q2 + dds[3] * q3;
+    }
+    out->p = bt[0] * r[0] + bt[1] * r[1] + bt[2] * r[2] + bt[3] * r[3];
+    if (!first) return;
+    out->dpdu = bt[0] * rs[0] + bt[1] * rs[1] + bt[2] * rs[2] + bt[3] * rs[3];
+    out->dpdv = dt[0] * r[0] + dt[1] * r[1] + dt[2] * r[2] + dt[3] * r[3];
+    if (!second) return;
+    out->d2pdu2 = bt[0] * rss[0] + bt[1] * rss[1] + bt[2] * rss[2] + bt[3] * rss[3];
+    out->d2pduv = dt[0] * rs[0] + dt[1] * rs[1] + dt[2] * rs[2] + dt[3] * rs[3];
+    out->d2pdv2 = ddt[0] * r[0] + ddt[1] * r[1] + ddt[2] * r[2] + ddt[3] * r[3];
+    // The blends' own change, in the derivatives of the first-derivative field.
+    for (int m = 0; m < 4; ++m) {
+      const int i = 1 + (m & 1), j = 1 + (m >> 1);
+      const Vec3 diff = p_[static_cast<std::size_t>(4 * j + i)] - p_[static_cast<std::size_t>(16 + m)];
+      const Blend& g = blend[m];
+      out->d2pdu2 += (ds[i] * bt[j] * g.gs) * diff;
+      out->d2pdv2 += (bs[i] * dt[j] * g.gt) * diff;
+      out->d2pduv += (0.5 * (ds[i] * bt[j] * g.gt + bs[i] * dt[j] * g.gs)) * diff;
+    }
   }
 
  private:
