@@ -109,11 +109,11 @@ ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, Ex
 
 ExactScan::~ExactScan() = default;
 
-void ExactScan::Activate(std::size_t index, double y, double spacing) {
+void ExactScan::Activate(const ScanEntry& entry, double y, double spacing) {
+  const std::size_t index = entry.index;
   auto a = std::make_unique<Active>();
   a->index = index;
-  for (const ScanEntry& p : pending_)
-    if (p.index == index) a->yMax = p.yMax;
+  a->yMax = entry.yMax;
   a->scan = std::make_unique<SurfaceScan>(surfaces_[index], camera_, options_.extrapolate, counters_);
   a->scan->StartAt(y, spacing);
   active_.push_back(std::move(a));
@@ -123,7 +123,7 @@ void ExactScan::Activate(std::size_t index, double y, double spacing) {
 void ExactScan::UpdateActive(double yLo, double yHi, double spacing) {
   std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yLo; });
   for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= yHi; ++nextPending_)
-    if (pending_[nextPending_].yMax >= yLo) Activate(pending_[nextPending_].index, yLo, spacing);
+    if (pending_[nextPending_].yMax >= yLo) Activate(pending_[nextPending_], yLo, spacing);
 }
 
 // Every line a surface's scan takes is SurfaceScan::LineFor of the row's y: the trackers

@@ -95,7 +95,7 @@ class ExactScan final : public raster::FragmentSource {
   // Retires the surfaces the scan has passed (below yLo) and sets up those it has reached
   // (top at or above yHi, bottom at or below yLo), their trackers first advanced to yLo.
   void UpdateActive(double yLo, double yHi, double spacing);
-  void Activate(size_t index, double y, double spacing);
+  void Activate(const ScanEntry& entry, double y, double spacing);
   // Advances a surface's trackers to y (and traces them).
   void AdvanceTo(Active& a, double y);
   // The X scan of a surface on line y from its trackers `t`: exact fragments, or (θ) each
