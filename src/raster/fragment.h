@@ -78,6 +78,7 @@ class Chord {
         const Slope& slopeB = {})
       : xa_(xa), xb_(xb), invSpan_(1.0 / (xb - xa)), invWa_(1.0 / a.w), invWb_(1.0 / b.w), a_(a), b_(b),
         orthographic_(orthographic) {
+    TextureCubic();
     const double span = xb - xa, turn = (b.normal - a.normal).norm();
     const Vec3 ta = span * slopeA.normal, tb = span * slopeB.normal;
     const double sa = span * (orthographic ? slopeA.depth : -slopeA.depth / (a.w * a.w));
@@ -141,6 +142,7 @@ class Chord {
   Chord(double xa, const Fragment& a, double xb, const Fragment& b, bool orthographic, const Cubics* cubics)
       : xa_(xa), xb_(xb), invSpan_(1.0 / (xb - xa)), invWa_(1.0 / a.w), invWb_(1.0 / b.w), a_(a), b_(b),
         orthographic_(orthographic), cubic_(cubics != nullptr) {
+    TextureCubic();
     if (cubics) cubics_ = *cubics, r0_ = std::sqrt(cubics_.u0), inv1r0_ = 1.0 / (1.0 - r0_);
   }
 
@@ -216,7 +218,11 @@ class Chord {
     const Vec3 n = cubic_ ? Horner(cubics_.normal, p) : Vec3(wa * a_.normal + wb * b_.normal);
     f.normal = n * (1.0 / n.norm());
     if (!f.normal.allFinite()) f.normal = a_.normal;
-    f.uv = wa * a_.uv + wb * b_.uv;
+    if (cubic_ && cubics_.root != 0) {
+      RootTexture(t, p, &f);
+      return f;
+    }
+    f.uv = uvCubic_ ? Horner(uv_, t) : Vec2(wa * a_.uv + wb * b_.uv);
     if (t > 0.5) f.duvdx = b_.duvdx, f.duvdy = b_.duvdy;
     return f;
   }
@@ -231,6 +237,9 @@ class Chord {
   bool cubic_ = false;
   Cubics cubics_;
   double r0_ = 0.0, inv1r0_ = 1.0;  // √cubics_.u0 and 1 / (1 - √cubics_.u0)
+  // The texture coordinates' cubic in t, when the ends' slopes gave one (TextureCubic).
+  bool uvCubic_ = false;
+  Vec2 uv_[4];
 
   double Along(double x) const { return std::clamp((x - xa_) * invSpan_, 0.0, 1.0); }
   // The cubics' parameter at t (Cubics::root).
@@ -240,6 +249,43 @@ class Chord {
     const double s = cubics_.root == 1 ? t : 1.0 - t;
     const double r = (std::sqrt(cubics_.u0 + (1.0 - cubics_.u0) * s) - r0_) * inv1r0_;
     return cubics_.root == 1 ? r : 1.0 - r;
+  }
+  // The texture coordinates' cubic in t from the ends' own change per pixel along the row
+  // (a fragment's duvdx: the surface's, exact), when both are known and fit the chord as
+  // its normal's slopes must (no longer than kSlopeTurnRatio times the change across it,
+  // plus kSlopeFloor texture units: near a silhouette the front end clamps a footprint,
+  // which is then no slope): the texture then lies within the fourth power of the chord's
+  // length of the surface's, where the blend's error (the square) moved every texture edge
+  // by a fraction of a pixel. Derived from the ends alone, so a decoded copy of a chord
+  // has it bit for bit.
+  void TextureCubic() {
+    if (xa_ == xb_) return;
+    const double span = xb_ - xa_, change = (b_.uv - a_.uv).norm();
+    const Vec2 ta = span * a_.duvdx, tb = span * b_.duvdx;
+    const auto fits = [&](const Vec2& m) { return std::isfinite(m.norm()) && m.norm() <= kSlopeTurnRatio * change + kSlopeFloor; };
+    uvCubic_ = fits(ta) && fits(tb);
+    if (uvCubic_) HermiteCoefficients(a_.uv, b_.uv, ta, tb, true, true, uv_);
+  }
+  // A chord near a silhouette: the texture coordinates go as its root parameter p (as the
+  // normal and depth do; a blend in t placed the texture by the square of the distance
+  // from the silhouette), and the footprint grows towards the silhouette as dt/dp does, as
+  // the surface's own does (1/√ of the distance from it): the far end's, scaled by
+  // dp/dt there over dp/dt at t, which is 1/√(u0 + (1 - u0) t') (t' the fraction from the
+  // near end), and no longer than the near end's (the silhouette's own is clamped by the
+  // front end). Taking the nearer end's footprint blurred half the chord with the
+  // silhouette's.
+  void RootTexture(double t, double p, Fragment* f) const {
+    f->uv = a_.uv + p * (b_.uv - a_.uv);
+    const bool nearA = cubics_.root == 1;
+    const Fragment &nearEnd = nearA ? a_ : b_, &farEnd = nearA ? b_ : a_;
+    const double fromNear = nearA ? t : 1.0 - t;
+    const double grow = 1.0 / std::sqrt(cubics_.u0 + (1.0 - cubics_.u0) * fromNear);
+    const auto scaled = [grow](const Vec2& far, const Vec2& near) {
+      const Vec2 d = grow * far;
+      return d.squaredNorm() <= near.squaredNorm() ? d : near;  // false for NaN
+    };
+    f->duvdx = scaled(farEnd.duvdx, nearEnd.duvdx);
+    f->duvdy = scaled(farEnd.duvdy, nearEnd.duvdy);
   }
   // What is interpolated for the eye distance: 1/w in perspective, w orthographic.
   double Depth(double w) const { return orthographic_ ? w : 1.0 / w; }

@@ -713,6 +713,86 @@ TEST(Chord, NearASilhouetteTheAttributesGoAsTheRootOfTheDistanceFromIt) {
   }
 }
 
+// The circle section's ends with texture coordinate u = φ, and their change per pixel
+// along the row: the surface's own (dφ/dx), or a footprint clamped to 1 texture unit a
+// pixel, as the front end's is at a silhouette (no slope).
+Fragment TexturedEnd(double phi, bool slope) {
+  Fragment f;
+  f.w = CircleSection::Point(phi).z();
+  f.position = CircleSection::Point(phi);
+  f.normal = CircleSection::Normal(phi);
+  f.uv = Vec2(phi, 0.0);
+  f.duvdx = slope ? Vec2(1.0 / CircleSection::DxDphi(phi), 0.0) : Vec2(1.0, 0.0);
+  f.duvdy = f.duvdx;
+  return f;
+}
+// The largest error of u against φ over 101 points of a chord of the section.
+double TextureError(const Chord& c, double pa, double pb) {
+  double e = 0.0;
+  for (int k = 0; k <= 100; ++k) {
+    const double x = c.xa() + (c.xb() - c.xa()) * k / 100.0;
+    e = std::max(e, std::abs(c.At(x).uv.x() - CircleSection::PhiAt(x, std::min(pa, pb), std::max(pa, pb))));
+  }
+  return e;
+}
+
+TEST(Chord, TextureCoordinatesFollowTheEndsSlopes) {
+  // u = φ is not linear along the row (nor is 1/w's blend of it): blended, its error falls
+  // as the square of the chord's turn; with the ends' own change per pixel (a Hermite
+  // cubic in x), as the fourth power. Turns of 2π/16 and 2π/32 as in
+  // SlopesMakeTheSectionFourthOrder; measured ratios per halving 3.1 (blend) and 10.7
+  // (cubic, towards 16 as the turn shrinks, as the normal's), and the cubic 11.6 times
+  // better at 2π/16.
+  constexpr double kSecondOrderMin = 2.5, kSecondOrderMax = 5.0, kFourthOrderMin = 8.0, kGainAt16Min = 8.0;
+  const double start = -0.6;
+  double blend[2], cubic[2];
+  for (int k = 0; k < 2; ++k) {
+    const double pa = start, pb = start + 2.0 * M_PI / (k == 0 ? 16 : 32);
+    for (const bool slopes : {false, true}) {
+      const Chord c(CircleSection::X(pa), TexturedEnd(pa, slopes), CircleSection::X(pb), TexturedEnd(pb, slopes), false);
+      (slopes ? cubic : blend)[k] = TextureError(c, pa, pb);
+    }
+  }
+  std::cout << "chord texture error, blend: N=16 " << blend[0] << ", N=32 " << blend[1] << "; cubic: N=16 " << cubic[0]
+            << ", N=32 " << cubic[1] << '\n';
+  EXPECT_GT(blend[0] / blend[1], kSecondOrderMin);
+  EXPECT_LT(blend[0] / blend[1], kSecondOrderMax);
+  EXPECT_GT(cubic[0] / cubic[1], kFourthOrderMin);
+  EXPECT_GT(blend[0] / cubic[0], kGainAt16Min);
+}
+
+TEST(Chord, NearASilhouetteTheTextureGoesAsTheRootAndItsFootprintGrows) {
+  // A chord to a silhouette takes u as its root parameter, as the normal and the depth:
+  // measured a thirty-second of the blend's error (the blend places the texture by the square of
+  // the distance from the silhouette). Its footprint grows towards the silhouette as the
+  // surface's (1/√ of the distance), from the far end's to at most the silhouette's own
+  // clamped one: before, half the chord took the silhouette's and blurred the texture to
+  // its mean.
+  constexpr double kRootGainMax = 0.1;
+  const double graze = M_PI / 2.0 - std::atan(1.0 / std::sqrt(CircleSection::kZ * CircleSection::kZ - 1.0));
+  const double pa = graze - 2.0 * M_PI / 8, pb = graze;
+  const Fragment a = TexturedEnd(pa, true), b = TexturedEnd(pb, false);
+  const double dx = CircleSection::DxDphi(pa);
+  const Chord::Slope slope{Vec3(Vec3(std::cos(pa), 0.0, std::sin(pa)) / dx), std::sin(pa) / dx};
+  const Chord root(CircleSection::X(pa), a, CircleSection::X(pb), b, false, slope, {Vec3::Constant(NAN), NAN, 0.0});
+  const Chord plain(CircleSection::X(pa), a, CircleSection::X(pb), b, false, slope, {});
+  ASSERT_NE(root.cubics(), nullptr);
+  const double eRoot = TextureError(root, pa, pb), ePlain = TextureError(plain, pa, pb);
+  std::cout << "chord to a silhouette, texture error: in the root " << eRoot << ", blended " << ePlain << '\n';
+  EXPECT_LT(eRoot, kRootGainMax * ePlain);
+  double last = 0.0;
+  for (int k = 0; k <= 100; ++k) {
+    const double x = root.xa() + (root.xb() - root.xa()) * k / 100.0;
+    const double footprint = root.At(x).duvdx.norm();
+    if (k == 0) {
+      EXPECT_NEAR(footprint, a.duvdx.norm(), 1e-12);
+    }
+    EXPECT_GE(footprint, last) << k;
+    EXPECT_LE(footprint, b.duvdx.norm()) << k;
+    last = footprint;
+  }
+}
+
 // Keeps rows as they come, refusing from row `refuseAt` on.
 class OrderedRows final : public RowSink {
  public:
