@@ -34,7 +34,8 @@ constexpr double kSecondDiffStep = 1e-6;
 // collocation matrix's condition number being ~10); a surface of higher degree (Loop's
 // quartic box splines, a Gregory patch) differs by a sizeable fraction of it. Position
 // and derivatives up to the second must agree this closely, relative to the patch points'
-// extent.
+// extent (a fitted Gregory patch: position and first derivatives, its fit agreeing to
+// ~1e-15 as well where the cell is one, and by ~1e-6 of the extent where it is not).
 constexpr double kBicubicFitRel = 1e-9;
 
 using SubFaceMap = SubdivFace::SubFaceMap;
@@ -424,11 +425,12 @@ struct FaceData {
   std::vector<double> patchPoints;  // x y z per point: the control points, then any Bfr adds
   osd::Bfr::Surface<double> stSurface;
   std::vector<double> stPatchPoints;  // s t per point
-  // Per sub-face (one for a quadrilateral), where it is a bicubic polynomial (Catmull-Clark
-  // and bilinear faces; none for Loop's, whose regular pieces are quartic): fitted when a
-  // scan first holds the sub-face (Cage::Hold), under the cage's mutex, and read lock-free.
-  // Null until then, so every evaluation of a sub-face is Bfr's before its scan's hold and
-  // the bicubics' after it, whatever other threads do with the face's other sub-faces.
+  // Per sub-face (one for a quadrilateral), where it is a bicubic polynomial or a Gregory
+  // patch (Catmull-Clark and bilinear faces; none for Loop's, whose regular pieces are
+  // quartic): fitted when a scan first holds the sub-face (Cage::Hold), under the cage's
+  // mutex, and read lock-free. Null until then, so every evaluation of a sub-face is Bfr's
+  // before its scan's hold and the pieces' after it, whatever other threads do with the
+  // face's other sub-faces.
   mutable std::vector<std::atomic<const BicubicPieces*>> pieces;
   double fitTol = 0.0;  // kBicubicFitRel of the patch points' extent
   FaceData() = default;
