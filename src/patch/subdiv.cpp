@@ -222,7 +222,7 @@ class GregoryPatch {
       const int i = 1 + (m & 1), j = 1 + (m >> 1);
       blend[m] = BlendAt(i, j, s, t);
       const Vec3& a = p_[static_cast<std::size_t>(4 * j + i)];
-      const Vec3& b = p_[static_cast<std::size_t>(16 + m)];
+      const Vec3& b = p_[static_cast<std::size_t>(Second(i, j))];
       inner[m] = b + blend[m].g * (a - b);
     }
     const auto point = [&](int i, int j) -> const Vec3& {
@@ -247,7 +247,7 @@ class GregoryPatch {
     // The blends' own change, in the derivatives of the first-derivative field.
     for (int m = 0; m < 4; ++m) {
       const int i = 1 + (m & 1), j = 1 + (m >> 1);
-      const Vec3 diff = p_[static_cast<std::size_t>(4 * j + i)] - p_[static_cast<std::size_t>(16 + m)];
+      const Vec3 diff = p_[static_cast<std::size_t>(4 * j + i)] - p_[static_cast<std::size_t>(Second(i, j))];
       const Blend& g = blend[m];
       out->d2pdu2 += (ds[i] * bt[j] * g.gs) * diff;
       out->d2pdv2 += (bs[i] * dt[j] * g.gt) * diff;
@@ -294,7 +294,6 @@ std::optional<GregoryPatch> FitGregory(const At& at, double tol) {
   if (!MatchesBetweenNodes(at, patch, DerivOrder::First, tol)) return std::nullopt;
   return patch;
 }
-
 
 }  // namespace
 

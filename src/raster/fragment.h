@@ -83,9 +83,7 @@ class Chord {
     const Vec3 ta = span * slopeA.normal, tb = span * slopeB.normal;
     const double sa = span * (orthographic ? slopeA.depth : -slopeA.depth / (a.w * a.w));
     const double sb = span * (orthographic ? slopeB.depth : -slopeB.depth / (b.w * b.w));
-    const auto fits = [&](const Vec3& t, double s) {
-      return t.norm() <= kSlopeTurnRatio * turn + kSlopeFloor && std::isfinite(s);  // false for NaN
-    };
+    const auto fits = [&](const Vec3& t, double s) { return TangentFits(t.norm(), turn) && std::isfinite(s); };
     const bool nearA = slopeA.silhouette <= kSilhouetteNear * std::abs(span);
     const bool nearB = slopeB.silhouette <= kSilhouetteNear * std::abs(span);
     if (nearA != nearB) {
@@ -242,6 +240,10 @@ class Chord {
   Vec2 uv_[4];
 
   double Along(double x) const { return std::clamp((x - xa_) * invSpan_, 0.0, 1.0); }
+  // Whether a tangent of this length (per unit t) fits a chord across which the attribute
+  // changes by `change`: no longer than kSlopeTurnRatio times it plus kSlopeFloor (false
+  // for NaN and infinity).
+  static bool TangentFits(double length, double change) { return length <= kSlopeTurnRatio * change + kSlopeFloor; }
   // The cubics' parameter at t (Cubics::root).
   double Param(double t) const {
     if (cubics_.root == 0) return t;
@@ -262,8 +264,7 @@ class Chord {
     if (xa_ == xb_) return;
     const double span = xb_ - xa_, change = (b_.uv - a_.uv).norm();
     const Vec2 ta = span * a_.duvdx, tb = span * b_.duvdx;
-    const auto fits = [&](const Vec2& m) { return std::isfinite(m.norm()) && m.norm() <= kSlopeTurnRatio * change + kSlopeFloor; };
-    uvCubic_ = fits(ta) && fits(tb);
+    uvCubic_ = TangentFits(ta.norm(), change) && TangentFits(tb.norm(), change);
     if (uvCubic_) HermiteCoefficients(a_.uv, b_.uv, ta, tb, true, true, uv_);
   }
   // A chord near a silhouette: the texture coordinates go as its root parameter p (as the
