@@ -23,10 +23,11 @@ WorldNormal WorldNormalOf(const SurfaceDerivs& o, const Affine3& worldFromObject
   return w;
 }
 
-}  // namespace
-
-TableResidual TableFunction(const SurfaceDerivs& o, const Affine3& worldFromObject, const ThetaFrame& frame,
-                            const Vec2& angle) {
+// TableFunction at `angle`, or (null) at the point's own angle θ: (cos θ, sin θ) = (S, T) /
+// |(S, T)|, with the normal, the view ray and s found once for both (NaN where the normal
+// is across the scan plane).
+TableResidual TableAt(const SurfaceDerivs& o, const Affine3& worldFromObject, const ThetaFrame& frame,
+                      const Vec2* angle) {
   const Vec3 p = worldFromObject * o.p;
   const WorldNormal w = WorldNormalOf(o, worldFromObject);
   const Vec3 &n = w.n, &nu = w.nu, &nv = w.nv, &pu = w.pu, &pv = w.pv;
@@ -52,7 +53,9 @@ TableResidual TableFunction(const SurfaceDerivs& o, const Affine3& worldFromObje
   const Vec3 qu = dq(ru), qv = dq(rv);
   const Vec3 s = r.cross(q);
   const Vec3 su = ru.cross(q) + r.cross(qu), sv = rv.cross(q) + r.cross(qv);
-  const double c = angle.x(), sn = angle.y();
+  const Vec2 own = angle ? Vec2::Zero() : Vec2(n.dot(s), -n.dot(r));
+  const Vec2 a = angle ? *angle : Vec2(own / own.norm());
+  const double c = a.x(), sn = a.y();
   const Vec3 d = sn * s + c * r;
   const Vec3 du = sn * su + c * ru, dv = sn * sv + c * rv;
   const double len = n.norm();
@@ -67,14 +70,18 @@ TableResidual TableFunction(const SurfaceDerivs& o, const Affine3& worldFromObje
   return out;
 }
 
+}  // namespace
+
+TableResidual TableFunction(const SurfaceDerivs& o, const Affine3& worldFromObject, const ThetaFrame& frame,
+                            const Vec2& angle) {
+  return TableAt(o, worldFromObject, frame, &angle);
+}
+
 double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const Affine3& worldFromObject,
                     const ThetaFrame& frame) {
   // At the point's own angle θ, G_θ = 0 and G_φ/|N| = ρ sin(φ - θ) with ρ the in-plane part
   // of the unit normal, so G_θ's gradient at fixed φ = θ is -ρ ∇θ.
-  const auto L = worldFromObject.linear();
-  const Vec3 n = (L.determinant() < 0.0 ? -1.0 : 1.0) * (L * object.dpdu).cross(L * object.dpdv);
-  const double theta = frame.Theta(worldFromObject * object.p, n);
-  return TurnRate(TableFunction(object, worldFromObject, frame, Vec2(std::cos(theta), std::sin(theta))), gradY);
+  return TurnRate(TableAt(object, worldFromObject, frame, nullptr), gradY);
 }
 
 Vec3 NormalSlope(const SurfaceDerivs& o, const Vec2& duv, const Affine3& worldFromObject) {
