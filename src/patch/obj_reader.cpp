@@ -105,7 +105,7 @@ class ObjParser {
     scene_.source = name_;
     scene_.cages.push_back(cage);
     // Room for every face at once: a Surface is a kilobyte, and growing the vector by
-    // doubling moved each one about twice into fresh pages (a tenth of a 2,688-face cage's
+    // doubling moved each one about twice into fresh pages (a third of a 2,688-face cage's
     // load).
     scene_.surfaces.reserve(scene_.surfaces.size() + faces.size());
     scene_.sourceLines.reserve(scene_.sourceLines.size() + faces.size());
