@@ -104,12 +104,7 @@ class ObjParser {
     }
     scene_.source = name_;
     scene_.cages.push_back(cage);
-    // Room for every face at once: a Surface is a kilobyte, and growing the vector by
-    // doubling moved each one about twice into fresh pages (a third of a 2,688-face cage's
-    // load).
-    scene_.surfaces.reserve(scene_.surfaces.size() + faces.size());
-    scene_.sourceLines.reserve(scene_.sourceLines.size() + faces.size());
-    scene_.sourceFiles.reserve(scene_.sourceFiles.size() + faces.size());
+    scene_.ReserveSurfaces(faces.size(), false);  // an .obj has no appearances
     for (SubdivFace& f : faces) {
       scene_.sourceLines.push_back(faceLines_[static_cast<std::size_t>(f.Face())]);
       scene_.sourceFiles.push_back(name_);

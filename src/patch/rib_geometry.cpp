@@ -27,15 +27,6 @@ void RibParser::AddSurface(const Request& r, Shape shape) {
   scene_.appearanceOf.push_back(AppearanceIndex());
 }
 
-void RibParser::ReserveSurfaces(std::size_t more) {
-  // Room for a request's many surfaces at once (a Surface is a kilobyte: growing one by one
-  // moved each about twice into fresh pages), still doubling across requests.
-  const auto grow = [more](auto& v) {
-    if (v.size() + more > v.capacity()) v.reserve(std::max(v.size() + more, 2 * v.capacity()));
-  };
-  grow(scene_.surfaces), grow(scene_.sourceLines), grow(scene_.sourceFiles), grow(scene_.appearanceOf);
-}
-
 std::uint32_t RibParser::AppearanceIndex() {
   Appearance a = attr_.appearance;
   // RenderMan Interface 3.2, "Orientation": the normal is flipped where the orientation
@@ -226,7 +217,7 @@ bool RibParser::PatchMesh(const Request& r) {
       !MeshCount(r, nv, periodic[1], bicubic, vStep, "v", &nvPatches))
     return false;
   const int order = bicubic ? 4 : 2;
-  ReserveSurfaces(static_cast<std::size_t>(nuPatches) * static_cast<std::size_t>(nvPatches));
+  scene_.ReserveSurfaces(static_cast<std::size_t>(nuPatches) * static_cast<std::size_t>(nvPatches), true);
   for (int pv = 0; pv < nvPatches; ++pv)
     for (int pu = 0; pu < nuPatches; ++pu) {
       std::array<Vec3, 16> cv;
@@ -407,7 +398,7 @@ bool RibParser::SubdivisionMesh(const Request& r) {
     return Fail(r.line, std::string("SubdivisionMesh: ") + e.what());
   }
   scene_.cages.push_back(cage);
-  ReserveSurfaces(faces.size());
+  scene_.ReserveSurfaces(faces.size(), true);
   for (SubdivFace& f : faces) AddSurface(r, std::move(f));
   return true;
 }
@@ -456,7 +447,7 @@ bool RibParser::NuPatch(const Request& r) {
     if (trim->KeepsInside() != attr_.trimKeepsInside) trim = std::make_shared<const TrimLoops>(trim->WithSense(attr_.trimKeepsInside));
     TrimPieces(trim, &pieces);
   }
-  ReserveSurfaces(pieces.size());
+  scene_.ReserveSurfaces(pieces.size(), true);
   for (NurbsPiece& piece : pieces) AddSurface(r, std::move(piece));
   return true;
 }

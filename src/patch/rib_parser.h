@@ -195,7 +195,6 @@ class RibParser {
   // ---- geometry ----
   bool InWorld(const Request& r);
   void AddSurface(const Request& r, Shape shape);
-  void ReserveSurfaces(std::size_t more);
   // The index into the scene's appearances of the current appearance (added if new).
   std::uint32_t AppearanceIndex();
   static std::size_t HashOf(const Appearance& a);

@@ -1,5 +1,6 @@
 #include "patch/scene.h"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "patch/bpt_reader.h"
@@ -7,6 +8,14 @@
 #include "patch/rib_reader.h"
 
 namespace patchscan {
+
+void Scene::ReserveSurfaces(std::size_t more, bool withAppearances) {
+  const auto grow = [more](auto& v) {
+    if (v.size() + more > v.capacity()) v.reserve(std::max(v.size() + more, 2 * v.capacity()));
+  };
+  grow(surfaces), grow(sourceLines), grow(sourceFiles);
+  if (withAppearances) grow(appearanceOf);
+}
 
 Bounds3 Scene::WorldBounds() const {
   Bounds3 b;

@@ -109,6 +109,12 @@ struct Scene {
   // How many surface ids the scene has: its surfaces, then its polygon meshes.
   std::size_t Ids() const { return surfaces.size() + polygons.size(); }
 
+  // Room for `more` surfaces in every per-surface vector at once (appearanceOf too when
+  // `withAppearances`), growing at least by doubling across calls. A Surface is a kilobyte:
+  // growing one by one moved each about twice into fresh pages (a third of a 2,688-face
+  // cage's load).
+  void ReserveSurfaces(std::size_t more, bool withAppearances);
+
   // A conservative world-space box of the whole scene.
   Bounds3 WorldBounds() const;
   // Turns every curve's ribbons (patch/curves.h) to face the camera's eye (or, for an
