@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bitset>
 #include <cmath>
 #include <cstdint>
 #include <mutex>
@@ -122,8 +123,10 @@ bool MatchesBetweenNodes(const At& at, const Patch& patch, DerivOrder order, dou
 // one: its values at the 4 x 4 nodes s, t in {0, 1/3, 2/3, 1} give the Bézier points (b =
 // M^-1 P M^-T, M the Bernstein collocation matrix), kept only if they match `at`'s position
 // and first and second derivatives within `tol` at 9 points between the nodes.
-template <class At>
-std::optional<BicubicPatch> FitBicubic(const At& at, double tol) {
+//
+// `node(i, j)` is `at`'s position at (i/3, j/3), which the caller may have in hand.
+template <class At, class Node>
+std::optional<BicubicPatch> FitBicubic(const At& at, const Node& node, double tol) {
   static const Eigen::Matrix4d kInverse = [] {
     Eigen::Matrix4d m;
     for (int i = 0; i < 4; ++i) {
@@ -132,19 +135,15 @@ std::optional<BicubicPatch> FitBicubic(const At& at, double tol) {
     }
     return Eigen::Matrix4d(m.inverse());
   }();
-  Vec3 node[4][4];  // [j][i] at (s, t) = (i/3, j/3)
-  SurfaceDerivs d;
+  Vec3 nodes[4][4];  // [j][i] at (s, t) = (i/3, j/3)
   for (int j = 0; j < 4; ++j)
-    for (int i = 0; i < 4; ++i) {
-      at(i / 3.0, j / 3.0, DerivOrder::Position, &d);
-      node[j][i] = d.p;
-    }
+    for (int i = 0; i < 4; ++i) nodes[j][i] = node(i, j);
   std::array<Vec3, 16> bezier;
   for (int l = 0; l < 4; ++l)      // along t
     for (int k = 0; k < 4; ++k) {  // along s
       Vec3 b = Vec3::Zero();
       for (int j = 0; j < 4; ++j)
-        for (int i = 0; i < 4; ++i) b += kInverse(l, j) * kInverse(k, i) * node[j][i];
+        for (int i = 0; i < 4; ++i) b += kInverse(l, j) * kInverse(k, i) * nodes[j][i];
       bezier[static_cast<std::size_t>(4 * l + k)] = b;
     }
   BicubicPatch patch(bezier);
@@ -322,8 +321,17 @@ struct BicubicPieces {
   std::vector<GregoryPatch> gregory;
   std::array<std::int8_t, 16> gregoryOf{};
 
+  // Where the (sub-)face's corners are known to be extraordinary (Corners), the fits that
+  // cannot succeed there are not tried, and the Gregory fit goes first.
+  struct Corners {
+    // Bit 2 qj + qi: quadrant (qi, qj)'s corner of the (sub-)face is an extraordinary point
+    // whose Gregory patch is the quadrant (a triangle's centre) or the cell at that corner
+    // (a smooth interior vertex of valence other than 4 at a quadrilateral's corner).
+    unsigned gregoryQuadrants = 0, gregoryCells = 0;
+  };
+
   BicubicPieces(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
-                double tol) {
+                double tol, Corners corners) {
     patchOf.fill(-1);
     gregoryOf.fill(-1);
     if (surface.IsRegular() && Fit(surface, pts, map, tol, 0, 0, 0)) return;
@@ -331,11 +339,24 @@ struct BicubicPieces {
       for (int qi = 0; qi < 2; ++qi) {
         // A quadrant is one bicubic, or one Gregory patch (a non-quadrilateral face's
         // sub-face at its centre, an extraordinary corner: Bfr's cells there are the
-        // quadrants), or cells of either.
-        if (Fit(surface, pts, map, tol, 1, qi, qj) || FitIrregular(surface, pts, map, tol, 1, qi, qj)) continue;
+        // quadrants), or cells of either. At a known extraordinary corner it is no bicubic
+        // (Bfr's patch there is irregular), and one Gregory patch only at a triangle's centre.
+        const unsigned bit = 1u << (2 * qj + qi);
+        if (corners.gregoryQuadrants & bit) {
+          if (FitIrregular(surface, pts, map, tol, 1, qi, qj)) continue;
+        } else if (!(corners.gregoryCells & bit)) {
+          if (Fit(surface, pts, map, tol, 1, qi, qj) || FitIrregular(surface, pts, map, tol, 1, qi, qj)) continue;
+        }
+        // The cells' nodes, shared along their common edges: the 7 x 7 grid of sixths of
+        // the quadrant (a cell's node (i/3, j/3) computed as Bfr's coordinate (c + i/3) / 4,
+        // the same double from either cell of an edge since c + 3/3 is exact).
+        QuadrantNodes nodes;
         for (int j = 2 * qj; j < 2 * qj + 2; ++j)
-          for (int i = 2 * qi; i < 2 * qi + 2; ++i)
-            if (!Fit(surface, pts, map, tol, 2, i, j)) FitIrregular(surface, pts, map, tol, 2, i, j);
+          for (int i = 2 * qi; i < 2 * qi + 2; ++i) {
+            const bool atCorner = (corners.gregoryCells & bit) && i == 3 * qi && j == 3 * qj;
+            if (atCorner && FitIrregular(surface, pts, map, tol, 2, i, j)) continue;
+            if (!FitCell(surface, pts, map, tol, i, j, &nodes) && !atCorner) FitIrregular(surface, pts, map, tol, 2, i, j);
+          }
       }
   }
   int PatchAt(double u, double v) const { return patchOf[static_cast<std::size_t>(4 * QuarterOf(v) + QuarterOf(u))]; }
@@ -401,7 +422,34 @@ struct BicubicPieces {
   // (FitIrregular); covers its quarters if it is one.
   bool Fit(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
            double tol, int level, int ci, int cj) {
-    return Keep(FitBicubic(CellOf(surface, pts, map, level, ci, cj), tol), patches, patchOf, level, ci, cj);
+    const auto at = CellOf(surface, pts, map, level, ci, cj);
+    const auto node = [&at](int i, int j) {
+      SurfaceDerivs d;
+      at(i / 3.0, j / 3.0, DerivOrder::Position, &d);
+      return d.p;
+    };
+    return Keep(FitBicubic(at, node, tol), patches, patchOf, level, ci, cj);
+  }
+  // The positions at a quadrant's cells' nodes, each evaluated once.
+  struct QuadrantNodes {
+    std::array<Vec3, 49> p;  // [7 j + i] at sixth (i, j) of the quadrant
+    std::bitset<49> has;
+  };
+  // Fit at level 2 (the cell (ci, cj)), its nodes from and into `nodes`.
+  bool FitCell(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
+               double tol, int ci, int cj, QuadrantNodes* nodes) {
+    const auto at = CellOf(surface, pts, map, 2, ci, cj);
+    const auto node = [&at, nodes, ci, cj](int i, int j) {
+      const auto k = static_cast<std::size_t>(7 * (3 * (cj & 1) + j) + 3 * (ci & 1) + i);
+      if (!nodes->has[k]) {
+        SurfaceDerivs d;
+        at(i / 3.0, j / 3.0, DerivOrder::Position, &d);
+        nodes->p[k] = d.p;
+        nodes->has[k] = true;
+      }
+      return nodes->p[k];
+    };
+    return Keep(FitBicubic(at, node, tol), patches, patchOf, 2, ci, cj);
   }
   bool FitIrregular(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
                     double tol, int level, int ci, int cj) {
@@ -416,6 +464,18 @@ struct BicubicPieces {
     return true;
   }
 };
+
+// Whether base vertex v is an extraordinary point of the Catmull-Clark limit surface:
+// interior, manifold, smooth (no sharpness at it or along its edges), of valence other than
+// 4. Bfr's patches at it are irregular.
+bool SmoothExtraordinary(const osd::Far::TopologyLevel& level, int v) {
+  if (level.IsVertexBoundary(v) || level.IsVertexNonManifold(v) || level.GetVertexSharpness(v) > 0.0f ||
+      level.GetVertexFaces(v).size() == 4)
+    return false;
+  for (const int e : level.GetVertexEdges(v))
+    if (level.GetEdgeSharpness(e) > 0.0f) return false;
+  return true;
+}
 
 // A prepared base face: its Bfr surfaces (points and, where the cage has them, texture
 // coordinates) and their patch points.
@@ -516,12 +576,31 @@ class SubdivFace::Cage {
       if (data.pieces[k].load(std::memory_order_relaxed)) return;
       const osd::Bfr::Parameterization param = data.surface.GetParameterization();
       auto pieces = std::make_unique<const BicubicPieces>(data.surface, data.patchPoints, MapOf(param, subFace),
-                                                          data.fitTol);
+                                                          data.fitTol, CornersOf(face, subFace, param));
       data.pieces[k].store(pieces.release(), std::memory_order_release);
     } catch (...) {
       Release(face);  // the holder's constructor fails: no release will come for this hold
       throw;
     }
+  }
+  // The extraordinary corners of a Catmull-Clark quadrilateral or triangle's sub-face,
+  // as BicubicPieces takes them (none known for other faces and schemes).
+  BicubicPieces::Corners CornersOf(int face, int subFace, const osd::Bfr::Parameterization& param) const {
+    BicubicPieces::Corners c;
+    if (mesh_.scheme != SubdivScheme::CatmullClark) return c;
+    const osd::Far::TopologyLevel& level = refiner_->GetLevel(0);
+    const auto fv = level.GetFaceVertices(face);
+    if (param.GetType() == osd::Bfr::Parameterization::QUAD && subFace < 0) {
+      // Bfr's corners (0,0), (1,0), (1,1), (0,1) are the face's vertices in order.
+      constexpr unsigned kQuadrant[4] = {1u << 0, 1u << 1, 1u << 3, 1u << 2};
+      for (int k = 0; k < 4; ++k)
+        if (SmoothExtraordinary(level, fv[k])) c.gregoryCells |= kQuadrant[k];
+    } else if (param.GetType() == osd::Bfr::Parameterization::TRI && subFace >= 0) {
+      // MapOf's kite: (0,0) the triangle's corner `subFace`, (1,1) its centre (valence 3).
+      c.gregoryQuadrants = 1u << 3;
+      if (SmoothExtraordinary(level, fv[subFace])) c.gregoryCells = 1u << 0;
+    }
+    return c;
   }
   void Release(int face) {
     const std::lock_guard lock(mutex_);
