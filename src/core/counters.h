@@ -38,6 +38,7 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(Setup, MaximaClimbIterations, "maxima_climb_iterations", "hill-climbing steps", "steps", Sum)                  \
   X(Setup, MaximaNewtonIterations, "maxima_newton_iterations", "Newton iterations on grad y = 0", "iterations", Sum) \
   X(Setup, MaximaDuplicates, "maxima_duplicates", "climbs that found a point already found", "climbs", Sum)         \
+  X(Setup, MaximaProvenMonotone, "maxima_proven_monotone", "surfaces whose y is proven monotone in u and v: one corner maximum, no climbs", "surfaces", Sum) \
   X(Setup, MaximaRejectedCollapsed, "maxima_rejected_collapsed", "climbs stopped on a collapsed edge that is no maximum", "climbs", Sum) \
   X(Setup, Stationary, "stationary_points", "maxima and saddles", "points", Sum)                                   \
   X(YScan, SampleRows, "sample_rows", "sample rows scanned", "rows", Max)                                          \

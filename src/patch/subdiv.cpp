@@ -691,6 +691,13 @@ int SubdivFace::BicubicPieceAt(double u, double v) const {
   return pc ? pc->PatchAt(u, v) : -1;
 }
 
+int SubdivFace::BicubicCover(std::array<const BicubicPatch*, 16>* out) const {
+  const BicubicPieces* pc = Pieces(cage_->Data(face_));
+  if (!pc || std::any_of(pc->patchOf.begin(), pc->patchOf.end(), [](std::int8_t k) { return k < 0; })) return -1;
+  for (std::size_t k = 0; k < pc->patches.size(); ++k) (*out)[k] = &pc->patches[k];
+  return static_cast<int>(pc->patches.size());
+}
+
 std::optional<TexCoords> SubdivFace::TextureCoords(double u, double v) const {
   if (cage_->Mesh().st.empty()) return std::nullopt;
   const FaceData& face = cage_->Data(face_);

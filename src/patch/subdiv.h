@@ -27,6 +27,8 @@
 
 namespace patchscan {
 
+class BicubicPatch;
+
 struct FaceData;       // a prepared base face (patch/subdiv.cpp)
 struct BicubicPieces;  // where a sub-face is a bicubic polynomial (patch/subdiv.cpp)
 
@@ -104,6 +106,10 @@ class SubdivFace {
   // share exactly when one polynomial serves both; -1 where Bfr's evaluation serves (or
   // before a fitting hold). Prepares the face.
   int BicubicPieceAt(double u, double v) const;
+  // Whether a hold has fitted the (sub-)face as bicubic pieces in every cell; if so the
+  // pieces (each over its own [0,1]^2, a square of the face's (u, v) scaled by a positive
+  // factor), at most 16, in *out, and how many. -1 when a cell is a Gregory patch or Bfr's.
+  int BicubicCover(std::array<const BicubicPatch*, 16>* out) const;
   // Whether Evaluate takes a fitted Gregory patch at (u, v) (prepares the face).
   bool GregoryAt(double u, double v) const;
   // The texture coordinates "st" at (u, v) with their derivatives, or nullopt when the cage

@@ -1,6 +1,13 @@
 #include "tracker/maxima.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <optional>
+#include <type_traits>
+
+#include "patch/bicubic.h"
+#include "patch/subdiv.h"
 
 namespace patchscan {
 
@@ -86,9 +93,91 @@ bool OnCollapsedEdgeThatIsNoMaximum(const ShapeT& shape, const ScreenMap& map, c
   return false;
 }
 
+// The sign of y_u (axis 0) or y_v (axis 1) over a bicubic Bézier patch seen through the
+// screen map m, if it is proven not to change; else 0. The homogeneous screen point's Y and
+// W are bicubic polynomials with Bernstein coefficients m (b_ij, 1), and y_u = (Y_u W -
+// Y W_u) / W^2; the numerator N is a polynomial of degree (5, 6) whose Bernstein
+// coefficients are sums of products of Y_u's and W's and of Y's and W_u's (the product
+// rule of Bernstein polynomials, here without its positive binomial factors, which change
+// no sign). All of one sign, each beyond kMonotoneMargin of the magnitudes it is summed
+// from (rounding), and W's coefficients all positive (the patch in front of the eye): y_u
+// keeps that sign on the patch (the convex-hull property). The edge scan proves the same
+// along an edge (tracker/edge_scan.cpp, MonotoneSign).
+constexpr double kMonotoneMargin = 1e-9;
+
+int ProvenSlopeSign(const BicubicPatch& patch, const Mat4& m, int axis) {
+  // Y and W at the Bézier points, [i][j] with i along the axis differentiated.
+  double y[4][4], w[4][4];
+  const auto& b = patch.BezierPoints();
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) {
+      const Vec4 h = m.block<4, 3>(0, 0) * b[static_cast<std::size_t>(4 * j + i)] + m.col(3);
+      if (!(h.w() > 0.0)) return 0;
+      const int a = axis == 0 ? i : j, o = axis == 0 ? j : i;
+      y[a][o] = h.y(), w[a][o] = h.w();
+    }
+  static constexpr double kBinomial2[3] = {1, 2, 1}, kBinomial3[4] = {1, 3, 3, 1};
+  double n[6][7] = {}, mag[6][7] = {};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) {
+      // Y_u's and W_u's coefficients (degree 2 along the axis), without their factor 3.
+      const double yd = y[i + 1][j] - y[i][j], wd = w[i + 1][j] - w[i][j];
+      for (int k = 0; k < 4; ++k)
+        for (int l = 0; l < 4; ++l) {
+          const double f = kBinomial2[i] * kBinomial3[k] * kBinomial3[j] * kBinomial3[l];
+          const double t1 = yd * w[k][l], t2 = y[k][l] * wd;
+          n[i + k][j + l] += f * (t1 - t2);
+          mag[i + k][j + l] += f * (std::abs(t1) + std::abs(t2));
+        }
+    }
+  bool pos = true, neg = true;
+  for (int k = 0; k < 6; ++k)
+    for (int l = 0; l < 7; ++l) {
+      const double margin = kMonotoneMargin * mag[k][l];
+      pos = pos && n[k][l] > margin;
+      neg = neg && n[k][l] < -margin;
+    }
+  return pos ? 1 : neg ? -1 : 0;
+}
+
+// The corner where h = -y is highest, when y is proven monotone in u and in v over the
+// whole surface (a bicubic patch, or a subdivision face that is bicubic pieces in every
+// cell): then h has no interior stationary point and no maximum along an edge but at
+// that corner, and every climb ends there. Else nothing, and the search runs.
 template <class ShapeT>
-std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Counters& st) {
+std::optional<Vec2> ProvenTopCorner(const ShapeT& shape, const ScreenMap& map) {
+  std::array<const BicubicPatch*, 16> pieces{};
+  int n = 0;
+  if constexpr (std::is_same_v<ShapeT, BicubicPatch>) {
+    pieces[0] = &shape, n = 1;
+  } else if constexpr (std::is_same_v<ShapeT, SubdivFace>) {
+    n = shape.BicubicCover(&pieces);
+  }
+  if (n <= 0) return std::nullopt;
+  int sign[2] = {0, 0};
+  for (int k = 0; k < n; ++k)
+    for (int axis = 0; axis < 2; ++axis) {
+      const int s = ProvenSlopeSign(*pieces[static_cast<std::size_t>(k)], map.ScreenFromObject(), axis);
+      if (s == 0 || (k > 0 && s != sign[axis])) return std::nullopt;
+      sign[axis] = s;
+    }
+  // y rising along u: h falls, its top at u = 0.
+  return Vec2(sign[0] > 0 ? 0.0 : 1.0, sign[1] > 0 ? 0.0 : 1.0);
+}
+
+template <class ShapeT>
+std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Counters& st, bool prove) {
   std::vector<Stationary> found;
+  if (const std::optional<Vec2> corner = prove ? ProvenTopCorner(shape, map) : std::nullopt) {
+    // The climbs' end, found without them: the corner, evaluated there.
+    const Height at = EvalHeight(shape, map, *corner);
+    if (PushesOut(corner->x(), at.g.x()) && PushesOut(corner->y(), at.g.y())) {
+      ++st[Counter::MaximaProvenMonotone];
+      if (OnCollapsedEdgeThatIsNoMaximum(shape, map, *corner, at)) return found;
+      found.push_back({StationaryKind::CornerMaximum, *corner, -at.h, at.g, at.H, -1});
+      return found;
+    }
+  }
   auto classifyInterior = [](const Mat2& H) {
     const double det = H.determinant(), scale = H.squaredNorm();
     if (std::abs(det) <= kCylinderRelDet * scale) return StationaryKind::LineOfMaxima;
@@ -120,19 +209,26 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
           step[k] = at.H(k, k) < 0 ? -at.g[k] / at.H(k, k) : (at.g[k] > 0 ? stepLen : -stepLen);
         }
         if (!step.allFinite() || step.squaredNorm() == 0.0) break;
-        // Clip at the boundary, keeping the direction.
+        // Clip at the boundary, keeping the direction. The coordinate that meets it is set
+        // on it: uv + step rounds to within an ulp of it, and a climb left an ulp inside
+        // took a step of that size next, gained nothing and stopped there, an "edge maximum"
+        // short of the corner the edge rises to.
         double scale = 1.0;
+        int hit = -1;
         for (int k = 0; k < 2; ++k) {
-          if (uv[k] + step[k] < 0.0) scale = std::min(scale, -uv[k] / step[k]);
-          if (uv[k] + step[k] > 1.0) scale = std::min(scale, (1.0 - uv[k]) / step[k]);
+          const double bound = uv[k] + step[k] < 0.0 ? 0.0 : uv[k] + step[k] > 1.0 ? 1.0 : NAN;
+          if (std::isnan(bound)) continue;
+          if (const double s = (bound - uv[k]) / step[k]; s < scale) scale = s, hit = k;
         }
         step *= scale;
         // Halve until h rises.
         Height next;
         Vec2 to;
-        bool rose = false;
+        bool rose = false, landed = false;
         for (int halving = 0; halving < 40; ++halving) {
           to = (uv + step).cwiseMax(0.0).cwiseMin(1.0);
+          landed = halving == 0 && hit >= 0;
+          if (landed) to[hit] = step[hit] < 0.0 ? 0.0 : 1.0;
           next = EvalHeight(shape, map, to);
           if (next.h > at.h) {
             rose = true;
@@ -145,7 +241,9 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
         stepLen = std::min(1.0, (step.norm() >= stepLen * 0.99) ? stepLen * 2 : stepLen * 0.5);
         uv = to;
         at = next;
-        if (gain < kClimbTolPx) break;
+        // A step cut short by the boundary gains little for that reason alone (from a few
+        // ulps inside it, nothing): the climb goes on along the edge it landed on.
+        if (gain < kClimbTolPx && !landed) break;
       }
       for (int k = 0; k < 2; ++k) fixed[k] = PushesOut(uv[k], at.g[k]) || (uv[k] <= 0.0 || uv[k] >= 1.0);
 
@@ -228,7 +326,13 @@ std::vector<Stationary> FindStationaryPoints(const Surface& s, const ScreenMap& 
                                              Counters* counters) {
   Counters local;
   Counters& st = counters ? *counters : local;
-  return VisitShape(s, [&](const auto& shape) { return FindImpl(shape, map, st); });
+  return VisitShape(s, [&](const auto& shape) { return FindImpl(shape, map, st, true); });
+}
+
+std::vector<Stationary> SearchStationaryPoints(const Surface& s, const ScreenMap& map, Counters* counters) {
+  Counters local;
+  Counters& st = counters ? *counters : local;
+  return VisitShape(s, [&](const auto& shape) { return FindImpl(shape, map, st, false); });
 }
 
 }  // namespace patchscan

@@ -41,7 +41,12 @@ constexpr double kDuplicateY = 0.1;
 
 // All maxima and saddles of one surface seen through `map`, sorted by y (topmost first).
 // Minima are not reported (trackers die there by failing to converge, §3.2.3).
+// A bicubic patch, or a subdivision face fitted as bicubic pieces in every cell, whose y is
+// proven monotone in u and in v has one maximum, at a corner, found without a climb
+// (counted as maxima_proven_monotone).
 std::vector<Stationary> FindStationaryPoints(const Surface& s, const ScreenMap& map,
                                              Counters* counters = nullptr);
+// The same by the seeds' climbs alone, every surface searched (to test the proof against).
+std::vector<Stationary> SearchStationaryPoints(const Surface& s, const ScreenMap& map, Counters* counters = nullptr);
 
 }  // namespace patchscan
