@@ -355,7 +355,7 @@ struct BicubicPieces {
           for (int i = 2 * qi; i < 2 * qi + 2; ++i) {
             const bool atCorner = (corners.gregoryCells & bit) && i == 3 * qi && j == 3 * qj;
             if (atCorner && FitIrregular(surface, pts, map, tol, 2, i, j)) continue;
-            if (!FitCell(surface, pts, map, tol, i, j, &nodes) && !atCorner) FitIrregular(surface, pts, map, tol, 2, i, j);
+            if (!Fit(surface, pts, map, tol, 2, i, j, &nodes) && !atCorner) FitIrregular(surface, pts, map, tol, 2, i, j);
           }
       }
   }
@@ -418,38 +418,32 @@ struct BicubicPieces {
         levelOf[static_cast<std::size_t>(4 * j + i)] = static_cast<std::int8_t>(level);
       }
   }
-  // Fits the cell (ci, cj) of `level` as a bicubic (Fit) or a Gregory patch
-  // (FitIrregular); covers its quarters if it is one.
-  bool Fit(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
-           double tol, int level, int ci, int cj) {
-    const auto at = CellOf(surface, pts, map, level, ci, cj);
-    const auto node = [&at](int i, int j) {
-      SurfaceDerivs d;
-      at(i / 3.0, j / 3.0, DerivOrder::Position, &d);
-      return d.p;
-    };
-    return Keep(FitBicubic(at, node, tol), patches, patchOf, level, ci, cj);
-  }
   // The positions at a quadrant's cells' nodes, each evaluated once.
   struct QuadrantNodes {
     std::array<Vec3, 49> p;  // [7 j + i] at sixth (i, j) of the quadrant
     std::bitset<49> has;
   };
-  // Fit at level 2 (the cell (ci, cj)), its nodes from and into `nodes`.
-  bool FitCell(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
-               double tol, int ci, int cj, QuadrantNodes* nodes) {
-    const auto at = CellOf(surface, pts, map, 2, ci, cj);
+  // Fits the cell (ci, cj) of `level` as a bicubic (Fit) or a Gregory patch
+  // (FitIrregular); covers its quarters if it is one. A cell of level 2 takes its nodes
+  // from, and puts them into, its quadrant's `nodes` where given.
+  bool Fit(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
+           double tol, int level, int ci, int cj, QuadrantNodes* nodes = nullptr) {
+    const auto at = CellOf(surface, pts, map, level, ci, cj);
     const auto node = [&at, nodes, ci, cj](int i, int j) {
-      const auto k = static_cast<std::size_t>(7 * (3 * (cj & 1) + j) + 3 * (ci & 1) + i);
-      if (!nodes->has[k]) {
+      const auto evaluate = [&at, i, j] {
         SurfaceDerivs d;
         at(i / 3.0, j / 3.0, DerivOrder::Position, &d);
-        nodes->p[k] = d.p;
+        return d.p;
+      };
+      if (!nodes) return evaluate();
+      const auto k = static_cast<std::size_t>(7 * (3 * (cj & 1) + j) + 3 * (ci & 1) + i);
+      if (!nodes->has[k]) {
+        nodes->p[k] = evaluate();
         nodes->has[k] = true;
       }
       return nodes->p[k];
     };
-    return Keep(FitBicubic(at, node, tol), patches, patchOf, 2, ci, cj);
+    return Keep(FitBicubic(at, node, tol), patches, patchOf, level, ci, cj);
   }
   bool FitIrregular(const osd::Bfr::Surface<double>& surface, const std::vector<double>& pts, const SubFaceMap& map,
                     double tol, int level, int ci, int cj) {

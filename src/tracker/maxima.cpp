@@ -184,6 +184,8 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
     if (det < 0) return StationaryKind::Saddle;
     return H(0, 0) < 0 ? StationaryKind::StrictMaximum : StationaryKind::Saddle;  // minima filtered below
   };
+  // A seed adds at most a climb's end and a saddle: one allocation, not growth by doubling.
+  found.reserve(2 * kMaximaSeedGrid * kMaximaSeedGrid);
 
   for (int sj = 0; sj < kMaximaSeedGrid; ++sj)
     for (int si = 0; si < kMaximaSeedGrid; ++si) {
@@ -298,6 +300,7 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
   // Step 4: merge duplicates (same kind, y and midpoint y within a tenth of a raster).
   std::sort(found.begin(), found.end(), [](const Stationary& a, const Stationary& b) { return a.y < b.y; });
   std::vector<Stationary> unique;
+  unique.reserve(found.size());
   for (const Stationary& s : found) {
     bool dup = false;
     for (const Stationary& u : unique) {
@@ -320,19 +323,20 @@ std::vector<Stationary> FindImpl(const ShapeT& shape, const ScreenMap& map, Coun
   return unique;
 }
 
-}  // namespace
-
-std::vector<Stationary> FindStationaryPoints(const Surface& s, const ScreenMap& map,
-                                             Counters* counters) {
+std::vector<Stationary> Find(const Surface& s, const ScreenMap& map, Counters* counters, bool prove) {
   Counters local;
   Counters& st = counters ? *counters : local;
-  return VisitShape(s, [&](const auto& shape) { return FindImpl(shape, map, st, true); });
+  return VisitShape(s, [&](const auto& shape) { return FindImpl(shape, map, st, prove); });
+}
+
+}  // namespace
+
+std::vector<Stationary> FindStationaryPoints(const Surface& s, const ScreenMap& map, Counters* counters) {
+  return Find(s, map, counters, true);
 }
 
 std::vector<Stationary> SearchStationaryPoints(const Surface& s, const ScreenMap& map, Counters* counters) {
-  Counters local;
-  Counters& st = counters ? *counters : local;
-  return VisitShape(s, [&](const auto& shape) { return FindImpl(shape, map, st, false); });
+  return Find(s, map, counters, false);
 }
 
 }  // namespace patchscan
