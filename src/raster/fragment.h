@@ -47,7 +47,8 @@ constexpr double kColumnEpsPx = 1e-6;
 // A chord end's unit normal and eye distance derivatives per pixel along the row (NaN:
 // unknown), and how far past it, away from the chord, the section has a silhouette: x
 // stands still there, the slopes are infinite, and the attributes go as the square root
-// of the distance in x from it (0: the end lies on one; infinite: none near).
+// of the distance in x from it (0: the end lies on one, and its slopes are per root pixel,
+// d/d√|x - xs|, finite; infinite: none near).
 struct ChordSlope {
   Vec3 normal = Vec3::Constant(NAN);
   double depth = NAN;
@@ -94,24 +95,36 @@ class Chord {
       // With the silhouette a gap g past the end (a fraction u0 = g / (g + |span|) of the
       // way from it to the far end), the parameter is p = √(u0 + (1 - u0) t') mapped onto
       // [0, 1] (t' = t from that end), and the cubics in it take both ends' tangents,
-      // dt'/dp = 2 √u0 / (1 + √u0) at the near end (none on the silhouette, where it is 0
-      // against an infinite slope) and 2 / (1 + √u0) at the far end. A blend in t is off
-      // near the silhouette by a fifth of the depth across the chord.
+      // dt'/dp = 2 √u0 / (1 + √u0) at the near end (on the silhouette, where that is 0
+      // against an infinite slope, its slope per root pixel instead) and 2 / (1 + √u0) at
+      // the far end. A blend in t is off near the silhouette by a fifth of the depth across
+      // the chord.
       const double g = nearA ? slopeA.silhouette : slopeB.silhouette;
       cubics_.u0 = g / (g + std::abs(span));
       r0_ = std::sqrt(cubics_.u0), inv1r0_ = 1.0 / (1.0 - r0_);
       const double r0 = r0_, atNear = 2.0 * r0 / (1.0 + r0), atFar = 2.0 / (1.0 + r0);
       const double fa = nearA ? atNear : atFar, fb = nearA ? atFar : atNear;
-      const Vec3 pa = fa * ta, pb = fb * tb;
-      const double qa = fa * sa, qb = fb * sb;
-      const bool ka = (!nearA || g > 0.0) && fits(pa, qa), kb = (!nearB || g > 0.0) && fits(pb, qb);
+      Vec3 pa = fa * ta, pb = fb * tb;
+      double qa = fa * sa, qb = fb * sb;
+      if (g == 0.0) {
+        // An end on the silhouette has its slopes per root pixel (d/d√|x - xs|, away from
+        // it): t' = p² there, so its tangent in p is they times √|span|, signed as p runs
+        // (from a to b: away from the silhouette at a, towards it at b).
+        const Slope& on = nearA ? slopeA : slopeB;
+        const Fragment& end = nearA ? a : b;
+        const double root = (nearA ? 1.0 : -1.0) * std::sqrt(std::abs(span));
+        (nearA ? pa : pb) = root * on.normal;
+        (nearA ? qa : qb) = root * (orthographic ? on.depth : -on.depth / (end.w * end.w));
+      }
+      const bool ka = fits(pa, qa), kb = fits(pb, qb);
       cubic_ = true;
       cubics_.root = nearA ? 1 : 2;
       HermiteCoefficients(a.normal, b.normal, pa, pb, ka, kb, cubics_.normal);
       HermiteCoefficients(Depth(a.w), Depth(b.w), qa, qb, ka, kb, cubics_.depth);
       return;
     }
-    const bool ka = fits(ta, sa), kb = fits(tb, sb);
+    // An end on the silhouette gives no tangent in x (its slopes are per root pixel).
+    const bool ka = slopeA.silhouette != 0.0 && fits(ta, sa), kb = slopeB.silhouette != 0.0 && fits(tb, sb);
     cubic_ = ka || kb;
     if (!cubic_) return;
     HermiteCoefficients(a.normal, b.normal, ta, tb, ka, kb, cubics_.normal);

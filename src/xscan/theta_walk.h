@@ -61,6 +61,8 @@ struct ThetaVertex {
   int index = -1;  // Table: i in θ_i = 2πi/N, 0 < i < N, i != N/2
   // The unit normal's and the eye distance's derivatives per pixel along the row, the
   // tangents of its chords' interpolation (raster::Chord); NaN where unknown or not wanted.
+  // On a silhouette, where they are infinite, per root pixel (d/d√|x - xs|) on the side
+  // facing the eye (ThetaWalker::RootSlopes); negated for a chord to the side facing away.
   Vec3 dndx = Vec3::Constant(NAN);
   double dwdx = NAN;
   // θ and the tilt of f's normal (ThetaFrame::Angles), found once when the vertex is made:
@@ -213,29 +215,59 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   template <class Make>
   Vertex MakeVertex(const LevelPoint& p, Make& make, ThetaVertex::Kind kind = ThetaVertex::Kind::End,
                     int index = -1) const {
-    Vertex v{p.x, make(p), kind, index};
+    return MakeVertexOf(p, make(p), kind, index);
+  }
+  // The vertex at p whose fragment, make(p), is made already.
+  Vertex MakeVertexOf(const LevelPoint& p, const raster::Fragment& f, ThetaVertex::Kind kind, int index = -1) const {
+    Vertex v{p.x, f, kind, index};
     v.uv = p.uv;
     const Vec3 ray = frame_.Ray(v.f.position), plane = frame_.ScanPlaneNormal(ray);
     v.theta = ThetaFrame::ThetaOn(ray, plane, v.f.normal);
     v.tilt = ThetaFrame::TiltOn(plane, v.f.normal);
     if (slopes_) {
-      const Vec2 duv = p.UvPerPixelAlongRow();
-      const Vec3 dpdx = p.object.dpdu * duv.x() + p.object.dpdv * duv.y();  // object space
-      v.dwdx = this->map_.ViewDepthChange(dpdx);
-      if (p.second) {
-        v.dndx = NormalSlope(p.object, duv, frame_.World());
-      } else {
-        SurfaceDerivs o;
-        this->shape_.Evaluate(p.uv.x(), p.uv.y(), DerivOrder::Second, &o);
-        v.dndx = NormalSlope(o, duv, frame_.World());
+      SurfaceDerivs second;
+      const SurfaceDerivs* o = &p.object;
+      if (!p.second) {
+        this->shape_.Evaluate(p.uv.x(), p.uv.y(), DerivOrder::Second, &second);
+        o = &second;
       }
-      if (kind != ThetaVertex::Kind::Silhouette) {
+      if (kind == ThetaVertex::Kind::Silhouette) {
+        RootSlopes(p, *o, ray, &v);
+      } else {
+        const Vec2 duv = p.UvPerPixelAlongRow();
+        const Vec3 dpdx = p.object.dpdu * duv.x() + p.object.dpdv * duv.y();  // object space
+        v.dwdx = this->map_.ViewDepthChange(dpdx);
+        v.dndx = NormalSlope(*o, duv, frame_.World());
         v.tiltRate = v.dndx.dot(plane) / std::cos(v.tilt);
         v.silhouetteX = SilhouetteX(v, ray, plane, frame_.World().linear() * dpdx);
       }
     }
     if (kind == ThetaVertex::Kind::Silhouette) v.silhouetteX = v.x;
     return v;
+  }
+  // A silhouette vertex's slopes, per root pixel (ThetaVertex::dndx): there the view ray is
+  // the section's tangent, so moving a parameter τ along the section (its direction d in
+  // (u,v), y constant) the point moves along the ray, x stands still, and x - xs = x''τ²/2,
+  // x'' = d^T (H_x - λ H_y) d with ∇x = λ ∇y (x's second derivative along the level curve:
+  // its curvature in (u,v) enters through y's Hessian). Then √|x - xs| = τ √(|x''| / 2) and
+  // the normal and eye distance change by their τ-derivatives times √(2 / |x''|) per root
+  // pixel, signed for the side where the section faces the eye (its toward-eye component
+  // -n·ray rising; the ray itself stands still along τ there). NaN where degenerate.
+  void RootSlopes(const LevelPoint& p, const SurfaceDerivs& o, const Vec3& ray, Vertex* v) const {
+    ScreenDerivs s;
+    this->map_.FromObject(o, DerivOrder::Second, &s);
+    const Vec2 d(p.gradY.y(), -p.gradY.x());
+    const double lambda = p.gradX.dot(p.gradY) / p.gradY.squaredNorm();
+    const auto along = [&](int k) {
+      return d.x() * d.x() * s.d2pdu2[k] + 2.0 * d.x() * d.y() * s.d2pduv[k] + d.y() * d.y() * s.d2pdv2[k];
+    };
+    const double xpp = along(0) - lambda * along(1);
+    const Vec3 dn = NormalSlope(o, d, frame_.World());
+    const double facing = -dn.dot(ray);
+    if (!(std::abs(xpp) > 0.0) || !(std::abs(facing) > 0.0) || !std::isfinite(xpp)) return;
+    const double perRoot = (facing > 0.0 ? 1.0 : -1.0) * std::sqrt(2.0 / std::abs(xpp));
+    v->dndx = perRoot * dn;
+    v->dwdx = perRoot * this->map_.ViewDepthChange(o.dpdu * d.x() + o.dpdv * d.y());
   }
   // Where along the row the silhouette nearest vertex v lies, from θ's distance ε to the
   // nearest silhouette angle (0 or π) and ε's rate along the row, as if the section were a
@@ -440,6 +472,14 @@ inline double SilhouetteGap(const ThetaVertex& v, const ThetaVertex& to) {
   return gap >= 0.0 ? gap : INFINITY;  // false for NaN
 }
 
+// Vertex v's slopes for its chord to `to`: a silhouette's toward the side `to` lies on
+// (θ > 0 faces the eye).
+inline raster::ChordSlope ChordSlopeOf(const ThetaVertex& v, const ThetaVertex& to) {
+  const double gap = SilhouetteGap(v, to);
+  if (gap != 0.0 || to.theta > 0.0) return {v.dndx, v.dwdx, gap};
+  return {-v.dndx, -v.dwdx, gap};
+}
+
 // The fragments of a chain on its own scan line, handed to `out` as chords (raster::Chord):
 // the first vertex's own column, then each link's columns, interpolated perspective-
 // correctly (orthographic: linearly). Returns the number of samples covered.
@@ -452,8 +492,7 @@ inline long EmitThetaChain(std::span<const ThetaVertex> chain, const raster::Sam
   for (size_t k = 1; k < chain.size(); ++k) {
     const ThetaVertex &a = chain[k - 1], &b = chain[k];
     if (!(a.f.w > 0.0 && b.f.w > 0.0) || a.x == b.x) continue;
-    const raster::Chord c(a.x, a.f, b.x, b.f, orthographic, {a.dndx, a.dwdx, SilhouetteGap(a, b)},
-                          {b.dndx, b.dwdx, SilhouetteGap(b, a)});
+    const raster::Chord c(a.x, a.f, b.x, b.f, orthographic, ChordSlopeOf(a, b), ChordSlopeOf(b, a));
     const int n = c.ColumnsOn(cols).count;
     covered += n;
     if (n > 0) out.AddChord(c, cols);
