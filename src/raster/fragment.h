@@ -222,7 +222,8 @@ class Chord {
     const double ia = orthographic_ ? 1.0 - t : (1.0 - t) * invWa_, ib = orthographic_ ? t : t * invWb_;
     const double sum = ia + ib, inv = 1.0 / sum;
     const double wa = ia * inv, wb = ib * inv;
-    const double p = cubic_ ? Param(t) : t;
+    double root = NAN;
+    const double p = cubic_ ? Param(t, &root) : t;
     Fragment f = a_;
     f.w = cubic_ || orthographic_ ? DepthAlong(t, p) : inv;
     f.position = wa * a_.position + wb * b_.position;
@@ -230,7 +231,7 @@ class Chord {
     f.normal = n * (1.0 / n.norm());
     if (!f.normal.allFinite()) f.normal = a_.normal;
     if (cubic_ && cubics_.root != 0) {
-      RootTexture(t, p, &f);
+      RootTexture(p, root, &f);
       return f;
     }
     f.uv = uvCubic_ ? Horner(uv_, t) : Vec2(wa * a_.uv + wb * b_.uv);
@@ -257,12 +258,15 @@ class Chord {
   // changes by `change`: no longer than kSlopeTurnRatio times it plus kSlopeFloor (false
   // for NaN and infinity).
   static bool TangentFits(double length, double change) { return length <= kSlopeTurnRatio * change + kSlopeFloor; }
-  // The cubics' parameter at t (Cubics::root).
-  double Param(double t) const {
+  // The cubics' parameter at t (Cubics::root), and into *root, where given and the
+  // parameter is a root's, √(u0 + (1 - u0) s) for s = t's distance from the near end (the
+  // texture footprint's growth is its inverse, RootTexture).
+  double Param(double t, double* root = nullptr) const {
     if (cubics_.root == 0) return t;
-    if (cubics_.u0 == 0.0) return cubics_.root == 1 ? std::sqrt(t) : 1.0 - std::sqrt(1.0 - t);
     const double s = cubics_.root == 1 ? t : 1.0 - t;
-    const double r = (std::sqrt(cubics_.u0 + (1.0 - cubics_.u0) * s) - r0_) * inv1r0_;
+    const double q = cubics_.u0 == 0.0 ? std::sqrt(s) : std::sqrt(cubics_.u0 + (1.0 - cubics_.u0) * s);
+    if (root) *root = q;
+    const double r = cubics_.u0 == 0.0 ? q : (q - r0_) * inv1r0_;
     return cubics_.root == 1 ? r : 1.0 - r;
   }
   // The texture coordinates' cubic in t from the ends' own change per pixel along the row
@@ -288,12 +292,11 @@ class Chord {
   // near end), and no longer than the near end's (the silhouette's own is clamped by the
   // front end). Taking the nearer end's footprint blurred half the chord with the
   // silhouette's.
-  void RootTexture(double t, double p, Fragment* f) const {
+  void RootTexture(double p, double root, Fragment* f) const {
     f->uv = a_.uv + p * (b_.uv - a_.uv);
     const bool nearA = cubics_.root == 1;
     const Fragment &nearEnd = nearA ? a_ : b_, &farEnd = nearA ? b_ : a_;
-    const double fromNear = nearA ? t : 1.0 - t;
-    const double grow = 1.0 / std::sqrt(cubics_.u0 + (1.0 - cubics_.u0) * fromNear);
+    const double grow = 1.0 / root;
     const auto scaled = [grow](const Vec2& far, const Vec2& near) {
       const Vec2 d = grow * far;
       return d.squaredNorm() <= near.squaredNorm() ? d : near;  // false for NaN
