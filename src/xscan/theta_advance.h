@@ -24,7 +24,7 @@ typename ThetaWalker<ShapeT>::LinkCheck ThetaWalker<ShapeT>::CheckLink(const Ver
   const double d = Wrap(b.theta - ta);
   const bool missing = std::abs(d) > table_ + kOnAngleRad ||
                        !ForEachTableAngle(ta, d, false, [](double angle, int) { return SilhouetteAngle(angle); });
-  if (std::abs(tiltB - tiltA) >= table_) return LinkCheck::Broken;
+  if (std::abs(tiltB - tiltA) >= table_ || TurnsTooFar(a, b)) return LinkCheck::Broken;
   // The tilt out of the scan plane along the link, as the cubic (Hermite's) from the ends'
   // tilts and rates along the row, going a table step beyond both ends' tilts between
   // them: an excursion of the normal the ends do not show, which a crawl would mark with
@@ -58,7 +58,7 @@ bool ThetaWalker<ShapeT>::FillLink(const Vertex& a, const Vertex& b, std::vector
   // point that far along the link's chord in (u,v) by θ (the crawl's PassTable does the
   // same within each of its steps). Each must lie between its neighbours in x and along
   // the chord, face as the ends do, and leave no link turning a table step out of the
-  // plane; else false, and the link is crawled.
+  // plane or in all; else false, and the link is crawled.
   const double d = Wrap(b.theta - a.theta);
   if (std::abs(d) <= kTurnRad || std::abs(d) >= kFillMaxTurnSteps * table_) return false;
   // How the ends face (a silhouette end faces neither way).
@@ -75,12 +75,12 @@ bool ThetaWalker<ShapeT>::FillLink(const Vertex& a, const Vertex& b, std::vector
       return false;
     out->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, k));
     const Vertex &p = (*out)[out->size() - 2], &q = out->back();
-    return (!facing || Facing(q) == *facing) && std::abs(q.tilt - p.tilt) < table_;
+    return (!facing || Facing(q) == *facing) && std::abs(q.tilt - p.tilt) < table_ && !TurnsTooFar(p, q);
   });
   // No tabulated angle passed after all (the ends' θ a table step apart, each within
   // kOnAngleRad of one): nothing to fill, the link is crawled.
   if (!placed || out->size() == 1) return false;
-  if (std::abs(b.tilt - out->back().tilt) >= table_) return false;
+  if (std::abs(b.tilt - out->back().tilt) >= table_ || TurnsTooFar(out->back(), b)) return false;
   out->push_back(b);
   return true;
 }

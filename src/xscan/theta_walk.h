@@ -10,9 +10,9 @@
 // closed, from a silhouette tracker, taking steps in which θ turns by at most half a table
 // step; a vertex is made where θ passes a tabulated angle, at every silhouette point (θ = 0
 // or π: where the x extent of the section ends, so coverage along the row is exact), at
-// both boundary ends, and where the normal has turned a table step out of the scan plane
-// since the last vertex (a turn θ does not see). The chain of vertices, in order along the curve, is the polygon that
-// approximates the section; each sample between two vertices gets a fragment interpolated
+// both boundary ends, and where the normal has turned a table step out of the scan plane,
+// or in all (in 3-D), since the last vertex (a turn θ does not see). The chain of
+// vertices, in order along the curve, is the polygon that approximates the section; each sample between two vertices gets a fragment interpolated
 // perspective-correctly along that chord.
 //
 // From one scan line to the next the vertices are θ trackers (§4.1, §3.5): each Table
@@ -22,8 +22,8 @@
 // silhouette trackers of the Y scan; a turn vertex follows the zeros of §4.3's turn
 // function (θ's derivative along the level curve) by Newton on (y - ys, T). The chain
 // keeps its order (the links of §4.2). Where a link looks suspicious — tilt vertices or a
-// lost tracker between its ends on the line before, θ or the tilt turning more than a
-// table step across it, θ's sense of rotation not reversing at a turn or reversing
+// lost tracker between its ends on the line before, θ, the tilt or the normal in all
+// turning more than a table step across it, θ's sense of rotation not reversing at a turn or reversing
 // elsewhere, θ's rate at an end against the link (a turn pair born across a vertex), J
 // changing sign, x running the other way, the link stretching — it is repaired sideways:
 // crawled from its first vertex, creating a tracker at each tabulated angle passed, until
@@ -142,7 +142,8 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   ThetaWalker(const ShapeT& shape, const ScreenMap& map, double ys, const raster::SampleColumns& cols,
               Counters* counters, WalkEvents* events, int steps, const ThetaFrame& frame)
       : Base(shape, map, ys, cols, counters, events), steps_(steps), frame_(frame),
-        table_(2.0 * std::numbers::pi / steps) {}
+        table_(2.0 * std::numbers::pi / steps),
+        cosTurn_(std::cos(std::min(std::numbers::pi, table_ + kTurnSlackRad))) {}
 
   using Vertex = ThetaVertex;
 
@@ -361,6 +362,20 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   int steps_;
   ThetaFrame frame_;
   double table_;  // 2π / N
+  // Whether the normal turns by more than a table step between vertices a and b (θ, tilt)
+  // in all: θ and the tilt may each be within a step and together more. Measured in the
+  // view's frame, where θ is the longitude and the tilt the latitude (in perspective the
+  // view ray turns along the section too, which θ leaves out), and with θ's part at most a
+  // step: θ's own overshoot of a table step (a vertex solved a little past its angle) is
+  // not a turn the chord misses.
+  bool TurnsTooFar(double thetaA, double tiltA, double thetaB, double tiltB) const {
+    const double dTheta = std::min(std::abs(Wrap(thetaB - thetaA)), table_);
+    return std::sin(tiltA) * std::sin(tiltB) + std::cos(tiltA) * std::cos(tiltB) * std::cos(dTheta) < cosTurn_;
+  }
+  bool TurnsTooFar(const Vertex& a, const Vertex& b) const { return TurnsTooFar(a.theta, a.tilt, b.theta, b.tilt); }
+  // A table step (and a rounding margin): its cosine (-1 for N < 2).
+  static constexpr double kTurnSlackRad = 1e-6;
+  double cosTurn_;
   ThetaChainSink* sink_ = nullptr;
   bool slopes_ = false;
   std::vector<Vertex>*piece_ = nullptr, *first_ = nullptr;

@@ -261,6 +261,9 @@ constexpr double kTableVertexThetaTolSteps = 0.5;
 // by at most one step more.
 constexpr double kTiltBetweenVerticesTolSteps = 2.0;
 
+// And in all (in 3-D), for the same reasons: a vertex once it has turned a table step.
+constexpr double kTurnBetweenVerticesTolSteps = 2.0;
+
 // Blinn's chain invariants (paper 001 §4.2, §4.3), checked on every chain a θ scan makes:
 // along a chain, consecutive tabulated-angle vertices differ in index by exactly 1 (mod N);
 // by 2 across a silhouette vertex (its angle, 0 or π, is not a table vertex); by 0 or 1
@@ -280,6 +283,12 @@ class ChainChecker final : public ThetaChainSink {
       const double dTilt = std::abs(frame_.Tilt(chain[k].f.position, chain[k].f.normal) -
                                     frame_.Tilt(chain[k - 1].f.position, chain[k - 1].f.normal));
       worstTiltSteps = std::max(worstTiltSteps, dTilt * steps / (2.0 * M_PI));
+      // In the view's frame (θ the longitude, the tilt the latitude), as the walk measures it.
+      const double ta = frame_.Tilt(chain[k - 1].f.position, chain[k - 1].f.normal), tb = frame_.Tilt(chain[k].f.position, chain[k].f.normal);
+      const double dTheta = std::remainder(frame_.Theta(chain[k].f.position, chain[k].f.normal) -
+                                               frame_.Theta(chain[k - 1].f.position, chain[k - 1].f.normal), 2.0 * M_PI);
+      const double turn = std::acos(std::clamp(std::sin(ta) * std::sin(tb) + std::cos(ta) * std::cos(tb) * std::cos(dTheta), -1.0, 1.0));
+      worstTurnSteps = std::max(worstTurnSteps, turn * steps / (2.0 * M_PI));
     }
     for (const ThetaVertex& v : chain) {
       using K = ThetaVertex::Kind;
@@ -318,6 +327,7 @@ class ChainChecker final : public ThetaChainSink {
   long nChains = 0, nTable = 0, nPairs = 0, violations = 0;
   double worstThetaOff = 0.0;  // in table steps
   double worstTiltSteps = 0.0;  // largest turn of the normal out of the scan plane between vertices
+  double worstTurnSteps = 0.0;  // largest turn of the normal in all between vertices
   std::ostringstream first;
 
  private:
@@ -358,13 +368,14 @@ TEST(ThetaScan, ChainInvariantsHoldOnTheTestSurfaces) {
       std::cout << name << " N=" << steps << ": " << check.nChains << " chains, " << check.nTable
                 << " table vertices, " << check.nPairs << " consecutive pairs, " << check.violations
                 << " violations; worst |theta - theta_i| " << check.worstThetaOff << " of a step; worst tilt between vertices "
-                << check.worstTiltSteps << " steps\n";
+                << check.worstTiltSteps << " steps, in all " << check.worstTurnSteps << " steps\n";
       EXPECT_GT(check.nPairs, 0) << name;
       EXPECT_EQ(check.violations, 0) << name << " N=" << steps << "\n" << check.first.str();
       EXPECT_LT(check.worstThetaOff, kTableVertexThetaTolSteps) << name;
       // A tilt vertex is made once the normal has turned a table step out of the scan plane
       // since the last vertex, and a crawl step turns it by at most half a step more.
       EXPECT_LE(check.worstTiltSteps, kTiltBetweenVerticesTolSteps) << name;
+      EXPECT_LE(check.worstTurnSteps, kTurnBetweenVerticesTolSteps) << name;
     }
 }
 

@@ -216,9 +216,15 @@ std::vector<ThetaVertex> Trackers(const ChainSet& set) {
       const ThetaVertex::Kind kind = v[k].kind;
       if (kind == ThetaVertex::Kind::Tilt) continue;
       if (kind == ThetaVertex::Kind::Table) {
-        const bool nextToSilhouette = (k > 0 && v[k - 1].kind == ThetaVertex::Kind::Silhouette) ||
-                                      (k + 1 < v.size() && v[k + 1].kind == ThetaVertex::Kind::Silhouette);
-        if (nextToSilhouette) continue;
+        // Next to a silhouette along the chain, tilt vertices (which chains crawled at
+        // different places may or may not have) passed over.
+        auto silhouetteFrom = [&](std::size_t j, int step) {
+          for (; j < v.size(); j += static_cast<std::size_t>(step)) {  // j wraps below 0
+            if (v[j].kind != ThetaVertex::Kind::Tilt) return v[j].kind == ThetaVertex::Kind::Silhouette;
+          }
+          return false;
+        };
+        if (silhouetteFrom(k - 1, -1) || silhouetteFrom(k + 1, 1)) continue;
       }
       out.push_back(v[k]);
     }
