@@ -43,10 +43,18 @@ struct ThetaFrame {
   // The angle of unit normal n out of the scan plane at p, in [-π/2, π/2]: what θ does
   // not see.
   double Tilt(const Vec3& p, const Vec3& n) const { return TiltOn(ScanPlaneNormal(Ray(p)), n); }
-  // Both at once (the ray and the scan plane found once): {θ, tilt}.
-  std::pair<double, double> Angles(const Vec3& p, const Vec3& n) const {
+  // Both at once (the ray and the scan plane found once): {θ, tilt}; and, given `inView`,
+  // n in the view's frame there (InView).
+  std::pair<double, double> Angles(const Vec3& p, const Vec3& n, Vec3* inView = nullptr) const {
     const Vec3 r = Ray(p), plane = ScanPlaneNormal(r);
+    if (inView) *inView = InView(r, plane, n);
     return {ThetaOn(r, plane, n), TiltOn(plane, n)};
+  }
+  // Unit normal n in the view's frame at a point with view ray r and scan plane normal
+  // `plane`: (S, T, sin tilt), S = n·s sideways in the plane, T = -n·r towards the eye
+  // (θ = atan2(T, S)). A unit vector: s = r × plane, r and plane are orthonormal.
+  static Vec3 InView(const Vec3& r, const Vec3& plane, const Vec3& n) {
+    return Vec3(n.dot(r.cross(plane)), -n.dot(r), n.dot(plane));
   }
   // The unit view ray to p, and the unit normal of the scan plane through it.
   Vec3 Ray(const Vec3& p) const { return orthographic ? forward : Vec3((p - eye).normalized()); }

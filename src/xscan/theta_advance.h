@@ -24,7 +24,7 @@ typename ThetaWalker<ShapeT>::LinkCheck ThetaWalker<ShapeT>::CheckLink(const Ver
   const double d = Wrap(b.theta - ta);
   const bool missing = std::abs(d) > table_ + kOnAngleRad ||
                        !ForEachTableAngle(ta, d, false, [](double angle, int) { return SilhouetteAngle(angle); });
-  if (std::abs(tiltB - tiltA) >= table_ || TurnsTooFar(a, b)) return LinkCheck::Broken;
+  if (TurnsPastStep(a, b)) return LinkCheck::Broken;
   // The tilt out of the scan plane along the link, as the cubic (Hermite's) from the ends'
   // tilts and rates along the row, going a table step beyond both ends' tilts between
   // them: an excursion of the normal the ends do not show, which a crawl would mark with
@@ -75,12 +75,12 @@ bool ThetaWalker<ShapeT>::FillLink(const Vertex& a, const Vertex& b, std::vector
       return false;
     out->push_back(MakeVertex(v, make, ThetaVertex::Kind::Table, k));
     const Vertex &p = (*out)[out->size() - 2], &q = out->back();
-    return (!facing || Facing(q) == *facing) && std::abs(q.tilt - p.tilt) < table_ && !TurnsTooFar(p, q);
+    return (!facing || Facing(q) == *facing) && !TurnsPastStep(p, q);
   });
   // No tabulated angle passed after all (the ends' θ a table step apart, each within
   // kOnAngleRad of one): nothing to fill, the link is crawled.
   if (!placed || out->size() == 1) return false;
-  if (std::abs(b.tilt - out->back().tilt) >= table_ || TurnsTooFar(out->back(), b)) return false;
+  if (TurnsPastStep(out->back(), b)) return false;
   out->push_back(b);
   return true;
 }

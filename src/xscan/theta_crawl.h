@@ -33,8 +33,8 @@ class ThetaWalker<ShapeT>::Crawler {
     p_ = before_ = start;
     th_ = chain_.back().theta, tilt_ = chain_.back().tilt;
     tiltAtVertex_ = tilt_;
-    thetaAtVertex_ = th_;
-    tiltCount_ = chain_.size();
+    inViewAtVertex_ = chain_.back().inView;
+    vertexCount_ = chain_.size();
     // The sense θ last moved in (0: not known); at the start θ's rate along the walk, so
     // that a turn within the first step is seen.
     lastTurn_ = turning;
@@ -195,7 +195,8 @@ class ThetaWalker<ShapeT>::Crawler {
   // if it ends here, else nothing (the next step is tried).
   std::optional<bool> AtStep(const LevelPoint& next) {
     const raster::Fragment fn = make_(next);
-    const auto [thn, tiltNext] = w_.frame_.Angles(fn.position, fn.normal);
+    Vec3 inViewNext;
+    const auto [thn, tiltNext] = w_.frame_.Angles(fn.position, fn.normal, &inViewNext);
     const double d = Wrap(thn - th_);
     // Steps turn θ, and the normal out of the scan plane, by at most half a table step.
     if ((std::abs(d) > 0.5 * w_.table_ || std::abs(tiltNext - tilt_) > 0.5 * w_.table_) && h_ > 4.0 * kWalkStepMin) {
@@ -209,7 +210,7 @@ class ThetaWalker<ShapeT>::Crawler {
     // (the vertices the step passes are measured from it) and the next line's check finds
     // the links sound.
     FollowLastVertex();
-    if (TurnedTooFar(thn, tiltNext) && chain_.back().uv != p_.uv) {
+    if (TurnedTooFar(inViewNext, tiltNext) && chain_.back().uv != p_.uv) {
       chain_.push_back(w_.MakeVertex(p_, make_, ThetaVertex::Kind::Tilt));
       ++w_.Count(Counter::ThetaTilts);
       FollowLastVertex();
@@ -237,10 +238,9 @@ class ThetaWalker<ShapeT>::Crawler {
     // step but the normal leaves the scan plane (a section crossing a ridge of the surface
     // at a slant), a vertex once it has turned a table step out of the plane bounds that
     // error too; and one once it has turned a table step in all, θ and the tilt each less
-    // (the teacup at θ8: colour RMSE
-    // against exact 0.0066 -> 0.0022).
+    // (the teacup at θ8: colour RMSE against exact 0.0066 -> 0.0022).
     FollowLastVertex();
-    if (TurnedTooFar(thn, tiltNext)) {
+    if (TurnedTooFar(inViewNext, tiltNext)) {
       // Made whole, its slopes too: a chord with no tangent at its tilt end blended the
       // normal there (the teapot's spout at θ4 off by 24 degrees across a 45-px chord).
       chain_.push_back(w_.MakeVertexOf(next, fn, ThetaVertex::Kind::Tilt));
@@ -260,17 +260,18 @@ class ThetaWalker<ShapeT>::Crawler {
     return std::nullopt;
   }
 
-  // The chain's last vertex's θ and tilt, if it has grown since they were taken.
+  // The chain's last vertex's tilt and view-frame normal, if it has grown since they were
+  // taken.
   void FollowLastVertex() {
-    if (chain_.size() == tiltCount_) return;
-    tiltCount_ = chain_.size();
+    if (chain_.size() == vertexCount_) return;
+    vertexCount_ = chain_.size();
     tiltAtVertex_ = chain_.back().tilt;
-    thetaAtVertex_ = chain_.back().theta;
+    inViewAtVertex_ = chain_.back().inView;
   }
-  // Whether the normal at (θ, tilt) has turned a table step out of the plane, or in all,
-  // since the chain's last vertex.
-  bool TurnedTooFar(double theta, double tilt) const {
-    return std::abs(tilt - tiltAtVertex_) >= w_.table_ || w_.TurnsTooFar(thetaAtVertex_, tiltAtVertex_, theta, tilt);
+  // Whether the normal (its tilt, and in the view's frame) has turned a table step out of
+  // the plane, or in all, since the chain's last vertex.
+  bool TurnedTooFar(const Vec3& inView, double tilt) const {
+    return w_.TurnsPastStep(tiltAtVertex_, inViewAtVertex_, tilt, inView);
   }
 
   ThetaWalker& w_;
@@ -283,9 +284,9 @@ class ThetaWalker<ShapeT>::Crawler {
   std::size_t checked_;   // chain vertices LinkEnd has looked at
   LevelPoint p_, before_;  // the crawl point, and the one before it
   double th_ = 0.0, tilt_ = 0.0;  // θ and the tilt at p_
-  std::size_t tiltCount_;         // the chain's size when tiltAtVertex_ was taken
+  std::size_t vertexCount_;       // the chain's size when the last vertex's angles were taken
   double tiltAtVertex_;           // the tilt of the chain's last vertex
-  double thetaAtVertex_;          // and its θ
+  Vec3 inViewAtVertex_;           // and its normal in the view's frame
   double lastTurn_;               // the sense θ last moved in (0: not known)
   double h_ = kWalkStepStart;
   LevelPoint turnTarget_;  // a link's target that is a turn tracker (ok: there is one)

@@ -12,8 +12,9 @@
 // or π: where the x extent of the section ends, so coverage along the row is exact), at
 // both boundary ends, and where the normal has turned a table step out of the scan plane,
 // or in all (in 3-D), since the last vertex (a turn θ does not see). The chain of
-// vertices, in order along the curve, is the polygon that approximates the section; each sample between two vertices gets a fragment interpolated
-// perspective-correctly along that chord.
+// vertices, in order along the curve, is the polygon that approximates the section; each
+// sample between two vertices gets a fragment interpolated perspective-correctly along
+// that chord.
 //
 // From one scan line to the next the vertices are θ trackers (§4.1, §3.5): each Table
 // vertex follows its own G_i = 0 by bivariate Newton on (y - ys, G_i) from a start
@@ -23,8 +24,9 @@
 // function (θ's derivative along the level curve) by Newton on (y - ys, T). The chain
 // keeps its order (the links of §4.2). Where a link looks suspicious — tilt vertices or a
 // lost tracker between its ends on the line before, θ, the tilt or the normal in all
-// turning more than a table step across it, θ's sense of rotation not reversing at a turn or reversing
-// elsewhere, θ's rate at an end against the link (a turn pair born across a vertex), J
+// turning more than a table step across it, θ's sense of rotation not reversing at a turn
+// or reversing elsewhere, θ's rate at an end against the link (a turn pair born across a
+// vertex), J
 // changing sign, x running the other way, the link stretching — it is repaired sideways:
 // crawled from its first vertex, creating a tracker at each tabulated angle passed, until
 // the existing tracker at its other end is met (§4.2). A turn pair born inside a link and
@@ -70,6 +72,8 @@ struct ThetaVertex {
   // tilt's rate along the row, radians per pixel of x (NaN without slopes, or on a
   // silhouette, where x stands still).
   double theta = NAN, tilt = NAN, tiltRate = NAN;
+  // The unit normal in the view's frame (ThetaFrame::InView): (S, T, sin tilt).
+  Vec3 inView = Vec3::Constant(NAN);
   // Where along the row the section's silhouette nearest the vertex is estimated to lie
   // (x itself on one; NaN without slopes): its chords take their attributes as roots of
   // the distance from it when it is near (raster::Chord).
@@ -143,6 +147,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
               Counters* counters, WalkEvents* events, int steps, const ThetaFrame& frame)
       : Base(shape, map, ys, cols, counters, events), steps_(steps), frame_(frame),
         table_(2.0 * std::numbers::pi / steps),
+        cosTable_(std::cos(std::min(std::numbers::pi, table_))),
         cosTurn_(std::cos(std::min(std::numbers::pi, table_ + kTurnSlackRad))) {}
 
   using Vertex = ThetaVertex;
@@ -225,6 +230,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     const Vec3 ray = frame_.Ray(v.f.position), plane = frame_.ScanPlaneNormal(ray);
     v.theta = ThetaFrame::ThetaOn(ray, plane, v.f.normal);
     v.tilt = ThetaFrame::TiltOn(plane, v.f.normal);
+    v.inView = ThetaFrame::InView(ray, plane, v.f.normal);
     if (slopes_) {
       SurfaceDerivs second;
       const SurfaceDerivs* o = &p.object;
@@ -362,20 +368,28 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   int steps_;
   ThetaFrame frame_;
   double table_;  // 2π / N
-  // Whether the normal turns by more than a table step between vertices a and b (θ, tilt)
-  // in all: θ and the tilt may each be within a step and together more. Measured in the
-  // view's frame, where θ is the longitude and the tilt the latitude (in perspective the
-  // view ray turns along the section too, which θ leaves out), and with θ's part at most a
-  // step: θ's own overshoot of a table step (a vertex solved a little past its angle) is
-  // not a turn the chord misses.
-  bool TurnsTooFar(double thetaA, double tiltA, double thetaB, double tiltB) const {
-    const double dTheta = std::min(std::abs(Wrap(thetaB - thetaA)), table_);
-    return std::sin(tiltA) * std::sin(tiltB) + std::cos(tiltA) * std::cos(tiltB) * std::cos(dTheta) < cosTurn_;
+  // Whether the normal turns a table step or more between two vertices, given by their
+  // tilts and their normals in the view's frame (ThetaVertex::inView): out of the scan
+  // plane, or in all (θ and the tilt may each be within a step and together more). The
+  // crawl, the advance's link check and FillLink all judge a link by this.
+  bool TurnsPastStep(double tiltA, const Vec3& inViewA, double tiltB, const Vec3& inViewB) const {
+    return std::abs(tiltB - tiltA) >= table_ || TurnsTooFar(inViewA, inViewB);
   }
-  bool TurnsTooFar(const Vertex& a, const Vertex& b) const { return TurnsTooFar(a.theta, a.tilt, b.theta, b.tilt); }
-  // A table step (and a rounding margin): its cosine (-1 for N < 2).
+  bool TurnsPastStep(const Vertex& a, const Vertex& b) const { return TurnsPastStep(a.tilt, a.inView, b.tilt, b.inView); }
+  // The turn in all, measured in the view's frame, where θ is the longitude and the tilt
+  // the latitude (in perspective the view ray turns along the section too, which θ leaves
+  // out), with θ's part at most a step: θ's own overshoot of a table step (a vertex solved
+  // a little past its angle) is not a turn the chord misses. For the view-frame normals a
+  // and b: cos d = sin t_a sin t_b + cos t_a cos t_b cos(min(|Δθ|, step)), where
+  // cos t_a cos t_b cos Δθ is the dot of their (S, T) parts and cos t = |(S, T)|.
+  bool TurnsTooFar(const Vec3& a, const Vec3& b) const {
+    const double inPlane = a.x() * b.x() + a.y() * b.y();
+    const double cc = std::sqrt((a.x() * a.x() + a.y() * a.y()) * (b.x() * b.x() + b.y() * b.y()));
+    return a.z() * b.z() + std::max(inPlane, cc * cosTable_) < cosTurn_;
+  }
+  // A table step (and a rounding margin beyond it): their cosines (-1 for N < 2).
   static constexpr double kTurnSlackRad = 1e-6;
-  double cosTurn_;
+  double cosTable_, cosTurn_;
   ThetaChainSink* sink_ = nullptr;
   bool slopes_ = false;
   std::vector<Vertex>*piece_ = nullptr, *first_ = nullptr;
