@@ -223,7 +223,8 @@ class FragmentGeometry final : public FragmentRow {
     double best = INFINITY;
     for (int k = 0; k < n; ++k) {
       if (m[k].smp.handle < kTriangleHandle) continue;
-      const double d = std::hypot(lat_.At(m[k].i) - cx, lat_.At(rows.j0 + m[k].r) - cy);
+      const double dx = lat_.At(m[k].i) - cx, dy = lat_.At(rows.j0 + m[k].r) - cy;
+      const double d = dx * dx + dy * dy;  // squared: the order is the distance's, without hypot's cost
       if (d < best) best = d, nearest = k;
     }
     if (nearest >= 0) return store_.Interpolate(m[nearest].smp.handle - kTriangleHandle, cx, cy);
