@@ -25,6 +25,13 @@ struct ExactScan::Active {
   // Whether those lines were walked (an interval taken row by row walks neither), and
   // the trackers on a top line not walked yet.
   bool lineWalked = false, nextWalked = false;
+  // Whether the surface's sections keep their shape through the interval (Calm): taken
+  // row by row for another surface's event, its rows' chains are advanced. The chains of
+  // the last row of an interval taken row by row (at carryY), when they may be advanced to
+  // the next interval's top line or first row (carried).
+  bool calm = false, carried = false;
+  ChainSet carry;
+  double carryY = 0.0;
   RowTrackers topTrackers;
   std::vector<RowTrackers> rowTrackers;
   std::vector<ChainSet> rows;
@@ -99,7 +106,7 @@ ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, Ex
 ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
                      std::vector<ScanEntry> share)
     : surfaces_(surfaces), camera_(camera), eye_(EyePoint(camera)), right_(ViewRight(camera)), forward_(ViewForward(camera)), options_(options),
-      pending_(std::move(share)) {
+      pending_(std::move(share)), thetaTable_(options.thetaSteps) {
   counters_[Counter::Surfaces] = static_cast<std::int64_t>(pending_.size());
   for (int i = 0; i < options_.thetaSteps; ++i) {
     const double a = 2.0 * std::numbers::pi * i / options_.thetaSteps;
@@ -139,7 +146,7 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
   VisitShape(surface, [&](const auto& shape) {
     using ShapeT = std::decay_t<decltype(shape)>;
     const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_};
-    ThetaWalker<ShapeT> walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_, options_.thetaSteps, frame);
+    ThetaWalker<ShapeT> walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_, thetaTable_, frame);
     walker.SetChainSink(chainSink_);
     walker.SetNormalSlopes(options_.slabRows == 0);  // chords, not slabs
     walker.SetTrim(a.scan->Trim(), &trimScratch_);
@@ -179,13 +186,13 @@ void ExactScan::WalkSurface(Active& a, double y, const RowTrackers& t, const ras
   FinishWalk(a);
 }
 
-bool ExactScan::AdvanceSurface(Active& a, double yFrom, double y, const raster::SampleColumns& columns) {
+bool ExactScan::AdvanceSurface(Active& a, const ChainSet& from, double yFrom, double y, const RowTrackers& t,
+                               ChainSet* to, const raster::SampleColumns& columns) {
   walkEvents_.Clear();
   bool ok = false;
   VisitTheta(a, y, columns, [&](auto& walker, auto&& make) {
     const double dy = a.scan->LineFor(y) - a.scan->LineFor(yFrom);  // the walker's lines
-    ok = walker.Advance(a.line, dy, a.scan->Trackers(), options_.extrapolate, &edgeUsed_, &silUsed_, &chain_,
-                        &a.next, make);
+    ok = walker.Advance(from, dy, t, options_.extrapolate, &edgeUsed_, &silUsed_, &chain_, to, make);
   });
   FinishWalk(a);
   return ok;
@@ -210,7 +217,7 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
     // decides alone (its chains are its own), so a partition of the scene changes nothing.
     bool advanced = false;
     if (a.lineWalked && !a.lineBroken && Calm(a, events, a.lineY, y)) {
-      advanced = AdvanceSurface(a, a.lineY, y, columns) && !WalkBroken();
+      advanced = AdvanceSurface(a, a.line, a.lineY, y, a.scan->Trackers(), &a.next, columns) && !WalkBroken();
       ++counters_[advanced ? Counter::ThetaRowsAdvanced : Counter::ThetaLineRepairs];
     }
     if (!advanced) {
@@ -299,7 +306,8 @@ bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
       a.rowTrackers[static_cast<std::size_t>(r)] = a.scan->Trackers();
     }
     AdvanceTo(a, yBottom);
-    quiet = quiet && Calm(a, events, yTop, yBottom);
+    a.calm = Calm(a, events, yTop, yBottom);
+    quiet = quiet && a.calm;
   }
   return quiet;
 }
@@ -318,7 +326,13 @@ bool ExactScan::PairInterval(bool quiet, const raster::SampleColumns& columns, r
   for (const auto& ap : active_) {
     Active& a = *ap;
     if (!a.lineWalked) {
-      WalkLine(a, yTop, a.topTrackers, columns, out, &a.line, &a.lineBroken);
+      // The interval before was taken row by row: its last row's chains, advanced.
+      if (a.carried && AdvanceSurface(a, a.carry, a.carryY, yTop, a.topTrackers, &a.line, columns) && !WalkBroken()) {
+        ++counters_[Counter::SlabLines];
+        a.lineBroken = false;
+      } else {
+        WalkLine(a, yTop, a.topTrackers, columns, out, &a.line, &a.lineBroken);
+      }
       a.lineWalked = true;
     }
     a.nextWalked = true;
@@ -326,7 +340,7 @@ bool ExactScan::PairInterval(bool quiet, const raster::SampleColumns& columns, r
     // (§4.1); a chain that cannot be, or a broken top line, has the bottom line crawled
     // afresh.
     const bool advance = !a.lineBroken;
-    if (advance && AdvanceSurface(a, yTop, yBottom, columns)) {
+    if (advance && AdvanceSurface(a, a.line, yTop, yBottom, a.scan->Trackers(), &a.next, columns)) {
       ++counters_[Counter::SlabLines];
       a.nextBroken = WalkBroken();
     } else {
@@ -348,6 +362,7 @@ void ExactScan::FinishInterval(bool slab, const raster::SampleColumns& columns, 
   byRows_ = !slab;
   if (slab) {
     ++counters_[Counter::SlabIntervals];
+    for (const auto& ap : active_) ap->carried = false;
     const SlabFrame frame{yTop, yBottom, camera_.orthographic, eye_, forward_};
     for (const auto& ap : active_) {
       Active& a = *ap;
@@ -362,14 +377,34 @@ void ExactScan::FinishInterval(bool slab, const raster::SampleColumns& columns, 
     }
   } else {
     ++counters_[Counter::RowIntervals];
+    // A surface whose sections keep their shape through the interval (the event is
+    // another's) has each row's chains advanced from the line or row before as θ
+    // trackers (§4.1), as θ rows are; the others', and a row whose chains cannot be
+    // advanced, are crawled afresh. Each surface decides alone.
     for (const auto& ap : active_) {
       Active& a = *ap;
       a.rows.resize(static_cast<std::size_t>(m));
+      const ChainSet* before = nullptr;
+      double yBefore = yTop;
+      if (a.calm && a.lineWalked && !a.lineBroken) before = &a.line;
+      else if (a.calm && a.carried) before = &a.carry, yBefore = a.carryY;
       for (int r = 0; r < m; ++r) {
         ChainSet& set = a.rows[static_cast<std::size_t>(r)];
-        set.Clear();
-        WalkSurface(a, rowY(r), a.rowTrackers[static_cast<std::size_t>(r)], columns, out, [&](std::span<const ThetaVertex> chain, bool closed) { set.Add(chain, closed); });
+        const RowTrackers& t = a.rowTrackers[static_cast<std::size_t>(r)];
+        bool advanced = false;
+        if (before) {
+          advanced = AdvanceSurface(a, *before, yBefore, rowY(r), t, &set, columns) && !WalkBroken();
+          ++counters_[advanced ? Counter::ThetaRowsAdvanced : Counter::ThetaLineRepairs];
+        }
+        if (!advanced) {
+          set.Clear();
+          WalkSurface(a, rowY(r), t, columns, out, [&](std::span<const ThetaVertex> chain, bool closed) { set.Add(chain, closed); });
+        }
+        before = a.calm && (advanced || !WalkBroken()) ? &set : nullptr;
+        yBefore = rowY(r);
       }
+      a.carried = before != nullptr;
+      if (a.carried) a.carry = a.rows.back(), a.carryY = yBefore;  // within its capacity once warm
     }
   }
   for (const auto& ap : active_) {

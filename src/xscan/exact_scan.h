@@ -109,10 +109,10 @@ class ExactScan final : public raster::FragmentSource {
   // whether the walk failed or repaired a tracker miss.
   void WalkLine(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
                 raster::FragmentRow& out, ChainSet* set, bool* broken);
-  // θ rows and slabs: the chains of a surface's last line, at yFrom, advanced to line y
-  // (its trackers there advanced already) as θ trackers into a.next; false if the line
-  // must be crawled afresh.
-  bool AdvanceSurface(Active& a, double yFrom, double y, const raster::SampleColumns& columns);
+  // θ rows and slabs: a surface's chains `from` on line yFrom advanced to line y, its
+  // trackers `t` there, as θ trackers into *to; false if the line must be crawled afresh.
+  bool AdvanceSurface(Active& a, const ChainSet& from, double yFrom, double y, const RowTrackers& t, ChainSet* to,
+                      const raster::SampleColumns& columns);
   // Calls f(walker, make) with the θ walker of a surface on line y and its fragment maker.
   template <class F>
   void VisitTheta(Active& a, double y, const raster::SampleColumns& columns, F&& f);
@@ -140,6 +140,7 @@ class ExactScan final : public raster::FragmentSource {
   std::vector<Vec2> angles_;   // (cos θ_i, sin θ_i): the θ trackers' table (§4.1)
   ExactScanOptions options_;
   std::vector<ScanEntry> pending_;  // in scan order
+  ThetaTable thetaTable_;           // the walkers' view of the table
   std::size_t nextPending_ = 0;
   std::vector<std::unique_ptr<Active>> active_;
   WalkEvents walkEvents_;

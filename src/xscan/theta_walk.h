@@ -137,18 +137,29 @@ constexpr double kLinkStretchUv = 1e-3;
 // θ turns less than this many table steps along it; a longer one is crawled.
 constexpr double kFillMaxTurnSteps = 3.0;
 
+// The table of N angles per turn (§4.1) as a walker judges turns by it: its step 2π/N, and
+// the cosines of a step and of a step with a rounding margin beyond it (-1 for N < 2).
+// Made once per scan: a walker lives for one surface's row, and the cosines of every
+// walker were a measurable share of a scene of many small surfaces.
+struct ThetaTable {
+  static constexpr double kTurnSlackRad = 1e-6;
+  explicit ThetaTable(int n)
+      : steps(n), step(2.0 * std::numbers::pi / n), cosStep(std::cos(std::min(std::numbers::pi, step))),
+        cosTurn(std::cos(std::min(std::numbers::pi, step + kTurnSlackRad))) {}
+  int steps;
+  double step, cosStep, cosTurn;
+};
+
 template <class ShapeT>
 class ThetaWalker : public LevelWalker<ShapeT> {
   using Base = LevelWalker<ShapeT>;
 
  public:
-  // `steps`: N, the tabulated angles per turn.
+  // `table`: N, the tabulated angles per turn, and what follows from it.
   ThetaWalker(const ShapeT& shape, const ScreenMap& map, double ys, const raster::SampleColumns& cols,
-              Counters* counters, WalkEvents* events, int steps, const ThetaFrame& frame)
-      : Base(shape, map, ys, cols, counters, events), steps_(steps), frame_(frame),
-        table_(2.0 * std::numbers::pi / steps),
-        cosTable_(std::cos(std::min(std::numbers::pi, table_))),
-        cosTurn_(std::cos(std::min(std::numbers::pi, table_ + kTurnSlackRad))) {}
+              Counters* counters, WalkEvents* events, const ThetaTable& table, const ThetaFrame& frame)
+      : Base(shape, map, ys, cols, counters, events), steps_(table.steps), frame_(frame), table_(table.step),
+        cosTable_(table.cosStep), cosTurn_(table.cosTurn) {}
 
   using Vertex = ThetaVertex;
 
@@ -387,9 +398,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     const double cc = std::sqrt((a.x() * a.x() + a.y() * a.y()) * (b.x() * b.x() + b.y() * b.y()));
     return a.z() * b.z() + std::max(inPlane, cc * cosTable_) < cosTurn_;
   }
-  // A table step (and a rounding margin beyond it): their cosines (-1 for N < 2).
-  static constexpr double kTurnSlackRad = 1e-6;
-  double cosTable_, cosTurn_;
+  double cosTable_, cosTurn_;  // ThetaTable's cosStep and cosTurn
   ThetaChainSink* sink_ = nullptr;
   bool slopes_ = false;
   std::vector<Vertex>*piece_ = nullptr, *first_ = nullptr;

@@ -299,7 +299,12 @@ TEST(Cli, ThetaStepOfOneSampleRowTakesRowsNotSlabs) {
     const Result r = Patchscan("render " + kTeapot + " -o " + out + " --size 96x72 --mode theta --stats" + args);
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_EQ(StatsValue(r.err, "slab_triangles") > 0, slabs) << args << "\n" << r.err;
-    EXPECT_EQ(StatsValue(r.err, "theta_rows_advanced") > 0, !slabs) << args << "\n" << r.err;
+    EXPECT_EQ(StatsValue(r.err, "slab_intervals") > 0, slabs) << args << "\n" << r.err;
+    // Rows advance their chains; so do slabs' intervals taken row by row, for the surfaces
+    // without the event.
+    if (!slabs) {
+      EXPECT_GT(StatsValue(r.err, "theta_rows_advanced"), 0) << args << "\n" << r.err;
+    }
   }
   std::filesystem::remove_all(dir);
 }

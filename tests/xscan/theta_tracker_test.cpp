@@ -190,7 +190,7 @@ class LineScan {
   void With(double y, F&& f) {
     const raster::SampleColumns cols{0.0, 1.0, c_.width};
     VisitShape(s_, [&](const auto& shape) {
-      ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, scan_.Map(), y, cols, &counters, nullptr, steps_, frame_);
+      ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, scan_.Map(), y, cols, &counters, nullptr, ThetaTable(steps_), frame_);
       auto make = [&](const LevelPoint& p) { return FragmentAt(p, s_, scan_.NormalFromObject(), 0); };
       f(walker, make);
     });
