@@ -104,7 +104,7 @@ class ThetaWalker<ShapeT>::Crawler {
       if (!w_.SolveTable(k, guess, &v, &w_.Count(Counter::ThetaCrawlIterations)) || !WithinStep(from, to, v) ||
           !inOrder(v))
         v = w_.Correct(guess);
-      if (inOrder(v)) chain_.push_back(w_.MakeVertex(v, make_, ThetaVertex::Kind::Table, k));
+      if (inOrder(v)) Add(w_.MakeVertex(v, make_, ThetaVertex::Kind::Table, k));
       return true;
     });
   }
@@ -132,7 +132,7 @@ class ThetaWalker<ShapeT>::Crawler {
       if (!w_.SolveTurn(at.uv, &v, &w_.Count(Counter::ThetaCrawlIterations)) || !WithinStep(before_, to, v) ||
           std::abs(v.jn) <= ThetaWalker::kOnSilhouetteJn || !Between(v.x, chain_.back().x, to.x))
         v = at;
-      chain_.push_back(w_.MakeVertex(v, make_, ThetaVertex::Kind::Turn));
+      Add(w_.MakeVertex(v, make_, ThetaVertex::Kind::Turn));
       ++w_.Count(Counter::ThetaTurnPoints);
     }
     lastTurn_ = d;
@@ -143,7 +143,7 @@ class ThetaWalker<ShapeT>::Crawler {
   bool EndsAtTurn(const LevelPoint& to) {
     if (!turnTarget_.ok || !WithinStep(p_, to, turnTarget_)) return false;
     PassTable(p_, th_, turnTarget_, Wrap(target_->theta - th_));
-    chain_.push_back(*target_);
+    Add(*target_);
     return true;
   }
 
@@ -162,7 +162,7 @@ class ThetaWalker<ShapeT>::Crawler {
     LevelPoint s;
     if (std::abs(p_.jn) > ThetaWalker::kOnSilhouetteJn && (p_.j > 0) != (e.j > 0) && w_.LocateSilhouette(p_, e, &s)) {
       if (!w_.UseSilhouetteTracker(s.uv)) w_.Repaired(s.uv, Counter::UntrackedSilhouettes);
-      chain_.push_back(w_.MakeVertex(s, make_, ThetaVertex::Kind::Silhouette));
+      Add(w_.MakeVertex(s, make_, ThetaVertex::Kind::Silhouette));
     } else {
       NoteTurn(p_, e, d);
       // A turn within the last step, before the boundary (θ's rate along the curve changes
@@ -174,14 +174,14 @@ class ThetaWalker<ShapeT>::Crawler {
         const Vertex vt = w_.MakeVertex(v, make_, ThetaVertex::Kind::Turn);
         const double tv = vt.theta;
         PassTable(p_, th_, v, Wrap(tv - th_));
-        chain_.push_back(vt);
+        Add(vt);
         ++w_.Count(Counter::ThetaTurnPoints);
         PassTable(v, tv, e, Wrap(ve.theta - tv));
       } else {
         PassTable(p_, th_, e, d);
       }
     }
-    chain_.push_back(ve);
+    Add(ve);
     bool found = true;
     if (target_) {
       LinkEnd(&found);  // the exit is an anchor: the link ends here or before
@@ -209,12 +209,7 @@ class ThetaWalker<ShapeT>::Crawler {
     // first (within the limit, or it would be one already), so that no link turns further
     // (the vertices the step passes are measured from it) and the next line's check finds
     // the links sound.
-    FollowLastVertex();
-    if (TurnedTooFar(inViewNext, tiltNext) && chain_.back().uv != p_.uv) {
-      chain_.push_back(w_.MakeVertex(p_, make_, ThetaVertex::Kind::Tilt));
-      ++w_.Count(Counter::ThetaTilts);
-      FollowLastVertex();
-    }
+    BoundLinkTo(next.x, tiltNext, inViewNext);
     const bool onSil = std::abs(p_.jn) <= ThetaWalker::kOnSilhouetteJn;
     LevelPoint s;
     if (!onSil && (p_.j > 0) != (next.j > 0) && std::abs(next.jn) > ThetaWalker::kOnSilhouetteJn &&
@@ -229,7 +224,7 @@ class ThetaWalker<ShapeT>::Crawler {
         w_.Repaired(s.uv, Counter::UntrackedSilhouettes);
         if (w_.events_) w_.events_->untrackedSilhouettes.push_back(s.uv);
       }
-      chain_.push_back(w_.MakeVertex(s, make_, ThetaVertex::Kind::Silhouette));
+      Add(w_.MakeVertex(s, make_, ThetaVertex::Kind::Silhouette));
     } else {
       NoteTurn(p_, next, d);
       PassTable(p_, th_, next, d);
@@ -240,10 +235,10 @@ class ThetaWalker<ShapeT>::Crawler {
     // error too; and one once it has turned a table step in all, θ and the tilt each less
     // (the teacup at θ8: colour RMSE against exact 0.0066 -> 0.0022).
     FollowLastVertex();
-    if (TurnedTooFar(inViewNext, tiltNext)) {
+    if (TurnedTooFar(next.x, inViewNext, tiltNext)) {
       // Made whole, its slopes too: a chord with no tangent at its tilt end blended the
       // normal there (the teapot's spout at θ4 off by 24 degrees across a 45-px chord).
-      chain_.push_back(w_.MakeVertexOf(next, fn, ThetaVertex::Kind::Tilt));
+      Add(w_.MakeVertexOf(next, fn, ThetaVertex::Kind::Tilt));
       ++w_.Count(Counter::ThetaTilts);
     }
     bool found = false;
@@ -260,6 +255,26 @@ class ThetaWalker<ShapeT>::Crawler {
     return std::nullopt;
   }
 
+  // Where the link from the chain's last vertex to one at x (its tilt, its normal in the
+  // view's frame) would turn a table step, the crawl point before it is a vertex first, if
+  // it lies between them. A link no sample column crosses is not judged (TurnsPastStep),
+  // so while the crawl stays between two columns the turn since the last vertex grows
+  // unchecked; the first vertex beyond a column (a silhouette's x may pass one the crawl
+  // points do not) would otherwise close a link turning several steps.
+  void BoundLinkTo(double x, double tilt, const Vec3& inView) {
+    FollowLastVertex();
+    if (chain_.back().uv == p_.uv || !TurnedTooFar(x, inView, tilt)) return;
+    if (!(p_.x == chain_.back().x || Between(p_.x, chain_.back().x, x))) return;  // x runs one way
+    chain_.push_back(w_.MakeVertex(p_, make_, ThetaVertex::Kind::Tilt));
+    ++w_.Count(Counter::ThetaTilts);
+    FollowLastVertex();
+  }
+  // Adds v to the chain, its link bounded (BoundLinkTo).
+  void Add(const Vertex& v) {
+    BoundLinkTo(v.x, v.tilt, v.inView);
+    chain_.push_back(v);
+  }
+
   // The chain's last vertex's tilt and view-frame normal, if it has grown since they were
   // taken.
   void FollowLastVertex() {
@@ -270,8 +285,8 @@ class ThetaWalker<ShapeT>::Crawler {
   }
   // Whether the normal (its tilt, and in the view's frame) has turned a table step out of
   // the plane, or in all, since the chain's last vertex.
-  bool TurnedTooFar(const Vec3& inView, double tilt) const {
-    return w_.TurnsPastStep(tiltAtVertex_, inViewAtVertex_, tilt, inView);
+  bool TurnedTooFar(double x, const Vec3& inView, double tilt) const {
+    return w_.TurnsPastStep(chain_.back().x, tiltAtVertex_, inViewAtVertex_, x, tilt, inView);
   }
 
   ThetaWalker& w_;

@@ -383,10 +383,20 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // tilts and their normals in the view's frame (ThetaVertex::inView): out of the scan
   // plane, or in all (θ and the tilt may each be within a step and together more). The
   // crawl, the advance's link check and FillLink all judge a link by this.
-  bool TurnsPastStep(double tiltA, const Vec3& inViewA, double tiltB, const Vec3& inViewB) const {
+  // A chord (rows, not slabs) with no sample column strictly between its ends is never
+  // interpolated on its row, whatever its normal does: not judged.
+  bool TurnsPastStep(double xa, double tiltA, const Vec3& inViewA, double xb, double tiltB, const Vec3& inViewB) const {
+    if (slopes_ && !SamplesBetween(xa, xb)) return false;
     return std::abs(tiltB - tiltA) >= table_ || TurnsTooFar(inViewA, inViewB);
   }
-  bool TurnsPastStep(const Vertex& a, const Vertex& b) const { return TurnsPastStep(a.tilt, a.inView, b.tilt, b.inView); }
+  bool TurnsPastStep(const Vertex& a, const Vertex& b) const {
+    return TurnsPastStep(a.x, a.tilt, a.inView, b.x, b.tilt, b.inView);
+  }
+  // Whether a sample column lies strictly between screen x a and b (beyond kColumnEpsPx).
+  bool SamplesBetween(double a, double b) const {
+    const double lo = std::min(a, b), hi = std::max(a, b);
+    return this->cols_.Floor(hi - kColumnEpsPx) >= this->cols_.Ceil(lo + kColumnEpsPx);
+  }
   // The turn in all, measured in the view's frame, where θ is the longitude and the tilt
   // the latitude (in perspective the view ray turns along the section too, which θ leaves
   // out), with θ's part at most a step: θ's own overshoot of a table step (a vertex solved

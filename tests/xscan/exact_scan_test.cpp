@@ -256,12 +256,14 @@ TEST(ExactScan, OrthographicSphereOutlineIsItsRadius) {
 constexpr double kTableVertexThetaTolSteps = 0.5;
 
 // The normal turns out of the scan plane by at most this many table steps between two
-// consecutive chain vertices: after every crawl step it is less than one step from the last
-// vertex's (else a tilt vertex is made there), and the step that leaves the domain turns it
-// by at most one step more.
+// consecutive chain vertices: after every crawl step, and before any vertex is added, it is
+// less than one step from the last vertex's (else a tilt vertex is made at the crawl point
+// before), and the step that leaves the domain turns it by at most one step more.
 constexpr double kTiltBetweenVerticesTolSteps = 2.0;
 
 // And in all (in 3-D), for the same reasons: a vertex once it has turned a table step.
+// Both bound the links whose chords are interpolated: with a sample column strictly
+// between their ends (ThetaWalker::TurnsPastStep judges no other).
 constexpr double kTurnBetweenVerticesTolSteps = 2.0;
 
 // Blinn's chain invariants (paper 001 §4.2, §4.3), checked on every chain a θ scan makes:
@@ -271,8 +273,9 @@ constexpr double kTurnBetweenVerticesTolSteps = 2.0;
 // Each table vertex's θ is recorded against its tabulated angle.
 class ChainChecker final : public ThetaChainSink {
  public:
-  explicit ChainChecker(const Camera& c)
-      : frame_{EyePoint(c), ViewRight(c), ViewForward(c), c.orthographic, nullptr, {}} {}
+  // `cols`: the sample columns the scan interpolates its chords on.
+  ChainChecker(const Camera& c, const raster::SampleColumns& cols)
+      : frame_{EyePoint(c), ViewRight(c), ViewForward(c), c.orthographic, nullptr, {}}, cols_(cols) {}
 
   void Chain(double ys, int steps, std::span<const ThetaVertex> chain) override {
     ++nChains;
@@ -280,6 +283,8 @@ class ChainChecker final : public ThetaChainSink {
     bool silhouette = false, turn = false, turnSinceSign = false;
     int lastSign = 0;
     for (size_t k = 1; k < chain.size(); ++k) {
+      const double lo = std::min(chain[k - 1].x, chain[k].x), hi = std::max(chain[k - 1].x, chain[k].x);
+      if (cols_.Floor(hi - kColumnEpsPx) < cols_.Ceil(lo + kColumnEpsPx)) continue;  // no sample between
       const double dTilt = std::abs(frame_.Tilt(chain[k].f.position, chain[k].f.normal) -
                                     frame_.Tilt(chain[k - 1].f.position, chain[k - 1].f.normal));
       worstTiltSteps = std::max(worstTiltSteps, dTilt * steps / (2.0 * M_PI));
@@ -332,6 +337,7 @@ class ChainChecker final : public ThetaChainSink {
 
  private:
   ThetaFrame frame_;
+  raster::SampleColumns cols_;
 };
 
 // A θ scan of every row at pixel centres with `steps` table angles, its chains to `sink`.
@@ -363,7 +369,7 @@ TEST(ThetaScan, ChainInvariantsHoldOnTheTestSurfaces) {
                    Orthographic(Vec3(2.5, -2.0, 2.2), 1.5)});
   for (const int steps : {16, 64})
     for (const auto& [name, surfaces, camera] : cases) {
-      ChainChecker check(camera);
+      ChainChecker check(camera, raster::SampleColumns{0.5, 1.0, camera.width});
       ASSERT_TRUE(ScanEveryRow(surfaces, camera, steps, check));
       std::cout << name << " N=" << steps << ": " << check.nChains << " chains, " << check.nTable
                 << " table vertices, " << check.nPairs << " consecutive pairs, " << check.violations
