@@ -198,6 +198,20 @@ bool ExactScan::AdvanceSurface(Active& a, const ChainSet& from, double yFrom, do
   return ok;
 }
 
+bool ExactScan::AdvanceOrWalk(Active& a, const ChainSet* before, double yBefore, double y, const RowTrackers& t,
+                              ChainSet* set, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  bool advanced = false;
+  if (before) {
+    advanced = AdvanceSurface(a, *before, yBefore, y, t, set, columns) && !WalkBroken();
+    ++counters_[advanced ? Counter::ThetaRowsAdvanced : Counter::ThetaLineRepairs];
+  }
+  if (!advanced) {
+    set->Clear();
+    WalkSurface(a, y, t, columns, out, [set](std::span<const ThetaVertex> chain, bool closed) { set->Add(chain, closed); });
+  }
+  return advanced;
+}
+
 bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   ++counters_[Counter::SampleRows];
   if (options_.thetaSteps > 0 && options_.slabRows > 0) return ScanRowSlabs(y, columns, out);
@@ -215,16 +229,8 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
     // are advanced as θ trackers (§4.1), as slab lines are; a surface's first row, a row
     // after an event and a chain that cannot be advanced are crawled afresh. Each surface
     // decides alone (its chains are its own), so a partition of the scene changes nothing.
-    bool advanced = false;
-    if (a.lineWalked && !a.lineBroken && Calm(a, events, a.lineY, y)) {
-      advanced = AdvanceSurface(a, a.line, a.lineY, y, a.scan->Trackers(), &a.next, columns) && !WalkBroken();
-      ++counters_[advanced ? Counter::ThetaRowsAdvanced : Counter::ThetaLineRepairs];
-    }
-    if (!advanced) {
-      a.next.Clear();
-      WalkSurface(a, y, a.scan->Trackers(), columns, out,
-                  [&](std::span<const ThetaVertex> chain, bool closed) { a.next.Add(chain, closed); });
-    }
+    const bool calm = a.lineWalked && !a.lineBroken && Calm(a, events, a.lineY, y);
+    const bool advanced = AdvanceOrWalk(a, calm ? &a.line : nullptr, a.lineY, y, a.scan->Trackers(), &a.next, columns, out);
     for (const ChainSet::Chain& c : a.next.chains)
       counters_[Counter::Fragments] += EmitThetaChain(a.next.Of(c), columns, camera_.orthographic, out);
     std::swap(a.line, a.next);
@@ -391,15 +397,7 @@ void ExactScan::FinishInterval(bool slab, const raster::SampleColumns& columns, 
       for (int r = 0; r < m; ++r) {
         ChainSet& set = a.rows[static_cast<std::size_t>(r)];
         const RowTrackers& t = a.rowTrackers[static_cast<std::size_t>(r)];
-        bool advanced = false;
-        if (before) {
-          advanced = AdvanceSurface(a, *before, yBefore, rowY(r), t, &set, columns) && !WalkBroken();
-          ++counters_[advanced ? Counter::ThetaRowsAdvanced : Counter::ThetaLineRepairs];
-        }
-        if (!advanced) {
-          set.Clear();
-          WalkSurface(a, rowY(r), t, columns, out, [&](std::span<const ThetaVertex> chain, bool closed) { set.Add(chain, closed); });
-        }
+        const bool advanced = AdvanceOrWalk(a, before, yBefore, rowY(r), t, &set, columns, out);
         before = a.calm && (advanced || !WalkBroken()) ? &set : nullptr;
         yBefore = rowY(r);
       }

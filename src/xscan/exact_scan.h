@@ -113,6 +113,11 @@ class ExactScan final : public raster::FragmentSource {
   // trackers `t` there, as θ trackers into *to; false if the line must be crawled afresh.
   bool AdvanceSurface(Active& a, const ChainSet& from, double yFrom, double y, const RowTrackers& t, ChainSet* to,
                       const raster::SampleColumns& columns);
+  // θ rows: a surface's chains on row y, its trackers `t` there, into *set: advanced from
+  // `before` on row yBefore where given (AdvanceSurface, counted as a row advanced or a
+  // line repaired), else, or where that fails, crawled afresh. Whether they were advanced.
+  bool AdvanceOrWalk(Active& a, const ChainSet* before, double yBefore, double y, const RowTrackers& t, ChainSet* set,
+                     const raster::SampleColumns& columns, raster::FragmentRow& out);
   // Calls f(walker, make) with the θ walker of a surface on line y and its fragment maker.
   template <class F>
   void VisitTheta(Active& a, double y, const raster::SampleColumns& columns, F&& f);
