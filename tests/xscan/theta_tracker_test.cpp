@@ -183,14 +183,19 @@ class LineScan {
     return ok;
   }
   const ScreenMap& Map() const { return scan_.Map(); }
+  // The sample columns the walker is given (by default one at every pixel centre's x,
+  // 0 .. width - 1), and whether its chains are made for chords on every row (vertices with
+  // normal slopes) rather than for slabs (ThetaWalker::SetNormalSlopes).
+  void SetColumns(const raster::SampleColumns& cols) { cols_ = cols; }
+  void SetRows(bool rows) { rows_ = rows; }
   Counters counters;
 
  private:
   template <class F>
   void With(double y, F&& f) {
-    const raster::SampleColumns cols{0.0, 1.0, c_.width};
     VisitShape(s_, [&](const auto& shape) {
-      ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, scan_.Map(), y, cols, &counters, nullptr, ThetaTable(steps_), frame_);
+      ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, scan_.Map(), y, cols_, &counters, nullptr, ThetaTable(steps_), frame_);
+      walker.SetNormalSlopes(rows_);
       auto make = [&](const LevelPoint& p) { return FragmentAt(p, s_, scan_.NormalFromObject(), 0); };
       f(walker, make);
     });
@@ -200,6 +205,8 @@ class LineScan {
   int steps_;
   ThetaFrame frame_;
   SurfaceScan scan_;
+  raster::SampleColumns cols_{0.0, 1.0, c_.width};
+  bool rows_ = false;
   std::vector<char> edgeUsed_, silUsed_;
   std::vector<ThetaVertex> scratch_;
 };
@@ -526,6 +533,61 @@ TEST(ThetaTracker, RatesAlongTheLinesPredictTheNextLine) {
     EXPECT_LT(turnLinesDiffering, turnLines / 10);
     EXPECT_LE(static_cast<double>(predicted), kMaxShare * static_cast<double>(linear)) << "spacing " << dy;
   }
+}
+
+TEST(ThetaTracker, RowChainsTiltOnlyWhereASampleColumnLiesBetween) {
+  // On every row (chords, not slabs) a link is interpolated only at the sample columns
+  // strictly between its ends, so its normal's turn out of the scan plane needs a tilt
+  // vertex only where a column lies between (ThetaWalker::TurnsPastStep). Crawled on the
+  // same lines with one column at every pixel and with one column far off the image, the
+  // chains have the same vertices apart from tilt vertices, and with the far column none;
+  // for slabs (every link judged, the slab's triangles cover it whatever the columns) the
+  // tilts stay. The surfaces' normals leave the scan plane by more than a step on many
+  // lines at N 8: with unit columns there are tilts to lose.
+  constexpr int kSteps = 8;
+  const raster::SampleColumns far{-1e6, 1.0, 1};
+  long rowTilts = 0, slabTilts = 0, slabTiltsFar = 0;
+  for (const TrackerCase& c : Cases()) {
+    LineScan scan(c.surface, c.camera, kSteps);
+    ChainSet unit, none;
+    for (double y = std::ceil(scan.Top()) + 0.5; y < c.camera.height; y += 1.0) {
+      scan.AdvanceTo(y);
+      const auto kinds = [](const ChainSet& set, bool tilts) {
+        std::vector<ThetaVertex> out;
+        for (const ThetaVertex& v : set.v)
+          if ((v.kind == ThetaVertex::Kind::Tilt) == tilts) out.push_back(v);
+        return out;
+      };
+      for (bool rows : {true, false}) {
+        scan.SetRows(rows);
+        scan.SetColumns({0.0, 1.0, c.camera.width});
+        scan.Crawl(y, &unit);
+        scan.SetColumns(far);
+        scan.Crawl(y, &none);
+        const std::vector<ThetaVertex> a = kinds(unit, false), b = kinds(none, false);
+        ASSERT_EQ(a.size(), b.size()) << c.name << " line " << y << (rows ? " rows" : " slabs");
+        for (std::size_t k = 0; k < a.size(); ++k) {
+          EXPECT_EQ(a[k].kind, b[k].kind) << c.name << " line " << y;
+          EXPECT_EQ(a[k].index, b[k].index) << c.name << " line " << y;
+          EXPECT_NEAR(a[k].x, b[k].x, kLinkMatchPx) << c.name << " line " << y;
+        }
+        const long tiltsUnit = static_cast<long>(kinds(unit, true).size());
+        const long tiltsFar = static_cast<long>(kinds(none, true).size());
+        if (rows) {
+          EXPECT_EQ(tiltsFar, 0) << c.name << " line " << y << ": a tilt vertex no sample column needs";
+          rowTilts += tiltsUnit;
+        } else {
+          slabTilts += tiltsUnit;
+          slabTiltsFar += tiltsFar;
+        }
+      }
+    }
+  }
+  std::cout << "tilt vertices at N " << kSteps << ": rows " << rowTilts << " (none with no column between), slabs "
+            << slabTilts << " with unit columns, " << slabTiltsFar << " with one far column\n";
+  EXPECT_GT(rowTilts, 0);
+  EXPECT_GT(slabTilts, 0);
+  EXPECT_EQ(slabTiltsFar, slabTilts);
 }
 
 }  // namespace
