@@ -37,6 +37,11 @@ struct ExactScan::Active {
   std::vector<ChainSet> rows;
   std::vector<ChainPair> pairs;
   std::vector<ThetaVertex> ordered;
+  // θ slabs: the chains of line and next with vertices added along their links' cubics
+  // (RefineChains), which the slabs are zipped from, and whether they are those of the
+  // chains line and next hold now.
+  ChainSet lineFine, nextFine;
+  bool lineRefined = false, nextRefined = false;
 };
 
 namespace {
@@ -148,7 +153,8 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
     const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_};
     ThetaWalker<ShapeT> walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_, thetaTable_, frame);
     walker.SetChainSink(chainSink_);
-    walker.SetNormalSlopes(options_.slabRows == 0);  // chords, not slabs
+    walker.SetNormalSlopes(true);
+    walker.SetRowChords(options_.slabRows == 0);
     walker.SetTrim(a.scan->Trim(), &trimScratch_);
     walker.SetTrimPieces(&trimPiece_, &trimFirst_);
     f(walker, [&](const LevelPoint& p) {
@@ -340,6 +346,7 @@ bool ExactScan::PairInterval(bool quiet, const raster::SampleColumns& columns, r
         WalkLine(a, yTop, a.topTrackers, columns, out, &a.line, &a.lineBroken);
       }
       a.lineWalked = true;
+      a.lineRefined = false;
     }
     a.nextWalked = true;
     // Between lines with no event the chains of the top line are advanced as θ trackers
@@ -353,7 +360,14 @@ bool ExactScan::PairInterval(bool quiet, const raster::SampleColumns& columns, r
       if (advance) ++counters_[Counter::ThetaLineRepairs];
       WalkLine(a, yBottom, a.scan->Trackers(), columns, out, &a.next, &a.nextBroken);
     }
-    slab = slab && advance && !a.nextBroken && PairChains(a.line, a.next, &a.pairs, &a.ordered);
+    if (!(slab && advance && !a.nextBroken)) {
+      slab = false;
+      continue;
+    }
+    if (!a.lineRefined) RefineChains(a.line, columns, camera_.orthographic, &a.lineFine);
+    RefineChains(a.next, columns, camera_.orthographic, &a.nextFine);
+    a.lineRefined = a.nextRefined = true;
+    slab = PairChains(a.lineFine, a.nextFine, &a.pairs, &a.ordered);
   }
   return slab;
 }
@@ -374,7 +388,7 @@ void ExactScan::FinishInterval(bool slab, const raster::SampleColumns& columns, 
       Active& a = *ap;
       const auto id = static_cast<std::uint32_t>(a.index);
       for (const ChainPair& p : a.pairs)
-        ZipSlab(a.line.Of(a.line.chains[p.top]),
+        ZipSlab(a.lineFine.Of(a.lineFine.chains[p.top]),
                 std::span<const ThetaVertex>(a.ordered.data() + p.begin, p.end - p.begin), frame, &anchorsTop_,
                 &anchorsBottom_, [&](const raster::RasterVertex& u, const raster::RasterVertex& v, const raster::RasterVertex& w) {
                   ++counters_[Counter::SlabTriangles];
@@ -407,6 +421,9 @@ void ExactScan::FinishInterval(bool slab, const raster::SampleColumns& columns, 
   }
   for (const auto& ap : active_) {
     std::swap(ap->line, ap->next);
+    std::swap(ap->lineFine, ap->nextFine);
+    ap->lineRefined = ap->nextRefined;
+    ap->nextRefined = false;
     ap->lineBroken = ap->nextBroken;
     ap->lineWalked = ap->nextWalked;
   }

@@ -13,7 +13,59 @@ std::size_t CountAnchors(std::span<const ThetaVertex> c) {
   return n;
 }
 
+// The chord's parameter t along x where its cubics' parameter is p (raster::Chord::Cubics:
+// p = R(t) near a silhouette at a, 1 - R(1 - t) near one at b, else t).
+double ChordTAt(const raster::Chord::Cubics& c, double p) {
+  if (c.root == 0) return p;
+  const double r = c.root == 1 ? p : 1.0 - p;
+  const double r0 = std::sqrt(c.u0), q = r * (1.0 - r0) + r0;
+  const double s = c.u0 < 1.0 ? (q * q - c.u0) / (1.0 - c.u0) : r;
+  return c.root == 1 ? s : 1.0 - s;
+}
+
+// The unit normal the perspective-correct blend of a chord's ends gives at t (as the back
+// end's triangles interpolate it).
+Vec3 BlendedNormal(const raster::Chord& c, double t) {
+  const double ia = c.orthographic() ? 1.0 - t : (1.0 - t) / c.a().w, ib = c.orthographic() ? t : t / c.b().w;
+  return (ia * c.a().normal + ib * c.b().normal).normalized();
+}
+
 }  // namespace
+
+void RefineChains(const ChainSet& in, const raster::SampleColumns& cols, bool orthographic, ChainSet* out) {
+  out->v.clear();
+  out->chains.clear();
+  for (const ChainSet::Chain& chain : in.chains) {
+    const auto c = in.Of(chain);
+    const auto begin = static_cast<std::uint32_t>(out->v.size());
+    for (std::size_t k = 0; k < c.size(); ++k) {
+      if (k > 0) {
+        const ThetaVertex &a = c[k - 1], &b = c[k];
+        if (a.f.w > 0.0 && b.f.w > 0.0 && a.x != b.x) {
+          const raster::Chord chord(a.x, a.f, b.x, b.f, orthographic, ChordSlopeOf(a, b), ChordSlopeOf(b, a));
+          if (const raster::Chord::Cubics* cubics = chord.cubics()) {
+            const double lo = std::min(a.x, b.x), hi = std::max(a.x, b.x);
+            const int between = cols.Floor(hi - raster::kColumnEpsPx) - cols.Ceil(lo + raster::kColumnEpsPx) + 1;
+            const auto xAt = [&](double p) { return a.x + ChordTAt(*cubics, p) * (b.x - a.x); };
+            const double tMid = ChordTAt(*cubics, 0.5);
+            const double stray = (chord.At(xAt(0.5)).normal - BlendedNormal(chord, tMid)).norm();
+            const int pieces = std::min({static_cast<int>(std::ceil(std::sqrt(stray / kSlabNormalTolRad))),
+                                         kMaxLinkPieces, std::max(between, 0) + 1});
+            for (int i = 1; i < pieces; ++i) {
+              ThetaVertex m;
+              m.x = xAt(static_cast<double>(i) / pieces);
+              m.f = chord.At(m.x);
+              m.kind = ThetaVertex::Kind::Table;
+              out->v.push_back(m);
+            }
+          }
+        }
+      }
+      out->v.push_back(c[k]);
+    }
+    out->chains.push_back({begin, static_cast<std::uint32_t>(out->v.size()), chain.closed});
+  }
+}
 
 raster::RasterVertex SlabVertex(const ThetaVertex& v, double y, bool orthographic) {
   raster::RasterVertex r;

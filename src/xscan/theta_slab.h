@@ -51,6 +51,25 @@ struct SlabFrame {
 constexpr double kSlabEndGrid = 65536.0;
 raster::RasterVertex SlabVertex(const ThetaVertex& v, double y, bool orthographic);
 
+// A slab's triangles blend the normal linearly between their vertices, where a θ row's
+// chord follows the cubic its ends' slopes give (raster::Chord): across a link a quarter
+// turn long (4 θ steps) the blend was wrong by up to 50° where the section's normal turns
+// unevenly in x. So before zipping, each link whose chord is a cubic gets vertices on that
+// cubic, evenly along its parameter, enough that the blend between them strays from it by
+// about kSlabNormalTolRad: n pieces where the blend across the whole link strays δ at its
+// middle, n = ⌈√(δ / tol)⌉ (a smooth curve's chord error falls as the square of its
+// length), at most kMaxLinkPieces and one more than the sample columns between its ends.
+// The chains' own vertices are kept, so the slabs stay as watertight as before. Measured
+// (teapot 1024x768, aa 4, 1-px slabs, against exact): colour RMSE at 4 / 8 / 16 steps
+// 0.0215 / 0.0098 / 0.0060 unrefined, 0.0086 / 0.0061 / 0.0050 at 0.05 rad, 0.0067 /
+// 0.0029 / 0.0019 at 0.02, 0.0057 / 0.0028 / 0.0017 at 0.01; the scan and shading's
+// instructions +5.6 % (0.02) and +7.8 % (0.01) at 4 steps, +1.2 % from 0.02 to 0.01 at 16.
+constexpr double kSlabNormalTolRad = 0.01;
+constexpr int kMaxLinkPieces = 8;
+// The chains of `in` with those vertices added (kind Table, index -1: no anchor), into
+// *out (its vectors reused: no allocation once they have grown).
+void RefineChains(const ChainSet& in, const raster::SampleColumns& cols, bool orthographic, ChainSet* out);
+
 // Anchors of a chain: its first and last vertices and its silhouette vertices, by index.
 void ChainAnchors(std::span<const ThetaVertex> chain, std::vector<std::uint32_t>* anchors);
 

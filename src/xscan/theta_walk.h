@@ -180,9 +180,13 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // Every chain made is also shown to `sink` (none by default).
   void SetChainSink(ThetaChainSink* sink) { sink_ = sink; }
 
-  // Whether vertices carry their normal's slope along the row (ThetaVertex::dndx), which
-  // only chords use (not slabs): off by default.
+  // Whether vertices carry their normal's slope along the row (ThetaVertex::dndx), the
+  // tangents of the chords' cubics (rows, and the links slabs refine): off by default.
   void SetNormalSlopes(bool on) { slopes_ = on; }
+  // Whether the chains are interpolated on their own row only (θ rows: a link with no
+  // sample column between its ends is never interpolated, and its turn is not judged), not
+  // between lines (slabs): off by default.
+  void SetRowChords(bool on) { rowChords_ = on; }
 
   // Advances the chains `from` of the line before, `dy` above this one, to this line as θ
   // trackers, in the same order, into *to (the trackers of this line in `t`): false if a
@@ -386,7 +390,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // A chord (rows, not slabs) with no sample column strictly between its ends is never
   // interpolated on its row, whatever its normal does: not judged.
   bool TurnsPastStep(double xa, double tiltA, const Vec3& inViewA, double xb, double tiltB, const Vec3& inViewB) const {
-    if (slopes_ && !SamplesBetween(xa, xb)) return false;
+    if (rowChords_ && !SamplesBetween(xa, xb)) return false;
     return std::abs(tiltB - tiltA) >= table_ || TurnsTooFar(inViewA, inViewB);
   }
   bool TurnsPastStep(const Vertex& a, const Vertex& b) const {
@@ -410,7 +414,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   }
   double cosTable_, cosTurn_;  // ThetaTable's cosStep and cosTurn
   ThetaChainSink* sink_ = nullptr;
-  bool slopes_ = false;
+  bool slopes_ = false, rowChords_ = false;
   std::vector<Vertex>*piece_ = nullptr, *first_ = nullptr;
 
   // Hands `chain` to take, or on a trimmed surface the pieces of it the trim keeps, each

@@ -184,8 +184,8 @@ class LineScan {
   }
   const ScreenMap& Map() const { return scan_.Map(); }
   // The sample columns the walker is given (by default one at every pixel centre's x,
-  // 0 .. width - 1), and whether its chains are made for chords on every row (vertices with
-  // normal slopes) rather than for slabs (ThetaWalker::SetNormalSlopes).
+  // 0 .. width - 1), and whether its chains are made for chords on every row rather than
+  // for slabs (ThetaWalker::SetRowChords); vertices carry their slopes either way.
   void SetColumns(const raster::SampleColumns& cols) { cols_ = cols; }
   void SetRows(bool rows) { rows_ = rows; }
   Counters counters;
@@ -195,7 +195,8 @@ class LineScan {
   void With(double y, F&& f) {
     VisitShape(s_, [&](const auto& shape) {
       ThetaWalker<std::decay_t<decltype(shape)>> walker(shape, scan_.Map(), y, cols_, &counters, nullptr, ThetaTable(steps_), frame_);
-      walker.SetNormalSlopes(rows_);
+      walker.SetNormalSlopes(true);
+      walker.SetRowChords(rows_);
       auto make = [&](const LevelPoint& p) { return FragmentAt(p, s_, scan_.NormalFromObject(), 0); };
       f(walker, make);
     });
