@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 
 #include "core/hermite.h"
 #include "raster/mesh.h"
@@ -235,8 +236,7 @@ class Chord {
   Fragment At(double x) const {
     if (xa_ == xb_) return a_;
     const double t = Along(x);
-    // The ends' weights: 1/w's share in perspective, whose sum is the blended 1/w itself.
-    const double ia = orthographic_ ? 1.0 - t : (1.0 - t) * invWa_, ib = orthographic_ ? t : t * invWb_;
+    const auto [ia, ib] = EndWeights(t);
     const double sum = ia + ib, inv = 1.0 / sum;
     const double wa = ia * inv, wb = ib * inv;
     double root = NAN;
@@ -256,6 +256,13 @@ class Chord {
     return f;
   }
 
+  // The unit normal the ends' perspective-correct blend gives at t in [0, 1] (as a slab
+  // triangle interpolates it), whatever the chord's cubics.
+  Vec3 BlendedNormal(double t) const {
+    const auto [ia, ib] = EndWeights(t);
+    return (ia * a_.normal + ib * b_.normal).normalized();
+  }
+
  private:
   double xa_ = 0.0, xb_ = 0.0;
   double invSpan_ = 0.0;  // 1 / (xb - xa)
@@ -271,6 +278,11 @@ class Chord {
   Vec2 uv_[4];
 
   double Along(double x) const { return std::clamp((x - xa_) * invSpan_, 0.0, 1.0); }
+  // The ends' weights at t, unnormalised: 1/w's share in perspective (whose sum is the
+  // blended 1/w itself), 1 - t and t orthographic.
+  std::pair<double, double> EndWeights(double t) const {
+    return orthographic_ ? std::pair{1.0 - t, t} : std::pair{(1.0 - t) * invWa_, t * invWb_};
+  }
   // Whether a tangent of this length (per unit t) fits a chord across which the attribute
   // changes by `change`: no longer than `ratio` times it plus kSlopeFloor (false for NaN
   // and infinity).

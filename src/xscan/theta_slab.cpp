@@ -23,13 +23,6 @@ double ChordTAt(const raster::Chord::Cubics& c, double p) {
   return c.root == 1 ? s : 1.0 - s;
 }
 
-// The unit normal the perspective-correct blend of a chord's ends gives at t (as the back
-// end's triangles interpolate it).
-Vec3 BlendedNormal(const raster::Chord& c, double t) {
-  const double ia = c.orthographic() ? 1.0 - t : (1.0 - t) / c.a().w, ib = c.orthographic() ? t : t / c.b().w;
-  return (ia * c.a().normal + ib * c.b().normal).normalized();
-}
-
 }  // namespace
 
 void RefineChains(const ChainSet& in, const raster::SampleColumns& cols, bool orthographic, ChainSet* out) {
@@ -48,7 +41,7 @@ void RefineChains(const ChainSet& in, const raster::SampleColumns& cols, bool or
             const int between = cols.Floor(hi - raster::kColumnEpsPx) - cols.Ceil(lo + raster::kColumnEpsPx) + 1;
             const auto xAt = [&](double p) { return a.x + ChordTAt(*cubics, p) * (b.x - a.x); };
             const double tMid = ChordTAt(*cubics, 0.5);
-            const double stray = (chord.At(xAt(0.5)).normal - BlendedNormal(chord, tMid)).norm();
+            const double stray = (chord.At(xAt(0.5)).normal - chord.BlendedNormal(tMid)).norm();
             const int pieces = std::min({static_cast<int>(std::ceil(std::sqrt(stray / kSlabNormalTolRad))),
                                          kMaxLinkPieces, std::max(between, 0) + 1});
             for (int i = 1; i < pieces; ++i) {

@@ -11,6 +11,7 @@
 #include <variant>
 
 #include "patch/scene.h"
+#include "raster/image_compare.h"
 #include "raster/triangle_setup.h"
 #include "raster/scanline_renderer.h"
 #include "xscan/agreement.h"
@@ -444,14 +445,10 @@ TEST(ThetaSlab, RowsTakenOneByOneForAnotherSurfacesEventAreAdvanced) {
   }
 }
 
-// The pixels' normals (the AOV of the surface covering most of each pixel) of a render
-// through the back end, and each pixel's surface (-1: none, or not fully covered).
-struct NormalImage {
-  std::vector<Vec3> normal;
-  std::vector<int> id;
-};
-NormalImage RenderNormals(std::span<const Surface> surfaces, const Camera& camera, int aa, int thetaSteps,
-                          int slabRows) {
+// A render through the back end as the image comparison reads one: colour, coverage,
+// normals and surface ids.
+raster::ComparableImage RenderComparable(std::span<const Surface> surfaces, const Camera& camera, int aa,
+                                         int thetaSteps, int slabRows) {
   raster::RenderSettings rs = test::SettingsFor(camera, aa);
   rs.aovs = true;
   ExactScanOptions o;
@@ -461,27 +458,26 @@ NormalImage RenderNormals(std::span<const Surface> surfaces, const Camera& camer
   test::KeepRows rows(camera.width);
   EXPECT_TRUE(raster::RenderFragments(scan, rs, rows).has_value());
   EXPECT_EQ(scan.Stats()[Counter::Failures], 0);
-  NormalImage img;
+  raster::ComparableImage img;
+  img.width = camera.width, img.height = camera.height;
   for (std::size_t k = 0; k + raster::kChannels <= rows.rows.size(); k += raster::kChannels) {
     const float* p = rows.rows.data() + k;
-    img.normal.emplace_back(p[raster::kChannelN], p[raster::kChannelN + 1], p[raster::kChannelN + 2]);
-    img.id.push_back(p[3] >= 1.0f ? static_cast<int>(p[raster::kChannelId]) : -1);
+    img.rgb.insert(img.rgb.end(), p, p + 3);
+    img.alpha.push_back(p[3]);
+    img.normal.insert(img.normal.end(), p + raster::kChannelN, p + raster::kChannelN + 3);
+    img.id.push_back(p[raster::kChannelId]);
   }
   return img;
 }
 
 // The 99th percentile of the angle (degrees) between two renders' normals over the pixels
-// fully covered by the same surface in both.
-double NormalErrorP99(const NormalImage& a, const NormalImage& b) {
-  std::vector<double> deg;
-  for (std::size_t k = 0; k < a.id.size(); ++k)
-    if (a.id[k] >= 0 && a.id[k] == b.id[k])
-      deg.push_back(std::acos(std::clamp(a.normal[k].normalized().dot(b.normal[k].normalized()), -1.0, 1.0)) * 180.0 /
-                    std::numbers::pi);
-  EXPECT_GT(deg.size(), 1000u);
-  if (deg.empty()) return 0.0;
-  std::sort(deg.begin(), deg.end());
-  return deg[deg.size() * 99 / 100];
+// fully covered by the same surface in both, as `patchscan compare` reports it.
+double NormalErrorP99(const raster::ComparableImage& a, const raster::ComparableImage& reference) {
+  const raster::ImageComparison c = raster::CompareImages(a, reference);
+  EXPECT_TRUE(c.normalDegrees.has_value());
+  if (!c.normalDegrees) return 0.0;
+  EXPECT_GT(c.normalDegrees->count, 1000);
+  return c.normalDegrees->p99;
 }
 
 // Slabs zipped from chains whose links carry vertices on their chords' cubics
@@ -496,10 +492,10 @@ TEST(ThetaSlab, NormalsFollowTheRowsCubics) {
   for (const auto& [file, up] : {std::pair{"teapot.bpt", Vec3(0, 0, 1)}, {"teacup.bpt", Vec3(0, 1, 0)}}) {
     const Scene s = Load(file);
     Camera camera = Framed(s, up, 256);
-    const NormalImage exact = RenderNormals(s.surfaces, camera, 4, 0, 0);
+    const raster::ComparableImage exact = RenderComparable(s.surfaces, camera, 4, 0, 0);
     for (const int steps : {4, 8}) {
-      const double rows = NormalErrorP99(exact, RenderNormals(s.surfaces, camera, 4, steps, 0));
-      const double slabs = NormalErrorP99(exact, RenderNormals(s.surfaces, camera, 4, steps, 4));
+      const double rows = NormalErrorP99(RenderComparable(s.surfaces, camera, 4, steps, 0), exact);
+      const double slabs = NormalErrorP99(RenderComparable(s.surfaces, camera, 4, steps, 4), exact);
       std::cout << file << " 256 px aa 4, " << steps << " steps: normal p99 rows " << rows << "°, 1-px slabs "
                 << slabs << "° (" << slabs / rows << " times)\n";
       EXPECT_LE(slabs, kSlabOverRowsNormalP99 * rows) << file << ", " << steps << " steps";
