@@ -84,6 +84,7 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(Theta, ThetaSteps, "theta_steps", "crawl steps", "steps", Sum)                                                 \
   X(Theta, ThetaTurnPoints, "theta_turn_points", "turn points found by the crawl (§4.3)", "vertices", Sum)         \
   X(Theta, ThetaTilts, "theta_tilts", "tilt vertices (the normal left the scan plane)", "vertices", Sum)           \
+  X(Theta, ThetaChordSplits, "theta_chord_splits", "of those, where a link's chord missed the surface's normal", "vertices", Sum) \
   X(Theta, ThetaCrawlIterations, "theta_crawl_iterations", "Newton iterations placing the crawl's tracker vertices", "iterations", Sum) \
   X(Theta, ThetaTrackers, "theta_trackers", "θ trackers advanced from the line before", "trackers", Sum)            \
   X(Theta, ThetaTrackerIterations, "theta_tracker_iterations", "θ-tracker Newton iterations", "iterations", Sum)    \

@@ -5,7 +5,8 @@
 // vertex is made where θ passes a tabulated angle (the θ tracker there, by Newton), where
 // θ turns back (the turn tracker), at each silhouette (found by the sign of J), where the
 // normal has turned a table step out of the plane, or in all (in 3-D), since the last
-// vertex (a tilt), and at the boundary. Included by theta_walk.h; not for use on its own.
+// vertex (a tilt), where a link's chord would miss the normal by more than an eighth of a
+// step (Push), and at the boundary. Included by theta_walk.h; not for use on its own.
 #pragma once
 
 #include <algorithm>
@@ -28,6 +29,7 @@ class ThetaWalker<ShapeT>::Crawler {
   Crawler(ThetaWalker& w, const LevelPoint& start, double sense, bool closed, std::vector<Vertex>* chain, Make& make,
           const Vertex* target, double turning)
       : w_(w), start_(start), sense_(sense), closed_(closed), chain_(*chain), make_(make), target_(target) {
+    w_.crawlPoints_.clear();
     chain_.push_back(w_.MakeVertex(start, make_, closed ? ThetaVertex::Kind::Silhouette : ThetaVertex::Kind::End));
     checked_ = chain_.size();
     p_ = before_ = start;
@@ -217,7 +219,8 @@ class ThetaWalker<ShapeT>::Crawler {
       // The silhouette vertex; the table angles near it are within half a step of it.
       ++w_.Count(Counter::SilhouettePoints);
       if (closed_ && (s.uv - start_.uv).norm() <= kSameCrossingUv) {
-        chain_.push_back(chain_.front());  // round: back at the start
+        const Vertex front = chain_.front();
+        Push(front);  // round: back at the start
         return true;
       }
       if (!w_.UseSilhouetteTracker(s.uv)) {
@@ -249,6 +252,7 @@ class ThetaWalker<ShapeT>::Crawler {
     const double hMax = std::abs(next.x - p_.x) < kSmallStepPx ? kSmallStepMax : kWalkStepMax;
     before_ = p_;
     p_ = next;
+    w_.crawlPoints_.push_back({next, fn.normal});
     th_ = thn;
     tilt_ = tiltNext;
     h_ = std::min(2.0 * h_, std::max(hMax, h_));
@@ -265,14 +269,52 @@ class ThetaWalker<ShapeT>::Crawler {
     FollowLastVertex();
     if (chain_.back().uv == p_.uv || !TurnedTooFar(x, inView, tilt)) return;
     if (!(p_.x == chain_.back().x || Between(p_.x, chain_.back().x, x))) return;  // x runs one way
-    chain_.push_back(w_.MakeVertex(p_, make_, ThetaVertex::Kind::Tilt));
+    Push(w_.MakeVertex(p_, make_, ThetaVertex::Kind::Tilt));
     ++w_.Count(Counter::ThetaTilts);
     FollowLastVertex();
   }
   // Adds v to the chain, its link bounded (BoundLinkTo).
   void Add(const Vertex& v) {
     BoundLinkTo(v.x, v.tilt, v.inView);
+    Push(v);
+  }
+  // Adds v to the chain, after a vertex at each crawl point since the last vertex where
+  // the link's chord (the Hermite cubics of its ends, as the back end draws it) would miss
+  // the surface's normal by more than kChordSplitStep table steps (Split). The turn and
+  // tilt limits bound how far the normal turns between vertices, not how unevenly: a
+  // section whose normal swings out of the scan plane and back, or turns most of a step
+  // in a short stretch of a long link, leaves a chord whose ends' tangents cannot follow
+  // it (the teacup saucer's front rim at 6 steps: 206 px links off by 20-37 degrees).
+  void Push(const Vertex& v) {
+    Split(0, w_.crawlPoints_.size(), v);
     chain_.push_back(v);
+    w_.crawlPoints_.clear();
+  }
+  static constexpr double kChordSplitStep = 1.0 / 8;
+  // The crawl points [lo, hi) lie on the link from the chain's last vertex to e: the one
+  // where the chord misses the normal most, if by more than the bound, becomes a vertex,
+  // and the links on either side are judged the same way.
+  void Split(std::size_t lo, std::size_t hi, const Vertex& e) {
+    const Vertex& a = chain_.back();
+    if (hi <= lo || !(a.f.w > 0.0 && e.f.w > 0.0) || a.x == e.x) return;
+    if (w_.rowChords_ && !w_.SamplesBetween(a.x, e.x)) return;
+    const raster::Chord chord(a.x, a.f, e.x, e.f, w_.frame_.orthographic, ChordSlopeOf(a, e), ChordSlopeOf(e, a));
+    const double xa = a.x, xe = e.x;
+    double worst = std::cos(kChordSplitStep * w_.table_);
+    std::size_t k = hi;
+    for (std::size_t i = lo; i < hi; ++i) {
+      const typename ThetaWalker::CrawlPoint& q = w_.crawlPoints_[i];
+      if (!Between(q.p.x, xa, xe)) continue;
+      const double c = chord.At(q.p.x).normal.dot(q.normal);
+      if (c < worst) worst = c, k = i;
+    }
+    if (k == hi) return;
+    const Vertex m = w_.MakeVertex(w_.crawlPoints_[k].p, make_, ThetaVertex::Kind::Tilt);
+    Split(lo, k, m);
+    chain_.push_back(m);
+    ++w_.Count(Counter::ThetaTilts);
+    ++w_.Count(Counter::ThetaChordSplits);
+    Split(k + 1, hi, e);
   }
 
   // The chain's last vertex's tilt and view-frame normal, if it has grown since they were

@@ -383,6 +383,13 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   int steps_;
   ThetaFrame frame_;
   double table_;  // 2π / N
+  // A crawl's points since its chain's last vertex, with the surface's normal at each
+  // (Crawler::Push judges the link's chord by them); kept here to be reused.
+  struct CrawlPoint {
+    LevelPoint p;
+    Vec3 normal;
+  };
+  std::vector<CrawlPoint> crawlPoints_;
   // Whether the normal turns a table step or more between two vertices, given by their
   // tilts and their normals in the view's frame (ThetaVertex::inView): out of the scan
   // plane, or in all (θ and the tilt may each be within a step and together more). The
