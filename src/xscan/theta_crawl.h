@@ -28,8 +28,9 @@ class ThetaWalker<ShapeT>::Crawler {
  public:
   Crawler(ThetaWalker& w, const LevelPoint& start, double sense, bool closed, std::vector<Vertex>* chain, Make& make,
           const Vertex* target, double turning)
-      : w_(w), start_(start), sense_(sense), closed_(closed), chain_(*chain), make_(make), target_(target) {
-    w_.crawlPoints_.clear();
+      : w_(w), start_(start), sense_(sense), closed_(closed), chain_(*chain), make_(make), target_(target),
+        points_(ThetaWalker::CrawlPoints()) {
+    points_.clear();
     chain_.push_back(w_.MakeVertex(start, make_, closed ? ThetaVertex::Kind::Silhouette : ThetaVertex::Kind::End));
     checked_ = chain_.size();
     p_ = before_ = start;
@@ -252,7 +253,7 @@ class ThetaWalker<ShapeT>::Crawler {
     const double hMax = std::abs(next.x - p_.x) < kSmallStepPx ? kSmallStepMax : kWalkStepMax;
     before_ = p_;
     p_ = next;
-    w_.crawlPoints_.push_back({next, fn.normal});
+    points_.push_back({next, fn.normal});
     th_ = thn;
     tilt_ = tiltNext;
     h_ = std::min(2.0 * h_, std::max(hMax, h_));
@@ -286,9 +287,9 @@ class ThetaWalker<ShapeT>::Crawler {
   // in a short stretch of a long link, leaves a chord whose ends' tangents cannot follow
   // it (the teacup saucer's front rim at 6 steps: 206 px links off by 20-37 degrees).
   void Push(const Vertex& v) {
-    Split(0, w_.crawlPoints_.size(), v);
+    Split(0, points_.size(), v);
     chain_.push_back(v);
-    w_.crawlPoints_.clear();
+    points_.clear();
   }
   static constexpr double kChordSplitStep = 1.0 / 8;
   // The crawl points [lo, hi) lie on the link from the chain's last vertex to e: the one
@@ -303,13 +304,13 @@ class ThetaWalker<ShapeT>::Crawler {
     double worst = std::cos(kChordSplitStep * w_.table_);
     std::size_t k = hi;
     for (std::size_t i = lo; i < hi; ++i) {
-      const typename ThetaWalker::CrawlPoint& q = w_.crawlPoints_[i];
+      const typename ThetaWalker::CrawlPoint& q = points_[i];
       if (!Between(q.p.x, xa, xe)) continue;
       const double c = chord.At(q.p.x).normal.dot(q.normal);
       if (c < worst) worst = c, k = i;
     }
     if (k == hi) return;
-    const Vertex m = w_.MakeVertex(w_.crawlPoints_[k].p, make_, ThetaVertex::Kind::Tilt);
+    const Vertex m = w_.MakeVertex(points_[k].p, make_, ThetaVertex::Kind::Tilt);
     Split(lo, k, m);
     chain_.push_back(m);
     ++w_.Count(Counter::ThetaTilts);
@@ -338,6 +339,7 @@ class ThetaWalker<ShapeT>::Crawler {
   std::vector<Vertex>& chain_;
   Make& make_;
   const Vertex* target_;  // a link's crawl: the tracker at its other end
+  std::vector<typename ThetaWalker::CrawlPoint>& points_;  // since the last vertex (Push)
   std::size_t checked_;   // chain vertices LinkEnd has looked at
   LevelPoint p_, before_;  // the crawl point, and the one before it
   double th_ = 0.0, tilt_ = 0.0;  // θ and the tilt at p_

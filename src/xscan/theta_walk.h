@@ -384,12 +384,17 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   ThetaFrame frame_;
   double table_;  // 2π / N
   // A crawl's points since its chain's last vertex, with the surface's normal at each
-  // (Crawler::Push judges the link's chord by them); kept here to be reused.
+  // (Crawler::Push judges the link's chord by them). A walker lives for one surface's row
+  // and crawls one chain at a time, so the points' storage is the thread's, reused by every
+  // crawl on it: no allocation once it has grown.
   struct CrawlPoint {
     LevelPoint p;
     Vec3 normal;
   };
-  std::vector<CrawlPoint> crawlPoints_;
+  static std::vector<CrawlPoint>& CrawlPoints() {
+    static thread_local std::vector<CrawlPoint> points;
+    return points;
+  }
   // Whether the normal turns a table step or more between two vertices, given by their
   // tilts and their normals in the view's frame (ThetaVertex::inView): out of the scan
   // plane, or in all (θ and the tilt may each be within a step and together more). The
