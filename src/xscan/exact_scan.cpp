@@ -25,11 +25,14 @@ struct ExactScan::Active {
   // Whether those lines were walked (an interval taken row by row walks neither), and
   // the trackers on a top line not walked yet.
   bool lineWalked = false, nextWalked = false;
-  // Whether the surface's sections keep their shape through the interval (Calm): taken
-  // row by row for another surface's event, its rows' chains are advanced. The chains of
-  // the last row of an interval taken row by row (at carryY), when they may be advanced to
-  // the next interval's top line or first row (carried).
-  bool calm = false, carried = false;
+  // Whether the surface's sections keep their shape (Calm) from the line or row before to
+  // each sample row of the interval, and from its last row to the bottom line (m + 1
+  // steps): in an interval taken row by row, a row is advanced from the one before unless
+  // an event of its own lies between them, as on θ rows. The chains of the last row of an
+  // interval taken row by row (at carryY), when they may be advanced to the next
+  // interval's top line or first row (carried).
+  std::vector<char> stepCalm;
+  bool carried = false;
   ChainSet carry;
   double carryY = 0.0;
   RowTrackers topTrackers;
@@ -313,13 +316,20 @@ bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
     if (!a.lineWalked) a.topTrackers = a.scan->Trackers();
     const long events = a.scan->Events();
     a.rowTrackers.resize(static_cast<std::size_t>(m));
-    for (int r = 0; r < m; ++r) {
-      AdvanceTo(a, rowY(r));
-      a.rowTrackers[static_cast<std::size_t>(r)] = a.scan->Trackers();
+    a.stepCalm.resize(static_cast<std::size_t>(m) + 1);
+    // Calm through the interval is calm through each of its steps: their events add up,
+    // and its stationary points and degenerate ranges each lie in or touch one of them.
+    long before = events;
+    double yBefore = yTop;
+    for (int r = 0; r <= m; ++r) {
+      const double yr = r < m ? rowY(r) : yBottom;
+      AdvanceTo(a, yr);
+      if (r < m) a.rowTrackers[static_cast<std::size_t>(r)] = a.scan->Trackers();
+      const bool calm = Calm(a, before, yBefore, yr);
+      a.stepCalm[static_cast<std::size_t>(r)] = calm;
+      quiet = quiet && calm;
+      before = a.scan->Events(), yBefore = yr;
     }
-    AdvanceTo(a, yBottom);
-    a.calm = Calm(a, events, yTop, yBottom);
-    quiet = quiet && a.calm;
   }
   return quiet;
 }
@@ -397,24 +407,26 @@ void ExactScan::FinishInterval(bool slab, const raster::SampleColumns& columns, 
     }
   } else {
     ++counters_[Counter::RowIntervals];
-    // A surface whose sections keep their shape through the interval (the event is
-    // another's) has each row's chains advanced from the line or row before as θ
-    // trackers (§4.1), as θ rows are; the others', and a row whose chains cannot be
+    // Each row's chains are advanced from the line or row before as θ trackers (§4.1), as
+    // θ rows are, unless the surface has an event between them (the interval's event may
+    // be another's, or on another row); the others, and a row whose chains cannot be
     // advanced, are crawled afresh. Each surface decides alone.
     for (const auto& ap : active_) {
       Active& a = *ap;
       a.rows.resize(static_cast<std::size_t>(m));
       const ChainSet* before = nullptr;
       double yBefore = yTop;
-      if (a.calm && a.lineWalked && !a.lineBroken) before = &a.line;
-      else if (a.calm && a.carried) before = &a.carry, yBefore = a.carryY;
+      if (a.lineWalked && !a.lineBroken) before = &a.line;
+      else if (a.carried) before = &a.carry, yBefore = a.carryY;
       for (int r = 0; r < m; ++r) {
         ChainSet& set = a.rows[static_cast<std::size_t>(r)];
         const RowTrackers& t = a.rowTrackers[static_cast<std::size_t>(r)];
-        const bool advanced = AdvanceOrWalk(a, before, yBefore, rowY(r), t, &set, columns, out);
-        before = a.calm && (advanced || !WalkBroken()) ? &set : nullptr;
+        const bool calm = a.stepCalm[static_cast<std::size_t>(r)];
+        const bool advanced = AdvanceOrWalk(a, calm ? before : nullptr, yBefore, rowY(r), t, &set, columns, out);
+        before = advanced || !WalkBroken() ? &set : nullptr;
         yBefore = rowY(r);
       }
+      if (!a.stepCalm[static_cast<std::size_t>(m)]) before = nullptr;
       a.carried = before != nullptr;
       if (a.carried) a.carry = a.rows.back(), a.carryY = yBefore;  // within its capacity once warm
     }
