@@ -281,7 +281,7 @@ class ThetaWalker<ShapeT>::Crawler {
   }
   // Adds v to the chain, after a vertex at each crawl point since the last vertex where
   // the link's chord (the Hermite cubics of its ends, as the back end draws it) would miss
-  // the surface's normal by more than kChordSplitStep table steps (Split). The turn and
+  // the surface's normal by more than ThetaTable::kChordSplitStep table steps (Split). The turn and
   // tilt limits bound how far the normal turns between vertices, not how unevenly: a
   // section whose normal swings out of the scan plane and back, or turns most of a step
   // in a short stretch of a long link, leaves a chord whose ends' tangents cannot follow
@@ -291,7 +291,6 @@ class ThetaWalker<ShapeT>::Crawler {
     chain_.push_back(v);
     points_.clear();
   }
-  static constexpr double kChordSplitStep = 1.0 / 8;
   // The crawl points [lo, hi) lie on the link from the chain's last vertex to e: the one
   // where the chord misses the normal most, if by more than the bound, becomes a vertex,
   // and the links on either side are judged the same way.
@@ -299,9 +298,12 @@ class ThetaWalker<ShapeT>::Crawler {
     const Vertex& a = chain_.back();
     if (hi <= lo || !(a.f.w > 0.0 && e.f.w > 0.0) || a.x == e.x) return;
     if (w_.rowChords_ && !w_.SamplesBetween(a.x, e.x)) return;
-    const raster::Chord chord(a.x, a.f, e.x, e.f, w_.frame_.orthographic, ChordSlopeOf(a, e), ChordSlopeOf(e, a));
     const double xa = a.x, xe = e.x;
-    double worst = std::cos(kChordSplitStep * w_.table_);
+    // The chord is made only for a link with a crawl point between its ends in x.
+    while (lo < hi && !Between(points_[lo].p.x, xa, xe)) ++lo;
+    if (lo == hi) return;
+    const raster::Chord chord(a.x, a.f, e.x, e.f, w_.frame_.orthographic, ChordSlopeOf(a, e), ChordSlopeOf(e, a));
+    double worst = w_.cosChordSplit_;
     std::size_t k = hi;
     for (std::size_t i = lo; i < hi; ++i) {
       const typename ThetaWalker::CrawlPoint& q = points_[i];

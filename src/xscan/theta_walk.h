@@ -143,11 +143,14 @@ constexpr double kFillMaxTurnSteps = 3.0;
 // walker were a measurable share of a scene of many small surfaces.
 struct ThetaTable {
   static constexpr double kTurnSlackRad = 1e-6;
+  // A crawl's link whose chord misses the surface's normal by more than this many table
+  // steps somewhere between its ends gets a vertex there (theta_crawl.h, Crawler::Split).
+  static constexpr double kChordSplitStep = 1.0 / 8;
   explicit ThetaTable(int n)
       : steps(n), step(2.0 * std::numbers::pi / n), cosStep(std::cos(std::min(std::numbers::pi, step))),
-        cosTurn(std::cos(std::min(std::numbers::pi, step + kTurnSlackRad))) {}
+        cosTurn(std::cos(std::min(std::numbers::pi, step + kTurnSlackRad))), cosChordSplit(std::cos(kChordSplitStep * step)) {}
   int steps;
-  double step, cosStep, cosTurn;
+  double step, cosStep, cosTurn, cosChordSplit;
 };
 
 template <class ShapeT>
@@ -159,7 +162,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   ThetaWalker(const ShapeT& shape, const ScreenMap& map, double ys, const raster::SampleColumns& cols,
               Counters* counters, WalkEvents* events, const ThetaTable& table, const ThetaFrame& frame)
       : Base(shape, map, ys, cols, counters, events), steps_(table.steps), frame_(frame), table_(table.step),
-        cosTable_(table.cosStep), cosTurn_(table.cosTurn) {}
+        cosTable_(table.cosStep), cosTurn_(table.cosTurn), cosChordSplit_(table.cosChordSplit) {}
 
   using Vertex = ThetaVertex;
 
@@ -424,7 +427,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     const double cc = std::sqrt((a.x() * a.x() + a.y() * a.y()) * (b.x() * b.x() + b.y() * b.y()));
     return a.z() * b.z() + std::max(inPlane, cc * cosTable_) < cosTurn_;
   }
-  double cosTable_, cosTurn_;  // ThetaTable's cosStep and cosTurn
+  double cosTable_, cosTurn_, cosChordSplit_;  // ThetaTable's cosStep, cosTurn and cosChordSplit
   ThetaChainSink* sink_ = nullptr;
   bool slopes_ = false, rowChords_ = false;
   std::vector<Vertex>*piece_ = nullptr, *first_ = nullptr;
