@@ -97,9 +97,9 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
     "links", Sum)                                                                                                      \
   X(Theta, ThetaLineRepairs, "theta_line_repairs", "quiet lines crawled afresh (a chain could not be advanced)", "lines", Sum) \
   X(Theta, ThetaRowsAdvanced, "theta_rows_advanced", "surface rows whose chains were advanced from the row before", "rows", Sum) \
-  X(Slabs, SlabIntervals, "slab_intervals", "intervals between two lines taken as slabs", "intervals", Max)        \
-  X(Slabs, RowIntervals, "row_intervals", "intervals taken row by row", "intervals", Max)                          \
-  X(Slabs, EventIntervals, "event_intervals", "of those, with an event of the Y scan (no line walked)", "intervals", Max) \
+  X(Slabs, SlabIntervals, "slab_intervals", "surfaces' intervals between two lines taken as slabs", "intervals", Sum) \
+  X(Slabs, RowIntervals, "row_intervals", "surfaces' intervals taken row by row", "intervals", Sum)                 \
+  X(Slabs, EventIntervals, "event_intervals", "of those, with an event of the surface's Y scan (no line walked)", "intervals", Sum) \
   X(Slabs, SlabLines, "slab_lines", "surface lines whose chains were walked or advanced", "lines", Sum)            \
   X(Slabs, SlabTriangles, "slab_triangles", "slab triangles made", "triangles", Sum)                               \
   X(BackEnd, Triangles, "triangles", "triangles (n)", "triangles", Sum)                                            \

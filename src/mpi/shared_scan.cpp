@@ -22,7 +22,7 @@
 namespace patchscan::mpi {
 namespace {
 
-enum Tag : int { kGo = 1, kRow, kVote, kVerdict, kPixels, kDone, kFinish };
+enum Tag : int { kGo = 1, kRow, kPixels, kDone, kFinish };
 
 double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
@@ -507,8 +507,7 @@ class Band final : public DirectScanSource {
     }
     return true;
   }
-  // The rows below this process's last, scanned for the others once its own are done (not
-  // before: the others may need this process's votes to finish the rows it waits for).
+  // The rows below this process's last, scanned for the others once its own are done.
   void ScanRest() { ScanThrough(layout_.nRows - 1); }
   // Process 0, after one of its own pixel rows went to the image.
   void PassedOwnRow(int y) { pixelsIn_ = std::max(pixelsIn_, y + 1); }
@@ -538,39 +537,14 @@ class Band final : public DirectScanSource {
   // Scans sample row j (a failed process: nothing) and sends each owner its part.
   void ScanOne(int j) {
     const double y = layout_.y0 + j * layout_.dy;
-    // Step 1: a θ slab interval begins every slabRows rows; every process votes on whether
-    // its surfaces have no event in it, and then on whether they allow a slab; process 0
-    // counts the votes.
-    bool quiet = true, slab = true, localInterval = false;
+    // Step 1: this process's surfaces on the row (a θ slab interval's surfaces each decide
+    // alone whether they are slabs: no process waits for another's).
     encoder_->Begin(j);
     bool ok = true;
     if (why_.empty() && j == failAt_) Fail("a fault injected at row " + std::to_string(j));
     if (why_.empty()) {
       try {
-        localInterval = local_->PrepareRow(y, columns_, &quiet);
-      } catch (const std::exception& e) {
-        Fail(e.what());
-      }
-    }
-    // The scan says where intervals begin; a failed process keeps to the same schedule.
-    const bool interval =
-        why_.empty() ? localInterval : options_.thetaSteps > 0 && options_.slabRows > 0 && j >= intervalEnd_;
-    if (interval) intervalEnd_ = j + options_.slabRows;
-    if (interval) {
-      quiet = Vote(quiet && why_.empty());
-      if (why_.empty()) {
-        try {
-          local_->PairRow(quiet, columns_, &slab);
-        } catch (const std::exception& e) {
-          Fail(e.what());
-        }
-      }
-      // With an event nobody pairs chains: the verdict is known without a vote.
-      slab = quiet && Vote(slab && why_.empty());
-    }
-    if (why_.empty()) {
-      try {
-        ok = local_->FinishRow(slab, y, columns_, *encoder_);
+        ok = local_->ScanRowNow(y, columns_, *encoder_);
         if (polygons_) polygons_->HandOver(y, layout_.dy, *encoder_);
       } catch (const std::exception& e) {
         Fail(e.what());
@@ -608,22 +582,6 @@ class Band final : public DirectScanSource {
     }
   }
 
-  bool Vote(bool mine) {
-    std::vector<double> in;
-    if (link_.Rank() != 0) {
-      link_.Send(0, kVote, std::vector<double>{mine ? 1.0 : 0.0});
-      link_.Receive(0, kVerdict, &in);
-      return in.at(0) != 0.0;
-    }
-    bool all = mine;
-    for (int k = 1; k < link_.Size(); ++k) {
-      link_.Receive(k, kVote, &in);
-      all = all && in.at(0) != 0.0;
-    }
-    for (int k = 1; k < link_.Size(); ++k) link_.Send(k, kVerdict, std::vector<double>{all ? 1.0 : 0.0});
-    return all;
-  }
-
   Link link_;
   ExactScanOptions options_;
   Layout layout_;
@@ -635,7 +593,7 @@ class Band final : public DirectScanSource {
   std::deque<RowMessage> own_;              // this process's part of its own rows, scanned ahead
   std::vector<RowMessage> messages_;
   std::vector<std::size_t> next_;
-  int scanned_ = 0, received_ = 0, intervalEnd_ = 0;
+  int scanned_ = 0, received_ = 0;
   int pixelsIn_ = 0;  // process 0: the next pixel row to bring in
   int frame_ = -1, aa_ = 1, failAt_ = -1;
   bool started_ = false, finished_ = false, completed_ = false;

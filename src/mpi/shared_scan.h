@@ -15,8 +15,6 @@
 // Messages (between two processes they arrive in the order sent):
 //   0 -> k  kGo      a frame begins: its number, scan options, rows
 //   j -> k  kRow     what j's surfaces put on one of k's sample rows
-//   k -> 0  kVote    at a θ slab interval: whether k's surfaces allow a slab
-//   0 -> k  kVerdict every process's vote, taken together
 //   k -> 0  kPixels  one of k's finished pixel rows
 //   k -> 0  kDone    k's frame is over: whether it failed (why), its counts, seconds,
 //                    traffic and memory

@@ -16,9 +16,9 @@ struct ExactScan::Active {
   std::unique_ptr<SurfaceScan> scan;
   std::size_t nextStationary = 0;  // for the trace: the next stationary point to pass
   // θ slabs: the chains on the interval's top line and on its bottom line (whether a walk
-  // there failed or repaired a tracker miss), the trackers on each of its sample rows,
-  // and when it is taken row by row each row's chains. θ rows: the chains of the row
-  // before (line, at lineY) and of this row (next).
+  // there failed or repaired a tracker miss), the trackers on the top line and on each of
+  // its sample rows, and when it is taken row by row (byRows) each row's chains. θ rows:
+  // the chains of the row before (line, at lineY) and of this row (next).
   ChainSet line, next;
   double lineY = 0.0;
   bool lineBroken = false, nextBroken = false;
@@ -27,12 +27,12 @@ struct ExactScan::Active {
   bool lineWalked = false, nextWalked = false;
   // Whether the surface's sections keep their shape (Calm) from the line or row before to
   // each sample row of the interval, and from its last row to the bottom line (m + 1
-  // steps): in an interval taken row by row, a row is advanced from the one before unless
-  // an event of its own lies between them, as on θ rows. The chains of the last row of an
+  // steps): a slab wants all, and taken row by row, a row is advanced from the one before
+  // unless an event lies between them, as on θ rows. The chains of the last row of an
   // interval taken row by row (at carryY), when they may be advanced to the next
   // interval's top line or first row (carried).
   std::vector<char> stepCalm;
-  bool carried = false;
+  bool byRows = false, carried = false;
   ChainSet carry;
   double carryY = 0.0;
   RowTrackers topTrackers;
@@ -287,7 +287,7 @@ std::pair<double, double> ExactScan::IntervalLines(const raster::SampleColumns& 
   return {yTop, yTop + options_.slabRows * dy};
 }
 
-bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+void ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   const long j = RowIndex(y, columns);
   const int m = options_.slabRows;
   intervalStart_ = j;
@@ -307,148 +307,196 @@ bool ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
     WalkLine(a, yTop, a.scan->Trackers(), columns, out, &a.line, &a.lineBroken);
     a.lineWalked = true;
   }
-  // The trackers on every sample row of the interval and on its bottom line; a slab wants
-  // no event of the Y scan between the lines. A top line not walked (the interval above
-  // was taken row by row) keeps its trackers, for the second phase.
-  bool quiet = true;
+  // The trackers on the top line, on every sample row of the interval and on its bottom
+  // line, and whether the surface has an event of the Y scan between each of them and
+  // the one before.
   for (const auto& ap : active_) {
     Active& a = *ap;
-    if (!a.lineWalked) a.topTrackers = a.scan->Trackers();
-    const long events = a.scan->Events();
+    a.topTrackers = a.scan->Trackers();
     a.rowTrackers.resize(static_cast<std::size_t>(m));
     a.stepCalm.resize(static_cast<std::size_t>(m) + 1);
-    // Calm through the interval is calm through each of its steps: their events add up,
-    // and its stationary points and degenerate ranges each lie in or touch one of them.
-    long before = events;
+    long before = a.scan->Events();
     double yBefore = yTop;
     for (int r = 0; r <= m; ++r) {
       const double yr = r < m ? rowY(r) : yBottom;
       AdvanceTo(a, yr);
       if (r < m) a.rowTrackers[static_cast<std::size_t>(r)] = a.scan->Trackers();
-      const bool calm = Calm(a, before, yBefore, yr);
-      a.stepCalm[static_cast<std::size_t>(r)] = calm;
-      quiet = quiet && calm;
+      a.stepCalm[static_cast<std::size_t>(r)] = Calm(a, before, yBefore, yr);
       before = a.scan->Events(), yBefore = yr;
     }
   }
-  return quiet;
 }
 
-bool ExactScan::PairInterval(bool quiet, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  // Some surface has an event: the interval goes row by row, and its lines are not walked
-  // (the next interval walks its top line only if it may be a slab).
-  if (!quiet) {
+bool ExactScan::PairSurface(Active& a, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  // An event of the surface's Y scan in the interval: rows, and neither line's chains
+  // walked (the next interval walks its top line only if it may be a slab). Calm through
+  // the interval is calm through each of its steps: their events add up, and its
+  // stationary points and degenerate ranges each lie in or touch one of them.
+  if (!std::all_of(a.stepCalm.begin(), a.stepCalm.end(), [](char c) { return c != 0; })) {
     ++counters_[Counter::EventIntervals];
-    for (const auto& ap : active_) ap->nextWalked = false;
+    a.nextWalked = false;
     return false;
   }
   const auto lines = IntervalLines(columns);
   const double yTop = lines.first, yBottom = lines.second;
-  bool slab = true;
-  for (const auto& ap : active_) {
-    Active& a = *ap;
-    if (!a.lineWalked) {
-      // The interval before was taken row by row: its last row's chains, advanced.
-      if (a.carried && AdvanceSurface(a, a.carry, a.carryY, yTop, a.topTrackers, &a.line, columns) && !WalkBroken()) {
-        ++counters_[Counter::SlabLines];
-        a.lineBroken = false;
-      } else {
-        WalkLine(a, yTop, a.topTrackers, columns, out, &a.line, &a.lineBroken);
-      }
-      a.lineWalked = true;
-      a.lineRefined = false;
-    }
-    a.nextWalked = true;
-    // Between lines with no event the chains of the top line are advanced as θ trackers
-    // (§4.1); a chain that cannot be, or a broken top line, has the bottom line crawled
-    // afresh.
-    const bool advance = !a.lineBroken;
-    if (advance && AdvanceSurface(a, a.line, yTop, yBottom, a.scan->Trackers(), &a.next, columns)) {
+  if (!a.lineWalked) {
+    // The interval before was taken row by row: its last row's chains, advanced.
+    if (a.carried && AdvanceSurface(a, a.carry, a.carryY, yTop, a.topTrackers, &a.line, columns) && !WalkBroken()) {
       ++counters_[Counter::SlabLines];
-      a.nextBroken = WalkBroken();
+      a.lineBroken = false;
     } else {
-      if (advance) ++counters_[Counter::ThetaLineRepairs];
-      WalkLine(a, yBottom, a.scan->Trackers(), columns, out, &a.next, &a.nextBroken);
+      WalkLine(a, yTop, a.topTrackers, columns, out, &a.line, &a.lineBroken);
     }
-    if (!(slab && advance && !a.nextBroken)) {
-      slab = false;
-      continue;
-    }
-    if (!a.lineRefined) RefineChains(a.line, columns, camera_.orthographic, &a.lineFine);
-    RefineChains(a.next, columns, camera_.orthographic, &a.nextFine);
-    a.lineRefined = a.nextRefined = true;
-    slab = PairChains(a.lineFine, a.nextFine, &a.pairs, &a.ordered);
+    a.lineWalked = true;
+    a.lineRefined = false;
   }
-  return slab;
+  a.nextWalked = true;
+  // The chains of the top line advanced to the bottom one as θ trackers (§4.1); a chain
+  // that cannot be, or a broken top line, has the bottom line crawled afresh.
+  const bool advance = !a.lineBroken;
+  if (advance && AdvanceSurface(a, a.line, yTop, yBottom, a.scan->Trackers(), &a.next, columns)) {
+    ++counters_[Counter::SlabLines];
+    a.nextBroken = WalkBroken();
+  } else {
+    if (advance) ++counters_[Counter::ThetaLineRepairs];
+    WalkLine(a, yBottom, a.scan->Trackers(), columns, out, &a.next, &a.nextBroken);
+  }
+  if (!advance || a.nextBroken) return false;
+  if (!a.lineRefined) RefineChains(a.line, columns, camera_.orthographic, &a.lineFine);
+  RefineChains(a.next, columns, camera_.orthographic, &a.nextFine);
+  a.lineRefined = a.nextRefined = true;
+  return PairChains(a.lineFine, a.nextFine, &a.pairs, &a.ordered);
 }
 
-void ExactScan::FinishInterval(bool slab, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+void ExactScan::SlabSurface(Active& a, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  const auto lines = IntervalLines(columns);
+  const SlabFrame frame{lines.first, lines.second, camera_.orthographic, eye_, forward_};
+  const auto id = static_cast<std::uint32_t>(a.index);
+  for (const ChainPair& p : a.pairs)
+    ZipSlab(a.lineFine.Of(a.lineFine.chains[p.top]),
+            std::span<const ThetaVertex>(a.ordered.data() + p.begin, p.end - p.begin), frame, &anchorsTop_,
+            &anchorsBottom_, [&](const raster::RasterVertex& u, const raster::RasterVertex& v, const raster::RasterVertex& w) {
+              ++counters_[Counter::SlabTriangles];
+              out.AddTriangle(u, v, w, id);
+            });
+}
+
+void ExactScan::RowSurface(Active& a, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   const long j = intervalStart_;
   const int m = options_.slabRows;
-  const double dy = columns.dx;
   const auto lines = IntervalLines(columns);
   const double yTop = lines.first, yBottom = lines.second;
-  auto rowY = [&](int r) { return columns.x0 + static_cast<double>(j + r) * dy; };
-  byRows_ = !slab;
-  if (slab) {
-    ++counters_[Counter::SlabIntervals];
-    for (const auto& ap : active_) ap->carried = false;
-    const SlabFrame frame{yTop, yBottom, camera_.orthographic, eye_, forward_};
-    for (const auto& ap : active_) {
-      Active& a = *ap;
-      const auto id = static_cast<std::uint32_t>(a.index);
-      for (const ChainPair& p : a.pairs)
-        ZipSlab(a.lineFine.Of(a.lineFine.chains[p.top]),
-                std::span<const ThetaVertex>(a.ordered.data() + p.begin, p.end - p.begin), frame, &anchorsTop_,
-                &anchorsBottom_, [&](const raster::RasterVertex& u, const raster::RasterVertex& v, const raster::RasterVertex& w) {
-                  ++counters_[Counter::SlabTriangles];
-                  out.AddTriangle(u, v, w, id);
-                });
-    }
-  } else {
-    ++counters_[Counter::RowIntervals];
-    // Each row's chains are advanced from the line or row before as θ trackers (§4.1), as
-    // θ rows are, unless the surface has an event between them (the interval's event may
-    // be another's, or on another row); the others, and a row whose chains cannot be
-    // advanced, are crawled afresh. Each surface decides alone.
-    for (const auto& ap : active_) {
-      Active& a = *ap;
-      a.rows.resize(static_cast<std::size_t>(m));
-      const ChainSet* before = nullptr;
-      double yBefore = yTop;
-      if (a.lineWalked && !a.lineBroken) before = &a.line;
-      else if (a.carried) before = &a.carry, yBefore = a.carryY;
-      for (int r = 0; r < m; ++r) {
-        ChainSet& set = a.rows[static_cast<std::size_t>(r)];
-        const RowTrackers& t = a.rowTrackers[static_cast<std::size_t>(r)];
-        const bool calm = a.stepCalm[static_cast<std::size_t>(r)];
-        const bool advanced = AdvanceOrWalk(a, calm ? before : nullptr, yBefore, rowY(r), t, &set, columns, out);
-        before = advanced || !WalkBroken() ? &set : nullptr;
-        yBefore = rowY(r);
+  auto rowY = [&](int r) { return columns.x0 + static_cast<double>(j + r) * columns.dx; };
+  // Each row's chains are advanced from the line or row before as θ trackers (§4.1), as
+  // θ rows are, unless the surface has an event between them; those, and a row whose
+  // chains cannot be advanced, are crawled afresh.
+  a.rows.resize(static_cast<std::size_t>(m));
+  const ChainSet* before = nullptr;
+  double yBefore = yTop;
+  if (a.lineWalked && !a.lineBroken) before = &a.line;
+  else if (a.carried) before = &a.carry, yBefore = a.carryY;
+  LineEnds(a, a.topTrackers, &topEnds_);
+  LineEnds(a, a.scan->Trackers(), &bottomEnds_);
+  for (int r = 0; r < m; ++r) {
+    ChainSet& set = a.rows[static_cast<std::size_t>(r)];
+    const RowTrackers& t = a.rowTrackers[static_cast<std::size_t>(r)];
+    const bool calm = a.stepCalm[static_cast<std::size_t>(r)];
+    const bool advanced = AdvanceOrWalk(a, calm ? before : nullptr, yBefore, rowY(r), t, &set, columns, out);
+    before = advanced || !WalkBroken() ? &set : nullptr;
+    yBefore = rowY(r);
+    SnapEnds((rowY(r) - yTop) / (yBottom - yTop), t, &set);
+  }
+  if (!a.stepCalm[static_cast<std::size_t>(m)]) before = nullptr;
+  a.carried = before != nullptr;
+  if (a.carried) a.carry = *before, a.carryY = yBefore;  // within its capacity once warm
+}
+
+void ExactScan::LineEnds(const Active& a, const RowTrackers& t, std::vector<LineEnd>* ends) const {
+  ends->clear();
+  for (const Vec2& uv : t.edgePoints) {
+    ScreenDerivs d;
+    EvaluateScreen(surfaces_[a.index], a.scan->Map(), uv.x(), uv.y(), DerivOrder::Position, &d);
+    if (d.w > 0.0) ends->push_back({uv, SlabEndX(d.p.x())});
+  }
+}
+
+void ExactScan::SnapEnds(double t, const RowTrackers& row, ChainSet* set) const {
+  // The boundary's points on the two lines nearest the end along its side of the domain,
+  // one at or before it and one at or after it, where the side has as many on both lines
+  // as on the row (no crossing born or gone in the interval: a fold, a corner).
+  const auto along = [](const Vec2& uv, int side) { return side % 2 == 0 ? uv.x() : uv.y(); };
+  const auto onSide = [](int side, const auto& points, auto uvOf) {
+    return std::count_if(points.begin(), points.end(), [&](const auto& p) { return DomainSide(uvOf(p)) == side; });
+  };
+  const auto uvOfEnd = [](const LineEnd& e) { return e.uv; };
+  const auto uvOfPoint = [](const Vec2& uv) { return uv; };
+  for (const ChainSet::Chain& c : set->chains) {
+    if (c.end - c.begin < 2) continue;
+    for (const std::uint32_t i : {c.begin, c.end - 1}) {
+      ThetaVertex& v = set->v[i];
+      if (v.kind != ThetaVertex::Kind::End) continue;
+      const int side = DomainSide(v.uv);
+      const auto count = onSide(side, row.edgePoints, uvOfPoint);
+      if (onSide(side, topEnds_, uvOfEnd) != count || onSide(side, bottomEnds_, uvOfEnd) != count) continue;
+      const double s = along(v.uv, side);
+      const auto nearest = [&](const std::vector<LineEnd>& ends) -> const LineEnd* {
+        const LineEnd* best = nullptr;
+        for (const LineEnd& e : ends)
+          if (DomainSide(e.uv) == side && (!best || std::abs(along(e.uv, side) - s) < std::abs(along(best->uv, side) - s)))
+            best = &e;
+        return best;
+      };
+      const LineEnd *top = nearest(topEnds_), *bottom = nearest(bottomEnds_);
+      if (!top || !bottom) continue;
+      const double st = along(top->uv, side), sb = along(bottom->uv, side);
+      if ((s - st) * (sb - s) < -kSnapAlongSlack) continue;  // not between: another crossing
+      const double x = top->x + t * (bottom->x - top->x);
+      if (!(std::abs(x - v.x) <= kSnapMaxPx)) continue;
+      // Vertices of the chain the end passes on its way come with it (else the chord from
+      // it would turn back and cover their columns twice): the surface begins at x.
+      const int inward = i == c.begin ? 1 : -1;
+      const auto first = static_cast<std::int64_t>(c.begin), last = static_cast<std::int64_t>(c.end) - 1;
+      for (auto k = static_cast<std::int64_t>(i) + inward; k >= first && k <= last; k += inward) {
+        ThetaVertex& passed = set->v[static_cast<std::size_t>(k)];
+        if (passed.kind == ThetaVertex::Kind::End || (x - passed.x) * (v.x - passed.x) > 0.0) break;
+        passed.x = x;
       }
-      if (!a.stepCalm[static_cast<std::size_t>(m)]) before = nullptr;
-      a.carried = before != nullptr;
-      if (a.carried) a.carry = a.rows.back(), a.carryY = yBefore;  // within its capacity once warm
+      v.x = x;
     }
   }
+}
+
+void ExactScan::ScanInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  PrepareInterval(y, columns, out);
+  // Each surface decides alone: a slab where its Y scan has no event in the interval and
+  // its lines' chains pair up, else its rows' chains, ending on its boundary where a slab
+  // beside it would (SnapEnds): so a partition of the scene changes nothing.
   for (const auto& ap : active_) {
-    std::swap(ap->line, ap->next);
-    std::swap(ap->lineFine, ap->nextFine);
-    ap->lineRefined = ap->nextRefined;
-    ap->nextRefined = false;
-    ap->lineBroken = ap->nextBroken;
-    ap->lineWalked = ap->nextWalked;
+    Active& a = *ap;
+    a.byRows = !PairSurface(a, columns, out);
+    if (a.byRows) {
+      ++counters_[Counter::RowIntervals];
+      RowSurface(a, columns, out);
+    } else {
+      ++counters_[Counter::SlabIntervals];
+      a.carried = false;
+      SlabSurface(a, columns, out);
+    }
+    std::swap(a.line, a.next);
+    std::swap(a.lineFine, a.nextFine);
+    a.lineRefined = a.nextRefined;
+    a.nextRefined = false;
+    a.lineBroken = a.nextBroken;
+    a.lineWalked = a.nextWalked;
   }
 }
 
 bool ExactScan::ScanRowSlabs(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   const long j = RowIndex(y, columns);
-  if (BeginsInterval(y, columns))
-    FinishInterval(PairInterval(PrepareInterval(y, columns, out), columns, out), columns, out);
-  if (!byRows_) return true;
+  if (BeginsInterval(y, columns)) ScanInterval(y, columns, out);
   const auto r = static_cast<std::size_t>(j - intervalStart_);
   for (const auto& ap : active_)
-    if (r < ap->rows.size())
+    if (ap->byRows && r < ap->rows.size())
       for (const ChainSet::Chain& c : ap->rows[r].chains)
         counters_[Counter::Fragments] += EmitThetaChain(ap->rows[r].Of(c), columns, camera_.orthographic, out);
   return true;

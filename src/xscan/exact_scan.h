@@ -65,21 +65,14 @@ class ExactScan final : public raster::FragmentSource {
 
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 
-  // θ slabs shared with other scans of the same rows (a partition of one scene's surfaces:
-  // PartitionedScan): whether sample row y begins an interval of slabRows rows, and the
-  // interval in three phases, each given the verdict of every scan's answers to the one
-  // before. PrepareInterval advances the trackers through the interval: whether this
-  // scan's surfaces have no event there. PairInterval, given whether no surface has one,
-  // walks and pairs the chains of the interval's lines (only then: an interval with an
-  // event goes row by row, and the lines' chains would go unused): whether this scan's
-  // surfaces allow a slab. FinishInterval, given whether all do, makes the slabs or the
-  // rows' chains. A slab needs all surfaces' agreement (shared boundaries stay
-  // watertight), and ScanRow takes the phases itself when the scan is alone.
-  bool SlabMode() const { return options_.thetaSteps > 0 && options_.slabRows > 0; }
+  // θ slabs: whether sample row y begins an interval of slabRows rows (ScanRow takes the
+  // interval at its first row: every surface's trackers advanced through it, then each
+  // surface alone made into slabs between the interval's lines, or, where its Y scan has
+  // an event there or its lines' chains do not pair up, into each row's chains; a surface
+  // taken row by row ends its rows' chains on a boundary where a slab across it would
+  // (SnapEnds), so no decision needs another surface's, and a partition of the scene
+  // changes nothing).
   bool BeginsInterval(double y, const raster::SampleColumns& columns) const;
-  bool PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
-  bool PairInterval(bool quiet, const raster::SampleColumns& columns, raster::FragmentRow& out);
-  void FinishInterval(bool slab, const raster::SampleColumns& columns, raster::FragmentRow& out);
 
   // Marks every tracker position and event on `trace` from the next row on (null: none).
   void SetTrace(TraceSink* trace) { trace_ = trace; }
@@ -103,6 +96,39 @@ class ExactScan final : public raster::FragmentSource {
   template <class Take>
   void WalkSurface(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
                    raster::FragmentRow& out, Take&& take);
+  bool SlabMode() const { return options_.thetaSteps > 0 && options_.slabRows > 0; }
+  // θ slabs: the interval beginning at sample row y (below).
+  void ScanInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // θ slabs: the interval beginning at sample row y: surfaces set up, and every surface's
+  // trackers advanced to its top line, each of its rows and its bottom line, with whether
+  // each step has no event (Active::stepCalm).
+  void PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // θ slabs: whether a surface is a slab through the interval: no event in it, its lines'
+  // chains walked or advanced, and paired (else rows, and, with an event, no line walked).
+  bool PairSurface(Active& a, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // θ slabs: a paired surface's slabs, or the chains of each of a surface's rows.
+  void SlabSurface(Active& a, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  void RowSurface(Active& a, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // θ slabs: a boundary's point on one of the interval's lines, its screen x rounded as a
+  // slab vertex's (SlabEndX).
+  struct LineEnd {
+    Vec2 uv;
+    double x;
+  };
+  // The boundary points of a surface's trackers `t` on a line.
+  void LineEnds(const Active& a, const RowTrackers& t, std::vector<LineEnd>* ends) const;
+  // Moves each End vertex of a row's chains, t of the way from the interval's top line to
+  // its bottom one, onto the straight line between its boundary's points on the two lines
+  // (topEnds_, bottomEnds_): the edge a slab across the boundary has there. The boundary
+  // lies within h^2 / (8 R) px of it (h the interval's height, R the boundary's radius of
+  // curvature on screen); the end keeps its fragment. Where the boundary has no point on
+  // a line near the end, the points do not bracket it, or the side has a crossing born or
+  // gone in the interval (a fold, a corner: the surface across shares it, and is taken
+  // row by row too), it stays. `row`: the row's trackers.
+  void SnapEnds(double t, const RowTrackers& row, ChainSet* set) const;
+  // The boundary's parameter may lie this far outside its points on the lines (rounding),
+  // and an end moves at most this far (pixels; farther, the points are another crossing's).
+  static constexpr double kSnapAlongSlack = 1e-12, kSnapMaxPx = 0.5;
   // θ slabs: the current interval's top and bottom lines.
   std::pair<double, double> IntervalLines(const raster::SampleColumns& columns) const;
   // θ slabs: a surface's chains on line y, from its trackers `t` there, into *set, and
@@ -156,10 +182,10 @@ class ExactScan final : public raster::FragmentSource {
   TrimScratch trimScratch_;                        // the walks of trimmed surfaces
   std::vector<ThetaVertex> trimPiece_, trimFirst_;  // θ chains cut by trims
   Counters counters_;
-  // θ slabs: the interval of sample rows being scanned, and whether it is taken row by row.
+  // θ slabs: the interval of sample rows being scanned.
   long intervalStart_ = 0, intervalEnd_ = -1;
-  bool byRows_ = false;
   std::vector<std::uint32_t> anchorsTop_, anchorsBottom_;
+  std::vector<LineEnd> topEnds_, bottomEnds_;  // SnapEnds' boundary points
 };
 
 }  // namespace patchscan

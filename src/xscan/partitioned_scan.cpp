@@ -269,8 +269,6 @@ struct PartitionedScan::Worker {
   const std::vector<std::uint32_t>& rank;  // of every surface, for the buffers
   ExactScan scan;
   std::vector<RowBuffer> rows;  // a batch of rows, scanned between one fork and join
-  RowBuffer& buffer() { return rows.front(); }
-  bool vote = false;      // this worker's answer to the current θ slab interval's phase
   double seconds = 0.0;  // spent scanning
 };
 
@@ -366,13 +364,9 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
           ++j;
           continue;
         }
-        // A batch of rows between one fork and join: the rows up to the next θ slab
-        // interval, at most batch_.
-        bool quiet = true, slab = true;
-        PrepareRow(y, a.columns, &quiet);
-        PairRow(quiet, a.columns, &slab);
-        const int count = BatchAfter(y, a.dy, a.nRows - j, a.columns);
-        ScanRows(slab, y, a.dy, count, a.columns);
+        // A batch of rows between one fork and join.
+        const int count = std::min(batch_, a.nRows - j);
+        ScanRows(y, a.dy, count, a.columns);
         for (int k = 0; k < count; ++k, ++j) {
           StoredRow* slot = slotFor(j);
           if (!slot) return;
@@ -439,63 +433,23 @@ bool PartitionedScan::Composite(double y, const raster::SampleColumns& columns, 
     workers_.front()->seconds += Now() - t0;
     return ok;
   }
-  bool quiet = true, slab = true;
-  PrepareRow(y, columns, &quiet);
-  PairRow(quiet, columns, &slab);
-  return FinishRow(slab, y, columns, out);
+  return ScanRowNow(y, columns, out);
 }
 
-bool PartitionedScan::PrepareRow(double y, const raster::SampleColumns& columns, bool* quiet) {
-  // Step 1: a θ slab interval beginning here is a slab only if no worker's surfaces have
-  // an event in it and every worker's chains pair up: the workers vote twice, each time
-  // all taking the verdict.
-  for (auto& w : workers_) w->buffer().Clear();
-  ExactScan& first = workers_.front()->scan;
-  interval_ = first.SlabMode() && first.BeginsInterval(y, columns);
-  if (interval_)  // else nothing to prepare: no fork and join for it
-    ForEachWorker([&](Worker& w) { w.vote = w.scan.PrepareInterval(y, columns, w.buffer()); });
-  *quiet = true;
-  for (const auto& w : workers_) *quiet = *quiet && w->vote;
-  return interval_;
-}
-
-void PartitionedScan::PairRow(bool quiet, const raster::SampleColumns& columns, bool* slab) {
-  *slab = false;
-  if (!interval_) return;
-  // Without an event the lines' chains are walked and paired (in parallel); with one there
-  // is nothing to walk.
-  auto pair = [&](Worker& w) { w.vote = w.scan.PairInterval(quiet, columns, w.buffer()); };
-  if (quiet)
-    ForEachWorker(pair);
-  else
-    for (auto& w : workers_) pair(*w);
-  *slab = true;
-  for (const auto& w : workers_) *slab = *slab && w->vote;
-}
-
-int PartitionedScan::BatchAfter(double y, double dy, int rowsLeft, const raster::SampleColumns& columns) const {
-  const ExactScan& first = workers_.front()->scan;
-  int count = 1;
-  while (count < batch_ && count < rowsLeft && !(first.SlabMode() && first.BeginsInterval(y + count * dy, columns)))
-    ++count;
-  return count;
-}
-
-void PartitionedScan::ScanRows(bool slab, double y, double dy, int count, const raster::SampleColumns& columns) {
-  // Step 2: every worker's rows, each into its own buffer (the first, prepared, already
-  // cleared).
+void PartitionedScan::ScanRows(double y, double dy, int count, const raster::SampleColumns& columns) {
+  // Step 1: every worker's rows, each into its own buffers (a θ slab interval's surfaces
+  // each decide alone whether they are slabs: no worker waits for another's within it).
   ForEachWorker([&](Worker& w) {
-    if (interval_) w.scan.FinishInterval(slab, columns, w.buffer());
     for (int k = 0; k < count; ++k) {
       RowBuffer& row = w.rows[static_cast<std::size_t>(k)];
-      if (k > 0) row.Clear();
+      row.Clear();
       row.scanned = w.scan.ScanRow(y + k * dy, columns, row);
     }
   });
 }
 
 bool PartitionedScan::MergeRow(int k, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  // Step 3: composite, in scan order.
+  // Step 2: composite, in scan order.
   const double t0 = Now();
   const std::size_t n = workers_.size();
   const auto row = [&](std::size_t w) -> const RowBuffer& { return workers_[w]->rows[static_cast<std::size_t>(k)]; };
@@ -512,8 +466,8 @@ bool PartitionedScan::MergeRow(int k, const raster::SampleColumns& columns, rast
   return ok;
 }
 
-bool PartitionedScan::FinishRow(bool slab, double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  ScanRows(slab, y, 0.0, 1, columns);
+bool PartitionedScan::ScanRowNow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  ScanRows(y, 0.0, 1, columns);
   return MergeRow(0, columns, out);
 }
 

@@ -6,11 +6,10 @@
 // The image is the same for any number of workers: every surface is scanned as it would be
 // alone, and the compositor hands the back end each row's fragments and triangles in the
 // order one scan of all surfaces would (surfaces in the order the scan meets them, each
-// surface's own in its own order), so even ties of depth resolve alike. The one decision
-// that joins surfaces — a θ slab interval is a slab only if every surface's chains allow it
-// (watertight shared boundaries) — is taken over all workers between the two phases of
-// each interval. Memory: each worker holds a batch of rows (a pixel row's sample rows, or 8
-// rows of θ chords).
+// surface's own in its own order), so even ties of depth resolve alike. No decision joins
+// surfaces (each decides alone whether a θ slab interval is a slab for it), so the workers
+// meet only to hand their rows over. Memory: each worker holds a batch of rows (a pixel
+// row's sample rows, or 8 rows of θ chords).
 #pragma once
 
 #include <functional>
@@ -85,16 +84,9 @@ class PartitionedScan final : public DirectScanSource {
                  const raster::KeptDepths& kept) override;
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 
-  // A row in three phases, for scans shared between processes (ExactScan's phases of a θ
-  // slab interval): PrepareRow returns whether sample row y begins an interval, and if so
-  // sets *quiet to whether this scan's surfaces have no event in it; PairRow, given
-  // whether no scan's do, sets *slab to whether this scan's surfaces allow a slab;
-  // FinishRow, given whether every scan's do (ignored when no interval begins), scans the
-  // row and hands it to `out` in scan order. ScanRow is all three, with this scan's own
-  // votes.
-  bool PrepareRow(double y, const raster::SampleColumns& columns, bool* quiet);
-  void PairRow(bool quiet, const raster::SampleColumns& columns, bool* slab);
-  bool FinishRow(bool slab, double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // A row for a scan shared between processes: scanned by every worker (a θ slab interval
+  // beginning at it first), and handed to `out` in scan order.
+  bool ScanRowNow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
   // Rows handed over leave out fragments the back end would drop by depth (`kept`, on rows
   // of `columns` samples): what BeginRows does, for a scan whose rows go elsewhere.
   void KeepDepths(const raster::KeptDepths& kept, int columns);
@@ -123,15 +115,12 @@ class PartitionedScan final : public DirectScanSource {
 
   // One row of all workers, composited (into `out`, or into a slot of the scan-ahead).
   bool Composite(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
-  // The rows from sample row y (PrepareRow's) that the workers scan between one fork and
-  // join: up to the next θ slab interval, at most batch_ and rowsLeft.
-  int BatchAfter(double y, double dy, int rowsLeft, const raster::SampleColumns& columns) const;
-  // Every worker scans `count` rows from y (the first prepared) into its buffers.
-  void ScanRows(bool slab, double y, double dy, int count, const raster::SampleColumns& columns);
+  // Every worker scans `count` rows from y into its buffers.
+  void ScanRows(double y, double dy, int count, const raster::SampleColumns& columns);
   // The workers' k-th buffered rows, merged in scan order into `out`: whether all scanned.
   bool MergeRow(int k, const raster::SampleColumns& columns, raster::FragmentRow& out);
-  // With a scan-ahead, the workers scan batch_ rows between one fork and join (when no
-  // slab interval begins among them): a fork and join a sample row cost more than a θ
+  // With a scan-ahead, the workers scan batch_ rows between one fork and join: a fork and
+  // join a sample row cost more than a θ
   // scan's row at two threads (4096x3072 θ teapot at two threads: 958 ms of CPU with,
   // 811 ms without, with the shared arena). A θ scan's rows hold chords, a few dozen
   // each: kThetaBatch of them; an exact scan's hold a fragment a covered sample: a pixel
@@ -148,7 +137,6 @@ class PartitionedScan final : public DirectScanSource {
   std::vector<std::size_t> next_;  // merge scratch
   double compositeSeconds_ = 0.0;
   bool tracing_ = false;           // no scan-ahead: the trace is drawn row by row
-  bool interval_ = false;          // PrepareRow's answer, for FinishRow
 };
 
 }  // namespace patchscan

@@ -70,7 +70,7 @@ raster::RasterVertex SlabVertex(const ThetaVertex& v, double y, bool orthographi
   // float), both surfaces' vertices are the same numbers, so one slab takes that sample
   // by the back end's tie rule; the vertex moves by under 1e-5 px.
   if (v.kind == ThetaVertex::Kind::End) {
-    x = std::round(x * kSlabEndGrid) / kSlabEndGrid;
+    x = SlabEndX(x);
     w = static_cast<double>(static_cast<float>(w));
   }
   r.h = orthographic ? Vec3(x, y, 1.0) : Vec3(x * w, y * w, w);

@@ -15,6 +15,7 @@
 // takes every sample row between them by its own chains instead.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -49,6 +50,7 @@ struct SlabFrame {
 // A chain vertex on line y as a vertex for the back end (homogeneous screen position).
 // Chain ends (boundary points shared by two surfaces) snap to 1 / kSlabEndGrid px in x.
 constexpr double kSlabEndGrid = 65536.0;
+inline double SlabEndX(double x) { return std::round(x * kSlabEndGrid) / kSlabEndGrid; }
 raster::RasterVertex SlabVertex(const ThetaVertex& v, double y, bool orthographic);
 
 // A slab's triangles blend the normal linearly between their vertices, where a θ row's
