@@ -117,10 +117,11 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
                   "sample row is sampled, its chains advanced from the row before (coverage exact "
                   "on every row), and no triangles are made. Else pixels between the scan lines "
                   "whose cross-sections are sampled (rounded to a whole number of sample rows); "
-                  "the surface between two such lines goes to the back end as one slab of "
-                  "triangles, and where the chains of two lines do not pair up (a curve born or "
-                  "gone, an event of the Y scan) every sample row between them is sampled "
-                  "instead. Silhouettes between the lines are chords: error about h^2 / (8 R) "
+                  "each surface between two such lines goes to the back end as one slab of "
+                  "triangles, and where a surface's chains of two lines do not pair up (a curve "
+                  "born or gone, an event of its Y scan) its every sample row between them is "
+                  "sampled instead, its ends on a boundary placed where a slab across it has its "
+                  "edge. Silhouettes between the lines are chords: error about h^2 / (8 R) "
                   "pixels for step h and a silhouette curving with radius R pixels")
       ->check(CLI::Range(0.0, 64.0))
       ->capture_default_str();
