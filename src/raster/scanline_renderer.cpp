@@ -221,12 +221,22 @@ class FragmentGeometry final : public FragmentRow {
   Fragment GroupFragment(const Rows& rows, const Member* m, int n, double cx, double cy) const {
     int nearest = -1;
     double best = INFINITY;
-    for (int k = 0; k < n; ++k) {
-      if (m[k].smp.handle < kTriangleHandle) continue;
+    const auto consider = [&](int k) {
+      if (m[k].smp.handle < kTriangleHandle) return;
       const double dx = lat_.At(m[k].i) - cx, dy = lat_.At(rows.j0 + m[k].r) - cy;
       const double d = dx * dx + dy * dy;  // squared: the order is the distance's, without hypot's cost
       if (d < best) best = d, nearest = k;
-    }
+    };
+    // A group of all the pixel's aa x aa samples (member r aa + c: row r's column c) has its
+    // centroid at the pixel's middle, nearer the middle samples (rows and columns (aa-1)/2
+    // and aa/2) than any other: they are searched alone, in the members' order, so the one
+    // chosen is the full search's. Most groups are whole pixels.
+    const int aa = s_.aa, lo = (aa - 1) / 2, hi = aa / 2;
+    if (n == aa * aa)
+      for (int r = lo; r <= hi; ++r)
+        for (int c = lo; c <= hi; ++c) consider(r * aa + c);
+    if (nearest < 0)
+      for (int k = 0; k < n; ++k) consider(k);
     if (nearest >= 0) return store_.Interpolate(m[nearest].smp.handle - kTriangleHandle, cx, cy);
     if (n == 1) return FragmentOf(rows, m[0], lat_.At(m[0].i));  // a lone sample (every pixel at aa 1)
     // The members come row by row, each row's from left to right: a run of samples of one
