@@ -31,9 +31,10 @@ SCENES = [  # name, file, extra camera options
     ("cage", None, []),  # bench/make_cage.py's torus cage of 2,176 faces, written into --out
 ]
 THETA_STEPS = [4, 6, 8, 12, 16, 32, 64]
-# θ with one-pixel slabs between lines of chains (--y-step 1) instead of the default chains
-# on every sample row: only differs with supersampling (at aa 1 every row is a line).
-THETA_SLAB_STEPS = [4, 8, 16, 32, 64]
+# θ with slabs between lines of chains (--y-step h pixels) instead of the default chains
+# on every sample row, as (steps, h): only differs with supersampling (at aa 1 every row is
+# a line). Two-pixel slabs trade silhouette error (h²/(8R)) for fewer lines.
+THETA_SLABS = [(4, 1), (8, 1), (16, 1), (32, 1), (64, 1), (4, 2), (16, 2)]
 TESS_RATES = [2, 4, 8, 12, 16, 24, 32]
 TESS_PIXELS = [16, 8, 4, 2, 1]
 AAS = [1, 4]
@@ -54,9 +55,10 @@ def settings(aa, only=None):
     for n in THETA_STEPS:
         every.append(("theta", f"steps {n}", ["--mode", "theta", "--theta-steps", str(n)], f"theta{n}"))
     if aa > 1:
-        for n in THETA_SLAB_STEPS:
-            every.append(("theta", f"steps {n}, 1-px slabs",
-                          ["--mode", "theta", "--theta-steps", str(n), "--y-step", "1"], f"theta{n}s"))
+        for n, h in THETA_SLABS:
+            every.append(("theta", f"steps {n}, {h}-px slabs",
+                          ["--mode", "theta", "--theta-steps", str(n), "--y-step", str(h)],
+                          f"theta{n}s" if h == 1 else f"theta{n}s{h}"))
     for r in TESS_RATES:
         every.append(("tess", f"rate {r}", ["--mode", "tess", "--tess-rate", str(r)], f"tess{r}"))
     for p in TESS_PIXELS:
@@ -217,8 +219,10 @@ def write_report(rows, path, size, povray_line):
 
 
 def Series(r):
-    """The plot's series of a row: its mode, θ's 1-px slabs apart from its rows."""
-    return "theta slabs" if r["mode"] == "theta" and "slabs" in r["setting"] else r["mode"]
+    """The plot's series of a row: its mode, θ's slabs of each height apart from its rows."""
+    if r["mode"] == "theta" and "slabs" in r["setting"]:
+        return "theta " + r["setting"].split(", ")[1]  # "theta 1-px slabs"
+    return r["mode"]
 
 
 def plot(rows, csv_path, png_path):
@@ -231,7 +235,7 @@ def plot(rows, csv_path, png_path):
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     with open(data, "w") as f:
         for scene in scenes:
-            for mode in ["theta", "theta slabs", "tess", "tess-pixels", "povray"]:
+            for mode in ["theta", "theta 1-px slabs", "theta 2-px slabs", "tess", "tess-pixels", "povray"]:
                 for aa in AAS:
                     sub = [r for r in rows if r["scene"] == scene and Series(r) == mode and r["aa"] == aa]
                     if not sub:
@@ -246,7 +250,8 @@ def plot(rows, csv_path, png_path):
         f"set terminal {'pngcairo' if has_cairo else 'png'} size {400 * len(scenes)},800",
         f"set output '{png_path}'", "set logscale xy", "set grid", "set key top right font ',8'",
         f"set multiplot layout 2,{len(scenes)} title 'error against time, per mode (aa 1 open, aa 4 filled)'"]
-    colours = {"theta": "#d62728", "theta slabs": "#ff9896", "tess": "#1f77b4", "tess-pixels": "#2ca02c",
+    colours = {"theta": "#d62728", "theta 1-px slabs": "#ff9896", "theta 2-px slabs": "#8c564b",
+               "tess": "#1f77b4", "tess-pixels": "#2ca02c",
                "povray": "#9467bd"}
     for col, label in [(2, "max silhouette error, px (0 drawn at 0.01)"), (3, "colour RMSE")]:
         for scene in scenes:
@@ -287,7 +292,7 @@ def main():
                     help="renders per setting, taken in turn across a scene's settings; the fastest counts")
     ap.add_argument("--scenes", default=",".join(s[0] for s in SCENES))
     ap.add_argument("--settings", default="",
-                    help="only these settings, by short name: exact (always), theta16, theta16s (slabs), tess8, "
+                    help="only these settings, by short name: exact (always), theta16, theta16s (1-px slabs), theta4s2 (2-px), tess8, "
                          "px4, ... "
                          "(default: all)")
     ap.add_argument("--aa", default=",".join(map(str, AAS)), help="supersampling levels, e.g. 1,4")
