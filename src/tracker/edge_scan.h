@@ -111,6 +111,23 @@ class EdgeScan {
   const std::vector<Vec2>& Deaths() const { return deaths_; }
   Vec2 Uv(const EdgeTracker& t) const { return EdgePoint(pieces_[t.piece].edge, t.t); }
 
+  // What Advance changes: Save and Restore return the scan to a line it has passed
+  // (SurfaceScan::State). Allocation-free once the state's lists have their size.
+  struct State {
+    std::vector<EdgeTracker> trackers;
+    std::vector<Vec2> folds, deaths;
+    size_t nextPiece = 0;
+    long events = 0;
+  };
+  void Save(State* s) const {
+    s->trackers = trackers_, s->folds = folds_, s->deaths = deaths_;
+    s->nextPiece = nextPiece_, s->events = events_;
+  }
+  void Restore(const State& s) {
+    trackers_ = s.trackers, folds_ = s.folds, deaths_ = s.deaths;
+    nextPiece_ = s.nextPiece, events_ = s.events;
+  }
+
  private:
   const Surface& surface_;
   const ScreenMap& map_;

@@ -134,6 +134,23 @@ constexpr double kMinimumBoxMin = 1.0 / 64.0;
 // Convergence in y: as for the edge trackers.
 const Vec2 kTolerance(kEdgeTolPx, kEdgeTolPx);
 
+// Steps between scan lines within this fraction of each other are equal.
+constexpr double kEqualStepRel = 1e-9;
+
+// Where a tracker's iteration starts on line yScan: ExtrapolatedStart (paper 001 §3.5) where
+// the lines of its last solutions were equally spaced, as the exact scan's are; else the
+// line through its last two solutions, in screen y. θ slabs step half a row from a line to
+// the first row, a row, half a row to the next line, or a whole interval from line to line:
+// extrapolated as if equal, the start lay up to three rows' motion off.
+Vec2 StartOn(const SilhouetteTracker& t, double yScan, bool quadratic) {
+  const double h0 = yScan - t.y, h1 = t.y - t.yPrev, h2 = t.yPrev - t.yPrev2;
+  const auto equal = [](double a, double b) { return std::abs(a - b) <= kEqualStepRel * std::abs(b); };
+  if (t.nSolved < 2 || !std::isfinite(h1) || h1 == 0.0 ||
+      (equal(h0, h1) && (!quadratic || t.nSolved < 3 || equal(h1, h2))))
+    return ExtrapolatedStart(t.uv, t.uvPrev, t.uvPrev2, t.nSolved, quadratic);
+  return t.uv + (h0 / h1) * (t.uv - t.uvPrev);
+}
+
 }  // namespace
 
 SilhouetteScan::SilhouetteScan(const Surface& s, const ScreenMap& map, std::vector<Stationary> stationary,
@@ -171,10 +188,10 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   births_.clear();
   exits_.clear();
   insideDeaths_.clear();
+  yLast_ = yScan;
   bool search = false;  // an event no tracker explains: look for the crossings again
   std::erase_if(trackers_, [&](SilhouetteTracker& t) {
-    const Vec2 start = extrapolate_ ? ExtrapolatedStart(t.uv, t.uvPrev, t.uvPrev2, t.nSolved,
-                                                           kEdgeTolPx <= kQuadraticExtrapolationTolPx) : t.uv;
+    const Vec2 start = extrapolate_ ? StartOn(t, yScan, kEdgeTolPx <= kQuadraticExtrapolationTolPx) : t.uv;
     Vec2 uv;
     // Steps are clipped at the boundary, not refused: a path that grazes an edge on its
     // way to a crossing inside still arrives; one whose crossing has left the domain
@@ -194,6 +211,9 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     t.uvPrev2 = t.uvPrev;
     t.uvPrev = t.uv;
     t.uv = uv;
+    t.yPrev2 = t.yPrev;
+    t.yPrev = t.y;
+    t.y = yScan;
     t.hasPrev = true;
     ++t.nSolved;
     return false;
@@ -204,7 +224,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
     Vec2 uv;
     if (!Solve(shape, yScan, start, &uv, DomainRule::Clip)) return false;
     if (Tracked(uv)) return true;
-    trackers_.push_back({uv, uv, false});
+    trackers_.push_back(NewTracker(uv));
     births_.push_back(uv);
     ++counters_[born];
     ++events_;
@@ -312,7 +332,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
 void SilhouetteScan::AddFound() {
   for (const Vec2& uv : searchFound_) {
     if (Tracked(uv)) continue;
-    trackers_.push_back({uv, uv, false});
+    trackers_.push_back(NewTracker(uv));
     births_.push_back(uv);
     ++counters_[Counter::RepairedBySearch];
   }
@@ -325,7 +345,7 @@ bool SilhouetteScan::Tracked(const Vec2& uv) const {
 
 void SilhouetteScan::Adopt(const Vec2& uv) {
   if (Tracked(uv)) return;
-  trackers_.push_back({uv, uv, false});
+  trackers_.push_back(NewTracker(uv));
   ++counters_[Counter::SilhouettesAdopted];
   ++events_;
 }

@@ -22,6 +22,7 @@ struct SilhouetteTracker {
   bool hasPrev = false;
   Vec2 uvPrev2 = Vec2::Zero();  // the scan line before the previous one (when nSolved >= 3)
   int nSolved = 1;                // scan lines on which this tracker has been solved
+  double y = NAN, yPrev = NAN, yPrev2 = NAN;  // the scan lines of uv, uvPrev and uvPrev2
 };
 
 // Both equations are solved in pixels: y - yScan, and J / max(|s_u|, |s_v|), to the edge
@@ -77,6 +78,23 @@ class SilhouetteScan {
   const std::vector<Vec2>& Births() const { return births_; }
   const std::vector<Vec2>& Deaths() const { return deaths_; }
 
+  // What Advance and Adopt change (as EdgeScan::State).
+  struct State {
+    std::vector<SilhouetteTracker> trackers;
+    std::vector<Vec2> births, deaths;
+    size_t nextStationary = 0;
+    double yLast = NAN;
+    long events = 0;
+  };
+  void Save(State* s) const {
+    s->trackers = trackers_, s->births = births_, s->deaths = deaths_;
+    s->nextStationary = nextStationary_, s->yLast = yLast_, s->events = events_;
+  }
+  void Restore(const State& s) {
+    trackers_ = s.trackers, births_ = s.births, deaths_ = s.deaths;
+    nextStationary_ = s.nextStationary, yLast_ = s.yLast, events_ = s.events;
+  }
+
  private:
   template <class ShapeT>
   void AdvanceImpl(const ShapeT& shape, double yScan, const EdgeScan& edges);
@@ -86,6 +104,12 @@ class SilhouetteScan {
   bool Tracked(const Vec2& uv) const;
   // Tracks what the latest search found that no tracker holds.
   void AddFound();
+  // A tracker at uv on the latest scan line.
+  SilhouetteTracker NewTracker(const Vec2& uv) const {
+    SilhouetteTracker t{uv, uv, false};
+    t.y = yLast_;
+    return t;
+  }
 
   const Surface& surface_;
   const ScreenMap& map_;
@@ -103,6 +127,7 @@ class SilhouetteScan {
   };
   std::vector<InsideDeath> insideDeaths_;
   Counters& counters_;
+  double yLast_ = NAN;  // the latest scan line
   long events_ = 0;
 };
 

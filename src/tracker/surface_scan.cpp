@@ -47,6 +47,20 @@ std::vector<Stationary> SurfaceScan::PrePass() {
   return stationary;
 }
 
+void SurfaceScan::Save(State* s) const {
+  edges_.Save(&s->edges);
+  silhouettes_.Save(&s->silhouettes);
+  if (trims_) trims_->Save(&s->trims);
+  s->row = row_;
+}
+
+void SurfaceScan::Restore(const State& s) {
+  edges_.Restore(s.edges);
+  silhouettes_.Restore(s.silhouettes);
+  if (trims_) trims_->Restore(s.trims);
+  row_ = s.row;
+}
+
 double SurfaceScan::LineFor(double y) const {
   const auto& ranges = edges_.DegenerateRanges();
   constexpr int kMaxSteps = 64;  // ranges are disjoint and few: a handful of steps at most

@@ -97,6 +97,19 @@ class SurfaceScan {
   const EdgeScan& Edges() const { return edges_; }
   const SilhouetteScan& Silhouettes() const { return silhouettes_; }
 
+  // Everything AdvanceTo (and Adopt) change: Save, advance, and Restore returns the scan to
+  // the line it saved, as if it had not moved (its counters keep the work done). θ slabs
+  // advance a surface straight to the next line and come back for its rows when it needs
+  // them. Allocation-free once a state's lists have their size.
+  struct State {
+    EdgeScan::State edges;
+    SilhouetteScan::State silhouettes;
+    TrimScan::State trims;
+    RowTrackers row;
+  };
+  void Save(State* s) const;
+  void Restore(const State& s);
+
  private:
   // The maxima pre-pass: fills stationary_ and yTop_, returns the points for the trackers.
   std::vector<Stationary> PrePass();

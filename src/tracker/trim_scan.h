@@ -52,6 +52,19 @@ class TrimScan {
     double t, tPrev, tPrev2;
     int nSolved;
   };
+
+ public:
+  // What Advance changes (as EdgeScan::State).
+  struct State {
+    std::vector<Tracker> trackers;
+    std::vector<Vec2> points;
+    std::size_t nextPiece = 0;
+    long events = 0;
+  };
+  void Save(State* s) const { s->trackers = trackers_, s->points = points_, s->nextPiece = nextPiece_, s->events = events_; }
+  void Restore(const State& s) { trackers_ = s.trackers, points_ = s.points, nextPiece_ = s.nextPiece, events_ = s.events; }
+
+ private:
   const Surface& surface_;
   const PieceTrim& trim_;
   const ScreenMap& map_;

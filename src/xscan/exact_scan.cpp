@@ -33,6 +33,11 @@ struct ExactScan::Active {
   // interval's top line or first row (carried).
   std::vector<char> stepCalm;
   bool byRows = false, carried = false;
+  // θ slabs: a surface that was a slab through the interval before is advanced straight
+  // from the top line to the bottom one (jumped), the scan's state on the top line saved
+  // to come back to for its rows where the interval turns out not to be a slab.
+  bool slabBefore = false, jumped = false;
+  SurfaceScan::State topState;
   ChainSet carry;
   double carryY = 0.0;
   RowTrackers topTrackers;
@@ -295,7 +300,6 @@ void ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
   const double dy = columns.dx;
   const auto lines = IntervalLines(columns);
   const double yTop = lines.first, yBottom = lines.second;
-  auto rowY = [&](int r) { return columns.x0 + static_cast<double>(j + r) * dy; };
   const std::size_t firstNew = [&] {
     std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yTop; });
     return active_.size();
@@ -307,23 +311,45 @@ void ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
     WalkLine(a, yTop, a.scan->Trackers(), columns, out, &a.line, &a.lineBroken);
     a.lineWalked = true;
   }
-  // The trackers on the top line, on every sample row of the interval and on its bottom
-  // line, and whether the surface has an event of the Y scan between each of them and
-  // the one before.
-  for (const auto& ap : active_) {
-    Active& a = *ap;
+  // The trackers on the top line and on the bottom one, and on every sample row of the
+  // interval with whether the surface has an event of the Y scan between each of them and
+  // the one before: a surface that was a slab through the interval before is advanced
+  // straight to the bottom line, and its rows only if that step is not calm (else all
+  // its steps are: their events add up, and its stationary points and degenerate ranges
+  // each lie in or touch one of them).
+  for (std::size_t k = 0; k < active_.size(); ++k) {
+    Active& a = *active_[k];
     a.topTrackers = a.scan->Trackers();
-    a.rowTrackers.resize(static_cast<std::size_t>(m));
     a.stepCalm.resize(static_cast<std::size_t>(m) + 1);
-    long before = a.scan->Events();
-    double yBefore = yTop;
-    for (int r = 0; r <= m; ++r) {
-      const double yr = r < m ? rowY(r) : yBottom;
-      AdvanceTo(a, yr);
-      if (r < m) a.rowTrackers[static_cast<std::size_t>(r)] = a.scan->Trackers();
-      a.stepCalm[static_cast<std::size_t>(r)] = Calm(a, before, yBefore, yr);
-      before = a.scan->Events(), yBefore = yr;
+    a.jumped = false;
+    if (a.slabBefore && k < firstNew && !a.scan->Trim()) {
+      a.scan->Save(&a.topState);
+      const long before = a.scan->Events();
+      AdvanceTo(a, yBottom);
+      if (Calm(a, before, yTop, yBottom)) {
+        std::fill(a.stepCalm.begin(), a.stepCalm.end(), char{1});
+        a.jumped = true;
+        continue;
+      }
+      a.scan->Restore(a.topState);
     }
+    AdvanceRows(a, columns);
+  }
+}
+
+void ExactScan::AdvanceRows(Active& a, const raster::SampleColumns& columns) {
+  const int m = options_.slabRows;
+  const auto lines = IntervalLines(columns);
+  const double yTop = lines.first, yBottom = lines.second;
+  a.rowTrackers.resize(static_cast<std::size_t>(m));
+  long before = a.scan->Events();
+  double yBefore = yTop;
+  for (int r = 0; r <= m; ++r) {
+    const double yr = r < m ? columns.x0 + static_cast<double>(intervalStart_ + r) * columns.dx : yBottom;
+    AdvanceTo(a, yr);
+    if (r < m) a.rowTrackers[static_cast<std::size_t>(r)] = a.scan->Trackers();
+    a.stepCalm[static_cast<std::size_t>(r)] = Calm(a, before, yBefore, yr);
+    before = a.scan->Events(), yBefore = yr;
   }
 }
 
@@ -474,6 +500,19 @@ void ExactScan::ScanInterval(double y, const raster::SampleColumns& columns, ras
   for (const auto& ap : active_) {
     Active& a = *ap;
     a.byRows = !PairSurface(a, columns, out);
+    if (a.byRows && a.jumped) {
+      // Calm to the bottom line, but its chains there do not pair: back to the top line,
+      // and its rows advanced one by one. The bottom line's chains walked from the jump's
+      // trackers stay (its trackers converge to the same crossings), unless a row finds an
+      // event the jump stepped over.
+      a.scan->Restore(a.topState);
+      AdvanceRows(a, columns);
+      if (!std::all_of(a.stepCalm.begin(), a.stepCalm.end(), [](char c) { return c != 0; })) {
+        ++counters_[Counter::EventIntervals];
+        a.nextWalked = false;
+      }
+    }
+    a.slabBefore = !a.byRows;
     if (a.byRows) {
       ++counters_[Counter::RowIntervals];
       RowSurface(a, columns, out);

@@ -103,6 +103,9 @@ class ExactScan final : public raster::FragmentSource {
   // trackers advanced to its top line, each of its rows and its bottom line, with whether
   // each step has no event (Active::stepCalm).
   void PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // θ slabs: a surface's trackers advanced from the interval's top line to each of its
+  // rows (Active::rowTrackers) and its bottom line, with whether each step is calm.
+  void AdvanceRows(Active& a, const raster::SampleColumns& columns);
   // θ slabs: whether a surface is a slab through the interval: no event in it, its lines'
   // chains walked or advanced, and paired (else rows, and, with an event, no line walked).
   bool PairSurface(Active& a, const raster::SampleColumns& columns, raster::FragmentRow& out);
