@@ -317,12 +317,12 @@ void ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
   // straight to the bottom line, and its rows only if that step is not calm (else all
   // its steps are: their events add up, and its stationary points and degenerate ranges
   // each lie in or touch one of them).
-  for (std::size_t k = 0; k < active_.size(); ++k) {
-    Active& a = *active_[k];
+  for (const auto& ap : active_) {
+    Active& a = *ap;
     a.topTrackers = a.scan->Trackers();
     a.stepCalm.resize(static_cast<std::size_t>(m) + 1);
     a.jumped = false;
-    if (a.slabBefore && k < firstNew && !a.scan->Trim()) {
+    if (a.slabBefore && !a.scan->Trim()) {  // not a surface set up here: none was a slab
       a.scan->Save(&a.topState);
       const long before = a.scan->Events();
       AdvanceTo(a, yBottom);
@@ -345,7 +345,7 @@ void ExactScan::AdvanceRows(Active& a, const raster::SampleColumns& columns) {
   long before = a.scan->Events();
   double yBefore = yTop;
   for (int r = 0; r <= m; ++r) {
-    const double yr = r < m ? columns.x0 + static_cast<double>(intervalStart_ + r) * columns.dx : yBottom;
+    const double yr = r < m ? RowY(columns, r) : yBottom;
     AdvanceTo(a, yr);
     if (r < m) a.rowTrackers[static_cast<std::size_t>(r)] = a.scan->Trackers();
     a.stepCalm[static_cast<std::size_t>(r)] = Calm(a, before, yBefore, yr);
@@ -353,12 +353,16 @@ void ExactScan::AdvanceRows(Active& a, const raster::SampleColumns& columns) {
   }
 }
 
+bool ExactScan::AllCalm(const Active& a) {
+  return std::all_of(a.stepCalm.begin(), a.stepCalm.end(), [](char c) { return c != 0; });
+}
+
 bool ExactScan::PairSurface(Active& a, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   // An event of the surface's Y scan in the interval: rows, and neither line's chains
   // walked (the next interval walks its top line only if it may be a slab). Calm through
   // the interval is calm through each of its steps: their events add up, and its
   // stationary points and degenerate ranges each lie in or touch one of them.
-  if (!std::all_of(a.stepCalm.begin(), a.stepCalm.end(), [](char c) { return c != 0; })) {
+  if (!AllCalm(a)) {
     ++counters_[Counter::EventIntervals];
     a.nextWalked = false;
     return false;
@@ -408,11 +412,9 @@ void ExactScan::SlabSurface(Active& a, const raster::SampleColumns& columns, ras
 }
 
 void ExactScan::RowSurface(Active& a, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  const long j = intervalStart_;
   const int m = options_.slabRows;
   const auto lines = IntervalLines(columns);
   const double yTop = lines.first, yBottom = lines.second;
-  auto rowY = [&](int r) { return columns.x0 + static_cast<double>(j + r) * columns.dx; };
   // Each row's chains are advanced from the line or row before as θ trackers (§4.1), as
   // θ rows are, unless the surface has an event between them; those, and a row whose
   // chains cannot be advanced, are crawled afresh.
@@ -427,10 +429,10 @@ void ExactScan::RowSurface(Active& a, const raster::SampleColumns& columns, rast
     ChainSet& set = a.rows[static_cast<std::size_t>(r)];
     const RowTrackers& t = a.rowTrackers[static_cast<std::size_t>(r)];
     const bool calm = a.stepCalm[static_cast<std::size_t>(r)];
-    const bool advanced = AdvanceOrWalk(a, calm ? before : nullptr, yBefore, rowY(r), t, &set, columns, out);
+    const bool advanced = AdvanceOrWalk(a, calm ? before : nullptr, yBefore, RowY(columns, r), t, &set, columns, out);
     before = advanced || !WalkBroken() ? &set : nullptr;
-    yBefore = rowY(r);
-    SnapEnds((rowY(r) - yTop) / (yBottom - yTop), t, &set);
+    yBefore = RowY(columns, r);
+    SnapEnds((RowY(columns, r) - yTop) / (yBottom - yTop), t, &set);
   }
   if (!a.stepCalm[static_cast<std::size_t>(m)]) before = nullptr;
   a.carried = before != nullptr;
@@ -507,7 +509,7 @@ void ExactScan::ScanInterval(double y, const raster::SampleColumns& columns, ras
       // event the jump stepped over.
       a.scan->Restore(a.topState);
       AdvanceRows(a, columns);
-      if (!std::all_of(a.stepCalm.begin(), a.stepCalm.end(), [](char c) { return c != 0; })) {
+      if (!AllCalm(a)) {
         ++counters_[Counter::EventIntervals];
         a.nextWalked = false;
       }

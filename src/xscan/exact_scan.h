@@ -100,12 +100,19 @@ class ExactScan final : public raster::FragmentSource {
   // θ slabs: the interval beginning at sample row y (below).
   void ScanInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
   // θ slabs: the interval beginning at sample row y: surfaces set up, and every surface's
-  // trackers advanced to its top line, each of its rows and its bottom line, with whether
-  // each step has no event (Active::stepCalm).
+  // trackers advanced to its top line and its bottom one, with whether each step has no
+  // event (Active::stepCalm): straight from line to line for a surface that was a slab
+  // through the interval before, unless that step has an event; else through each row.
   void PrepareInterval(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
   // θ slabs: a surface's trackers advanced from the interval's top line to each of its
   // rows (Active::rowTrackers) and its bottom line, with whether each step is calm.
   void AdvanceRows(Active& a, const raster::SampleColumns& columns);
+  // θ slabs: whether every step of a surface through the interval is calm.
+  static bool AllCalm(const Active& a);
+  // θ slabs: screen y of the interval's sample row r.
+  double RowY(const raster::SampleColumns& columns, int r) const {
+    return columns.x0 + static_cast<double>(intervalStart_ + r) * columns.dx;
+  }
   // θ slabs: whether a surface is a slab through the interval: no event in it, its lines'
   // chains walked or advanced, and paired (else rows, and, with an event, no line walked).
   bool PairSurface(Active& a, const raster::SampleColumns& columns, raster::FragmentRow& out);
