@@ -92,8 +92,10 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(Theta, ThetaTurnTrackers, "theta_turn_trackers", "turn points advanced from the line before", "trackers", Sum) \
   X(Theta, ThetaTurnIterations, "theta_turn_iterations", "turn-tracker Newton iterations", "iterations", Sum)      \
   X(Theta, ThetaTurnsLost, "theta_turns_lost", "turn trackers lost (the turn pair met)", "trackers", Sum)          \
+  X(Theta, ThetaTiltTrackers, "theta_tilt_trackers", "tilt trackers solved: tilt vertices advanced from the line before, and links' middles checked", "trackers", Sum) \
+  X(Theta, ThetaTiltIterations, "theta_tilt_iterations", "tilt-tracker Newton iterations", "iterations", Sum)      \
   X(Theta, ThetaLinkRepairs, "theta_link_repairs", "links repaired sideways (§4.2)", "links", Sum)                 \
-  X(Theta, ThetaLinksFilled, "theta_links_filled", "of those, links missing only tabulated vertices, filled by Newton", \
+  X(Theta, ThetaLinksFilled, "theta_links_filled", "of those, mended by Newton: tabulated vertices filled in, or split by tilt vertices", \
     "links", Sum)                                                                                                      \
   X(Theta, ThetaLineRepairs, "theta_line_repairs", "quiet lines crawled afresh (a chain could not be advanced)", "lines", Sum) \
   X(Theta, ThetaRowsAdvanced, "theta_rows_advanced", "surface rows whose chains were advanced from the row before", "rows", Sum) \
@@ -150,6 +152,8 @@ inline constexpr auto kCounterRatios = std::to_array<CounterRatio>({
      Counter::ThetaTrackerIterations, Counter::ThetaTrackerIterations, Counter::ThetaTrackers},
     {CounterGroup::Theta, "theta_iterations_per_turn_tracker", "Newton iterations per turn tracker",
      Counter::ThetaTurnIterations, Counter::ThetaTurnIterations, Counter::ThetaTurnTrackers},
+    {CounterGroup::Theta, "theta_iterations_per_tilt_tracker", "Newton iterations per tilt tracker",
+     Counter::ThetaTiltIterations, Counter::ThetaTiltIterations, Counter::ThetaTiltTrackers},
 });
 
 // One set of counts, one per counter of the table; zero to begin with. Never allocates.

@@ -227,4 +227,50 @@ bool SolveTurnTracker(const ShapeT& shape, const ScreenMap& map, double ys, cons
   return out->ok;
 }
 
+// The tracker of a tilt vertex (a point a crawl put where the normal had turned a table
+// step since the vertex before, out of the scan plane or in all): it keeps no level of its
+// own, so it rides the surface from line to line straight along y's (u,v) gradient at
+// `start` (Newton on y - ys along that line: the least (u,v) change that reaches the
+// line), and the advance's link check judges whether the links on both sides still turn
+// less than a step. False if it leaves [0,1]² or does not converge. Adds its iterations to
+// *iterations; `rate`, if given, receives its rate along the lines, d(u,v)/d(ys) along that
+// direction; `order` is the point's (LevelPoint::second). Never allocates.
+template <class ShapeT>
+bool SolveTiltTracker(const ShapeT& shape, const ScreenMap& map, double ys, const Vec2& start, LevelPoint* out,
+                      std::int64_t* iterations, Vec2* rate = nullptr, DerivOrder order = DerivOrder::Second) {
+  const Vec2 from = start.cwiseMax(0.0).cwiseMin(1.0);  // an extrapolated start may lie just outside
+  *out = EvalLevelPoint(shape, map, from, order);
+  const double g = out->gradY.norm();
+  if (!out->ok || !(g > 0.0)) return false;
+  const Vec2 dir = out->gradY / g;
+  // The parameter range keeping from + t dir in [0,1]².
+  double lo = -INFINITY, hi = INFINITY;
+  for (int k = 0; k < 2; ++k) {
+    if (dir[k] == 0.0) continue;
+    const double a = -from[k] / dir[k], b = (1.0 - from[k]) / dir[k];
+    lo = std::max(lo, std::min(a, b));
+    hi = std::min(hi, std::max(a, b));
+  }
+  NewtonOptions opt;
+  opt.maxIterations = kThetaMaxIterations;
+  opt.domain = DomainRule::Fail;  // a tracker leaving [0,1]² has left the patch
+  bool first = true;
+  const auto r = SolveNewton1(
+      [&](double t, double* f, double* dfdt) {
+        if (!first) *out = EvalLevelPoint(shape, map, from + t * dir, order);
+        first = false;
+        *f = out->ok ? out->y - ys : NAN;
+        *dfdt = out->gradY.dot(dir);
+      },
+      0.0, lo, hi, kEdgeTolPx, opt);
+  *iterations += r.iterations;
+  if (r.status != NewtonStatus::Converged) return false;
+  if (const Vec2 uv = from + r.t * dir; out->uv != uv) *out = EvalLevelPoint(shape, map, uv, order);
+  if (rate) {
+    const double dydt = out->gradY.dot(dir);
+    *rate = std::abs(dydt) > 0.0 ? Vec2(dir / dydt) : Vec2(NAN, NAN);
+  }
+  return out->ok;
+}
+
 }  // namespace patchscan

@@ -24,7 +24,7 @@ typename ThetaWalker<ShapeT>::LinkCheck ThetaWalker<ShapeT>::CheckLink(const Ver
   const double d = Wrap(b.theta - ta);
   const bool missing = std::abs(d) > table_ + kOnAngleRad ||
                        !ForEachTableAngle(ta, d, false, [](double angle, int) { return SilhouetteAngle(angle); });
-  if (TurnsPastStep(a, b)) return LinkCheck::Broken;
+  const bool turnsTooFar = TurnsPastStep(a, b);
   // The tilt out of the scan plane along the link, as the cubic (Hermite's) from the ends'
   // tilts and rates along the row, going a table step beyond both ends' tilts between
   // them: an excursion of the normal the ends do not show, which a crawl would mark with
@@ -47,7 +47,56 @@ typename ThetaWalker<ShapeT>::LinkCheck ThetaWalker<ShapeT>::CheckLink(const Ver
   const double dxTop = B.x - A.x, dx = b.x - a.x;
   if (std::abs(dxTop) > kColumnEpsPx && std::abs(dx) > kColumnEpsPx && (dxTop > 0) != (dx > 0)) return LinkCheck::Broken;
   if ((b.uv - a.uv).norm() > 2.0 * (B.uv - A.uv).norm() + kLinkStretchUv) return LinkCheck::Broken;
+  // On slab lines such a link is crawled (below: the tilt tracker).
+  if (turnsTooFar) return missing || !rowChords_ ? LinkCheck::Broken : LinkCheck::Split;
   return missing ? LinkCheck::MissingTable : LinkCheck::Sound;
+}
+
+template <class ShapeT>
+template <class Make>
+bool ThetaWalker<ShapeT>::SplitLink(const Vertex& a, const Vertex& b, std::vector<Vertex>* out, Make& make) {
+  out->clear();
+  out->push_back(a);
+  if (!SplitInto(a, b, kSplitMaxDepth, LinkFacing(a, b), out, make)) return false;
+  out->push_back(b);
+  return true;
+}
+
+template <class ShapeT>
+template <class Make>
+bool ThetaWalker<ShapeT>::SplitInto(const Vertex& a, const Vertex& b, int depth, std::optional<bool> facing,
+                                    std::vector<Vertex>* out, Make& make) {
+  // A chord no sample column crosses is never interpolated (TurnsPastStep).
+  if (!SamplesBetween(a.x, b.x)) return true;
+  // The line's point found from the middle of the link's chord in (u,v) as a tilt tracker
+  // is, between the ends in x. The link stays whole if its normal turns less than a step
+  // and its chord (the ends' Hermite cubics, as the back end draws it) meets the surface's
+  // normal there within the crawl's bound (ThetaTable::kChordSplitStep).
+  LevelPoint p;
+  ++Count(Counter::ThetaTiltTrackers);
+  if (!SolveTiltTracker(this->shape_, this->map_, this->ys_, 0.5 * (a.uv + b.uv), &p,
+                        &Count(Counter::ThetaTiltIterations), nullptr, DerivOrder::First) ||
+      !Between(p.x, a.x, b.x))
+    return false;
+  const raster::Fragment f = make(p);
+  if (!TurnsPastStep(a, b)) {
+    const raster::Chord chord(a.x, a.f, b.x, b.f, frame_.orthographic, ChordSlopeOf(a, b), ChordSlopeOf(b, a));
+    if (chord.At(p.x).normal.dot(f.normal) >= cosChordSplit_) return true;
+  }
+  // Else it is a vertex (with its slopes): it must face as the ends do and keep θ running
+  // one way (the link has no turn point: no table angle lies between its ends, and none
+  // between the vertex and either).
+  if (depth == 0) return false;
+  p = this->Eval(p.uv, DerivOrder::Second);
+  if (!p.ok) return false;
+  const Vertex m = MakeVertexOf(p, f, ThetaVertex::Kind::Tilt);
+  if (facing && Facing(m) != *facing) return false;
+  const double d = Wrap(b.theta - a.theta), da = Wrap(m.theta - a.theta), db = Wrap(b.theta - m.theta);
+  if (std::abs(d) > kTurnRad && ((da * d < 0.0 && std::abs(da) > kTurnRad) || (db * d < 0.0 && std::abs(db) > kTurnRad)))
+    return false;
+  if (!SplitInto(a, m, depth - 1, facing, out, make)) return false;
+  out->push_back(m);
+  return SplitInto(m, b, depth - 1, facing, out, make);
 }
 
 template <class ShapeT>
@@ -61,10 +110,7 @@ bool ThetaWalker<ShapeT>::FillLink(const Vertex& a, const Vertex& b, std::vector
   // plane or in all; else false, and the link is crawled.
   const double d = Wrap(b.theta - a.theta);
   if (std::abs(d) <= kTurnRad || std::abs(d) >= kFillMaxTurnSteps * table_) return false;
-  // How the ends face (a silhouette end faces neither way).
-  std::optional<bool> facing;
-  if (a.kind != ThetaVertex::Kind::Silhouette) facing = Facing(a);
-  else if (b.kind != ThetaVertex::Kind::Silhouette) facing = Facing(b);
+  const std::optional<bool> facing = LinkFacing(a, b);
   out->clear();
   out->push_back(a);
   const bool placed = ForEachTableAngle(a.theta, d, false, [&](double angle, int k) {
@@ -115,7 +161,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
     double sense = 1.0;  // along the chain's order (a ring is crawled with sense 1)
     LevelPoint last;      // the last vertex advanced, and its index in A
     std::size_t lastK = 0;
-    bool skipped = false;  // tilt vertices or lost trackers of A since lastK
+    bool skipped = false;  // tilt vertices dropped or trackers lost of A since lastK
     double lastD = 0.0;    // θ's change along the chain's last link (0: none yet)
     // θ keeps its sense of rotation through a Table or Tilt vertex and reverses it at a
     // Turn (§4.3): the link from a to b breaks that rule.
@@ -143,16 +189,50 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
                            a.kind != ThetaVertex::Kind::Silhouette &&
                            (a.x - to->v[to->v.size() - 2].x) * (b.x - a.x) < 0.0;
         const bool wrongWay = skipped || xBack || turnsWrong(a, b) || againstRate(a, b, rateB);
-        const LinkCheck check = wrongWay ? LinkCheck::Broken : CheckLink(A[lastK], A[k % A.size()], a, b);
+        LinkCheck check = wrongWay ? LinkCheck::Broken : CheckLink(A[lastK], A[k % A.size()], a, b);
+        // A link with a tilt vertex at an end (on rows) was crawled on the line before; now
+        // that the tilt has been carried along, its chord is checked against the surface
+        // in its middle as the crawl checks its points (SplitLink).
+        if (check == LinkCheck::Sound && rowChords_ &&
+            (a.kind == ThetaVertex::Kind::Tilt || b.kind == ThetaVertex::Kind::Tilt))
+          check = LinkCheck::Split;
         if (check != LinkCheck::Sound) {
-          ++(*this->counters_)[Counter::ThetaLinkRepairs];
-          // A link missing only tabulated vertices gets them by Newton; else, or if that
-          // fails, it is crawled.
-          const bool filled = check == LinkCheck::MissingTable && FillLink(a, b, scratch, make);
-          if (filled) ++(*this->counters_)[Counter::ThetaLinksFilled];
-          if (!filled) scratch->clear();
-          if (!filled && !Crawl(last, sense, false, scratch, make, &b,
-                                a.kind == ThetaVertex::Kind::Turn ? -lastD : lastD)) return false;
+          // A link missing only tabulated vertices gets them by Newton, and one whose
+          // normal only turns too far is split by tilt vertices; else, or if that fails,
+          // it is crawled. A tilt vertex at its end is dropped instead: the crawl across
+          // its place to the next vertex puts tilt vertices where they are due (a crawl
+          // ends only on a vertex it makes itself, which a tilt's place need not be).
+          const bool filled = (check == LinkCheck::MissingTable && FillLink(a, b, scratch, make)) ||
+                              (check == LinkCheck::Split && SplitLink(a, b, scratch, make));
+          if (!filled && b.kind == ThetaVertex::Kind::Tilt && k < n) {
+            skipped = true;
+            return true;
+          }
+          // (A tilt's link whose chord was found sound is no repair.)
+          if (!filled || scratch->size() > 2) {
+            ++(*this->counters_)[Counter::ThetaLinkRepairs];
+            if (filled) ++(*this->counters_)[Counter::ThetaLinksFilled];
+          }
+          if (!filled) {
+            // The crawl starts from the last vertex before any tilt vertices: a tilt
+            // vertex, riding the surface, may have overtaken b (the crawl from it would
+            // never meet b), and the crawl puts tilt vertices where they are due.
+            if (to->v.back().kind == ThetaVertex::Kind::Tilt && to->v.size() > begin + 1) {
+              while (to->v.back().kind == ThetaVertex::Kind::Tilt && to->v.size() > begin + 1) {
+                to->v.pop_back();
+                to->before.pop_back();
+                to->rate.pop_back();
+              }
+              last = this->Eval(to->v.back().uv, DerivOrder::Second);
+              if (to->v.back().kind == ThetaVertex::Kind::Silhouette) last.jn = 0.0;
+            }
+            // Two θ trackers of one angle that have met (their turn pair gone between
+            // them) are one vertex.
+            if (SameVertex(to->v.back(), b)) return true;
+            scratch->clear();
+            if (!Crawl(last, sense, false, scratch, make, &b,
+                       to->v.back().kind == ThetaVertex::Kind::Turn ? -lastD : lastD)) return false;
+          }
           for (std::size_t i = 1; i + 1 < scratch->size(); ++i) {
             to->v.push_back((*scratch)[i]);
             to->before.push_back(Vec2(NAN, NAN));
@@ -179,9 +259,28 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
       TableResidual residual;           // a Table vertex's G_i at its solution
       Vec2 uvRate = Vec2(NAN, NAN);     // a tracker's rate along the lines (PredictedStart)
       switch (V.kind) {
-        case ThetaVertex::Kind::Tilt:
-          skipped = true;
-          continue;
+        case ThetaVertex::Kind::Tilt: {
+          // On rows, kept where the surface carries it (SolveTiltTracker), the links on
+          // both sides judged as any; one leaving the patch is dropped, and the link across
+          // its place repaired sideways. On slab lines the link across it is crawled
+          // afresh (and one turning too far is not split): a slab's normals have no slopes
+          // to follow its links' curves, and the crawl checks those against the surface
+          // at each of its points (kept tilts made the teapot's 1-px slabs at 8 steps,
+          // 256 px, aa 4, miss the normal farther: p99 5.6 -> 6.1 degrees).
+          if (!rowChords_) {
+            skipped = true;
+            continue;
+          }
+          const Vec2 start = extrapolate ? PredictedStart(V.uv, from.before[c.begin + k], from.rate[c.begin + k], dy)
+                                         : V.uv;
+          ++(*this->counters_)[Counter::ThetaTiltTrackers];
+          if (!SolveTiltTracker(this->shape_, this->map_, this->ys_, start, &p,
+                                &(*this->counters_)[Counter::ThetaTiltIterations], &uvRate)) {
+            skipped = true;
+            continue;
+          }
+          break;
+        }
         case ThetaVertex::Kind::Turn: {
           const Vec2 start = extrapolate ? PredictedStart(V.uv, from.before[c.begin + k], from.rate[c.begin + k], dy)
                                          : V.uv;

@@ -136,6 +136,12 @@ constexpr double kLinkStretchUv = 1e-3;
 // A link missing tabulated vertices is filled by Newton (ThetaWalker::FillLink) only while
 // θ turns less than this many table steps along it; a longer one is crawled.
 constexpr double kFillMaxTurnSteps = 3.0;
+// A link whose normal has come to turn a table step or more along it, or whose chord
+// misses the normal in its middle (and is sound otherwise), is split in halves by tilt
+// vertices (ThetaWalker::SplitLink) at most this deep (up to 2^depth - 1 vertices); one
+// still unsound is crawled. A link changes little from one line to the next: one split
+// nearly always does.
+constexpr int kSplitMaxDepth = 2;
 
 // The table of N angles per turn (§4.1) as a walker judges turns by it: its step 2π/N, and
 // the cosines of a step and of a step with a rounding margin beyond it (-1 for N < 2).
@@ -371,16 +377,32 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     return v.kind == target.kind && v.index == target.index && std::abs(v.x - target.x) <= kLinkMatchPx;
   }
   // Whether the link a-b advanced from A-B needs a repair (theta_advance.h): sound, missing
-  // only tabulated vertices between its ends, or to be crawled sideways.
-  enum class LinkCheck { Sound, MissingTable, Broken };
+  // only tabulated vertices between its ends, sound but for its normal turning a table step
+  // or more (TurnsPastStep: to be split), or to be crawled sideways.
+  enum class LinkCheck { Sound, MissingTable, Split, Broken };
   LinkCheck CheckLink(const Vertex& A, const Vertex& B, const Vertex& a, const Vertex& b) const;
   // The link a-b's missing tabulated vertices by Newton: *out = a, them, b; false if any is
   // not found where it belongs (theta_advance.h).
   template <class Make>
   bool FillLink(const Vertex& a, const Vertex& b, std::vector<Vertex>* out, Make& make);
+  // The link a-b split by tilt vertices until no part turns a table step and each part's
+  // chord meets the surface's normal in its middle: *out = a, them, b; false if a vertex is
+  // not found where it belongs or the parts are not sound at kSplitMaxDepth
+  // (theta_advance.h).
+  template <class Make>
+  bool SplitLink(const Vertex& a, const Vertex& b, std::vector<Vertex>* out, Make& make);
+  template <class Make>
+  bool SplitInto(const Vertex& a, const Vertex& b, int depth, std::optional<bool> facing, std::vector<Vertex>* out,
+                 Make& make);
   // Whether the vertex's normal faces the eye.
   bool Facing(const Vertex& v) const {
     return v.f.normal.dot(frame_.orthographic ? frame_.forward : Vec3(v.f.position - frame_.eye)) > 0.0;
+  }
+  // How a link's ends face (a silhouette end faces neither way; none if both are).
+  std::optional<bool> LinkFacing(const Vertex& a, const Vertex& b) const {
+    if (a.kind != ThetaVertex::Kind::Silhouette) return Facing(a);
+    if (b.kind != ThetaVertex::Kind::Silhouette) return Facing(b);
+    return std::nullopt;
   }
 
   int steps_;

@@ -467,6 +467,49 @@ TEST(ThetaTracker, AdvancedChainsHaveTheCrawledChainsVertices) {
   EXPECT_GT(total[Counter::ThetaLinksFilled], 20);  // 54 of 745 repairs when measured
 }
 
+TEST(ThetaTracker, TiltTrackersRideStraightAlongYsGradientOntoTheLine) {
+  // SolveTiltTracker: from a point a tenth of a pixel off line ys (a link's middle, a
+  // start extrapolated from the lines before, are nearer) it lands on the line (within
+  // kEdgeTolPx, in at most kMaxTiltIterations: y is smooth and the step is short) on the
+  // straight (u,v) line through its start along y's gradient there, and its rate
+  // d(u,v)/d(ys) is the derivative of its solution as ys moves: central differences over
+  // kRateStepPx agree within kRateRelTol (their truncation, ~h^2/6 of the solution's
+  // third derivative, reaches 2e-3 of the rate where y's gradient is 20 px per unit of
+  // (u,v); the rate only predicts the next line's start). Not compared within
+  // kNearSilhouetteJn of a silhouette, where y along that line folds over close by, nor
+  // where y's gradient is under kMinGradPx per unit of (u,v) (near a maximum or saddle of
+  // y: 1.9 px per unit on the teapot's body made 1.3e-2).
+  constexpr double kOffLinePx = 0.1, kRateStepPx = 1e-2, kRateRelTol = 1e-2, kCollinearRel = 1e-9;
+  constexpr double kNearSilhouetteJn = 0.2, kMinGradPx = 10.0;
+  constexpr int kMaxTiltIterations = 4;
+  AtRandomPoints(7, [&](const TrackerCase& c, const ThetaFrame&, const Vec2& uv, int) {
+    const ScreenMap map(c.camera, c.surface.worldFromObject);
+    bool compared = false;
+    VisitShape(c.surface, [&](const auto& shape) {
+      const LevelPoint start = EvalLevelPoint(shape, map, uv);
+      if (!start.ok || std::abs(start.jn) < kNearSilhouetteJn || start.gradY.norm() < kMinGradPx) return;
+      const double ys = start.y + kOffLinePx;
+      LevelPoint p, lo, hi;
+      Vec2 rate;
+      std::int64_t iterations = 0, more = 0;
+      if (!SolveTiltTracker(shape, map, ys, uv, &p, &iterations, &rate) ||
+          !SolveTiltTracker(shape, map, ys - kRateStepPx, uv, &lo, &more) ||
+          !SolveTiltTracker(shape, map, ys + kRateStepPx, uv, &hi, &more))
+        return;  // left the patch
+      compared = true;
+      EXPECT_NEAR(p.y, ys, kEdgeTolPx) << c.name << " at " << uv.transpose();
+      EXPECT_LE(iterations, kMaxTiltIterations) << c.name << " at " << uv.transpose();
+      EXPECT_TRUE(p.second) << c.name;
+      const Vec2 moved = p.uv - uv, g = start.gradY;
+      EXPECT_LE(std::abs(moved.x() * g.y() - moved.y() * g.x()), kCollinearRel * moved.norm() * g.norm())
+          << c.name << " at " << uv.transpose();
+      const Vec2 fd = (hi.uv - lo.uv) / (2.0 * kRateStepPx);
+      EXPECT_LE((rate - fd).norm(), kRateRelTol * fd.norm()) << c.name << " at " << uv.transpose();
+    });
+    return compared;
+  });
+}
+
 TEST(ThetaTracker, RatesAlongTheLinesPredictTheNextLine) {
   // ThetaWalker::PredictedStart: a θ or turn tracker solved on the line before carries its
   // rate d(u,v)/d(ys) (RateAlongLines of its Jacobian), and the next line's start is the
