@@ -109,7 +109,9 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
                   "chords; tess = tessellated with OpenSubdiv's Bfr::Tessellation pattern");
   cmd->add_option("--theta-steps", o->thetaSteps,
                   "theta mode: tabulated normal angles per turn of a cross-section (chord error "
-                  "R (1 - cos(pi/N)) pixels for a section of radius R pixels)")
+                  "R (1 - cos(pi/N)) pixels for a section of radius R pixels); with chains on "
+                  "every row, a surface whose chains hold more vertices per sample than exact "
+                  "samples cost takes the exact scan instead")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
   cmd->add_option("--y-step", o->yStep,

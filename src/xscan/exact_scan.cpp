@@ -40,6 +40,12 @@ struct ExactScan::Active {
   SurfaceScan::State topState;
   ChainSet carry;
   double carryY = 0.0;
+  // θ rows: the vertices of the surface's chains that are solved by Newton (not their ends
+  // and silhouettes: the Y scan's trackers) and the samples they covered, summed over its
+  // rows so far, and whether it has gone over to the exact X scan for good (where its
+  // chains hold more such vertices per sample than kThetaVerticesPerSampleMax).
+  long thetaVertices = 0, thetaSamples = 0;
+  bool exactX = false;
   RowTrackers topTrackers;
   std::vector<RowTrackers> rowTrackers;
   std::vector<ChainSet> rows;
@@ -60,6 +66,17 @@ constexpr double kMaxUvPerPixel = 1.0;
 // θ slabs are not taken this near (pixels) a degenerate level set: dark pixels were
 // measured up to 1.5 px from a cone point's row at 64 steps.
 constexpr double kDegenerateSlabPx = 2.0;
+
+// θ rows: a chain vertex costs about as much as this many samples of the exact X scan
+// (which solves each sample by Newton; a θ chain's samples are interpolated along its
+// chords, ~0.1 of an exact sample each): teapot 1024x768 aa 1, 64 steps, callgrind:
+// ~7.5 k instructions per vertex advanced (θ, tilt and turn trackers, link checks and
+// repairs, amortised fresh crawls), ~3.0 k per exact sample. A surface whose chains have
+// held more vertices per sample than this, over at least kThetaShareMinSamples samples,
+// costs more by θ than exactly: it goes over to the exact X scan for the rest of its rows
+// (its samples then exact: no worse). The teaspoon at 64 steps has one vertex per sample.
+constexpr double kThetaVerticesPerSampleMax = 0.5;
+constexpr long kThetaShareMinSamples = 64;
 
 Vec2 ClampLength(const Vec2& v, double len) {
   const double n = v.norm();
@@ -181,7 +198,7 @@ template <class Take>
 void ExactScan::WalkSurface(Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
                             raster::FragmentRow& out, Take&& take) {
   walkEvents_.Clear();
-  if (options_.thetaSteps > 0) {
+  if (options_.thetaSteps > 0 && !a.exactX) {
     VisitTheta(a, y, columns, [&](auto& walker, auto&& make) {
       walker.WalkAll(t, &edgeUsed_, &silUsed_, &chain_, make, take);
     });
@@ -235,7 +252,7 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
     Active& a = *ap;
     const long events = a.scan->Events();
     AdvanceTo(a, y);
-    if (options_.thetaSteps == 0) {
+    if (options_.thetaSteps == 0 || a.exactX) {
       WalkSurface(a, y, a.scan->Trackers(), columns, out, [](std::span<const ThetaVertex>, bool) {});
       continue;
     }
@@ -245,8 +262,20 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
     // decides alone (its chains are its own), so a partition of the scene changes nothing.
     const bool calm = a.lineWalked && !a.lineBroken && Calm(a, events, a.lineY, y);
     const bool advanced = AdvanceOrWalk(a, calm ? &a.line : nullptr, a.lineY, y, a.scan->Trackers(), &a.next, columns, out);
-    for (const ChainSet::Chain& c : a.next.chains)
-      counters_[Counter::Fragments] += EmitThetaChain(a.next.Of(c), columns, camera_.orthographic, out);
+    long samples = 0;
+    for (const ChainSet::Chain& c : a.next.chains) samples += EmitThetaChain(a.next.Of(c), columns, camera_.orthographic, out);
+    counters_[Counter::Fragments] += samples;
+    // The exact X scan from the next row on where the chains cost more (each surface
+    // decides alone, from its own rows: a partition of the scene changes nothing).
+    a.thetaVertices += std::count_if(a.next.v.begin(), a.next.v.end(), [](const ThetaVertex& v) {
+      return v.kind != ThetaVertex::Kind::End && v.kind != ThetaVertex::Kind::Silhouette;
+    });
+    a.thetaSamples += samples;
+    if (options_.exactWhereCheaper && a.thetaSamples >= kThetaShareMinSamples &&
+        static_cast<double>(a.thetaVertices) > kThetaVerticesPerSampleMax * static_cast<double>(a.thetaSamples)) {
+      a.exactX = true;
+      ++counters_[Counter::ThetaExactSurfaces];
+    }
     std::swap(a.line, a.next);
     a.lineBroken = !advanced && WalkBroken();
     a.lineWalked = true;

@@ -39,6 +39,11 @@ struct ExactScanOptions {
   // as triangles (theta_slab.h); where the lines' chains do not pair up, or the Y scan
   // has an event between them, every sample row between them takes its own chains.
   int slabRows = 0;
+  // θ rows: a surface whose chains hold more Newton-solved vertices per sample than
+  // samples of the exact X scan cost (exact_scan.cpp: kThetaVerticesPerSampleMax) takes
+  // the exact X scan from then on. Off: every surface keeps its chains (tests of the θ
+  // scan's own error).
+  bool exactWhereCheaper = true;
 };
 
 // A surface as the scan meets it: its index, and the y extent and area (pixels) of its

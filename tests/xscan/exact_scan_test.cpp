@@ -199,6 +199,7 @@ ThetaAgreement CompareTheta(std::span<const Surface> surfaces, const Camera& cam
   ThetaAgreement a;
   ExactScanOptions theta;
   theta.thetaSteps = steps;
+  theta.exactWhereCheaper = false;  // the θ scan's own error
   Counters st;
   const auto exact = NearestImage(surfaces, camera, {});
   const auto sampled = NearestImage(surfaces, camera, theta, &st);
@@ -344,6 +345,7 @@ class ChainChecker final : public ThetaChainSink {
 bool ScanEveryRow(std::span<const Surface> surfaces, const Camera& camera, int steps, ThetaChainSink& sink) {
   ExactScanOptions o;
   o.thetaSteps = steps;
+  o.exactWhereCheaper = false;  // every row's chains
   ExactScan scan(surfaces, camera, o);
   scan.SetThetaChainSink(&sink);
   const raster::SampleColumns cols{0.5, 1.0, camera.width};

@@ -402,6 +402,28 @@ TEST(ThetaRows, TiltVerticesAreCarriedFromRowToRow) {
   EXPECT_EQ(st[Counter::Failures], 0);
 }
 
+TEST(ThetaRows, ASurfaceWhoseChainsCostMoreThanExactSamplesGoesExact) {
+  // A surface whose chains hold more Newton-solved vertices per sample covered than
+  // kThetaVerticesPerSampleMax (many angles on a surface few samples wide) takes the exact
+  // X scan from then on: its layers stay exact mode's. At 64 steps most of the teaspoon's
+  // narrow patches do (13 of 16 at this size); at 4 steps few of the teapot's (1 of 32 at
+  // this size, none at 1024x768).
+  const Scene spoon = Load("teaspoon.bpt");
+  const auto fine = CompareWithExact(spoon, Framed(spoon, Vec3(0, 1, 0), 192), 0.5, 64, 0, 1);
+  std::cout << "teaspoon, 64 steps: " << fine.stats[Counter::ThetaExactSurfaces] << " of "
+            << fine.stats[Counter::SurfacesSetUp] << " surfaces went exact; " << fine.differ << " of " << fine.covered
+            << " samples' layers differ from exact away from an edge\n";
+  EXPECT_GT(fine.stats[Counter::ThetaExactSurfaces], 0);
+  EXPECT_LT(fine.stats[Counter::ThetaExactSurfaces], fine.stats[Counter::SurfacesSetUp]);
+  EXPECT_EQ(fine.differ, 0);
+  EXPECT_EQ(fine.stats[Counter::Failures], 0);
+  const Scene pot = Load("teapot.bpt");
+  const auto coarse = CompareWithExact(pot, Framed(pot, Vec3(0, 0, 1), 192), 0.5, 4, 0, 1);
+  std::cout << "teapot, 4 steps: " << coarse.stats[Counter::ThetaExactSurfaces] << " of "
+            << coarse.stats[Counter::SurfacesSetUp] << " surfaces went exact\n";
+  EXPECT_LE(coarse.stats[Counter::ThetaExactSurfaces], coarse.stats[Counter::SurfacesSetUp] / 8);
+}
+
 TEST(ThetaSlab, ASurfaceWithAnEventInAnIntervalWalksNoLine) {
   // A surface whose Y scan has an event in an interval goes row by row whatever its lines'
   // chains are, so it walks or advances neither of them (but its top line, when it is set
