@@ -67,14 +67,15 @@ constexpr double kMaxUvPerPixel = 1.0;
 // measured up to 1.5 px from a cone point's row at 64 steps.
 constexpr double kDegenerateSlabPx = 2.0;
 
-// θ rows: a chain vertex costs about as much as this many samples of the exact X scan
-// (which solves each sample by Newton; a θ chain's samples are interpolated along its
-// chords, ~0.1 of an exact sample each): teapot 1024x768 aa 1, 64 steps, callgrind:
-// ~7.5 k instructions per vertex advanced (θ, tilt and turn trackers, link checks and
-// repairs, amortised fresh crawls), ~3.0 k per exact sample. A surface whose chains have
-// held more vertices per sample than this, over at least kThetaShareMinSamples samples,
-// costs more by θ than exactly: it goes over to the exact X scan for the rest of its rows
-// (its samples then exact: no worse). The teaspoon at 64 steps has one vertex per sample.
+// θ rows: the most Newton-solved chain vertices per sample covered at which a surface's
+// chains still cost less than the exact X scan. A vertex advanced costs ~7.5 k
+// instructions (θ, tilt and turn trackers, link checks and repairs, amortised fresh
+// crawls), an exact sample's Newton solve ~3.0 k, a sample interpolated along a chord
+// ~0.3 k (teapot 1024x768 aa 1, 64 steps, callgrind): even at ~0.36; counted whole
+// renders chose 0.5 of 0.3, 0.5 and 0.7 (teapot θ16 and θ64, teaspoon θ32 and θ64). A
+// surface over it, once its rows have covered kThetaShareMinSamples samples, goes over to
+// the exact X scan for the rest of its rows (its samples then exact: no worse). The
+// teaspoon at 64 steps has one vertex per sample.
 constexpr double kThetaVerticesPerSampleMax = 0.5;
 constexpr long kThetaShareMinSamples = 64;
 
