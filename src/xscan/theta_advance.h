@@ -217,12 +217,13 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
             // The crawl starts from the last vertex before any tilt vertices: a tilt
             // vertex, riding the surface, may have overtaken b (the crawl from it would
             // never meet b), and the crawl puts tilt vertices where they are due.
-            if (to->v.back().kind == ThetaVertex::Kind::Tilt && to->v.size() > begin + 1) {
-              while (to->v.back().kind == ThetaVertex::Kind::Tilt && to->v.size() > begin + 1) {
-                to->v.pop_back();
-                to->before.pop_back();
-                to->rate.pop_back();
-              }
+            bool popped = false;
+            for (; to->v.back().kind == ThetaVertex::Kind::Tilt && to->v.size() > begin + 1; popped = true) {
+              to->v.pop_back();
+              to->before.pop_back();
+              to->rate.pop_back();
+            }
+            if (popped) {
               last = this->Eval(to->v.back().uv, DerivOrder::Second);
               if (to->v.back().kind == ThetaVertex::Kind::Silhouette) last.jn = 0.0;
             }
