@@ -219,6 +219,8 @@ class FragmentGeometry final : public FragmentRow {
   // averaged: the surface at their centroid to second order. A group with slab samples
   // takes the slab triangle of the sample nearest the centroid, at the centroid.
   Fragment GroupFragment(const Rows& rows, const Member* m, int n, double cx, double cy) const {
+    // A lone exact or chord sample (every pixel at aa 1): its own fragment, no search.
+    if (n == 1 && m[0].smp.handle < kTriangleHandle) return FragmentOf(rows, m[0], lat_.At(m[0].i));
     int nearest = -1;
     double best = INFINITY;
     const auto consider = [&](int k) {
@@ -238,7 +240,6 @@ class FragmentGeometry final : public FragmentRow {
     if (nearest < 0)
       for (int k = 0; k < n; ++k) consider(k);
     if (nearest >= 0) return store_.Interpolate(m[nearest].smp.handle - kTriangleHandle, cx, cy);
-    if (n == 1) return FragmentOf(rows, m[0], lat_.At(m[0].i));  // a lone sample (every pixel at aa 1)
     // The members come row by row, each row's from left to right: a run of samples of one
     // chord is taken at its mean column, once (a chord's attributes are smooth along it,
     // so to second order as their mean), weighted by its length.

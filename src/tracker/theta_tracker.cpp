@@ -10,9 +10,16 @@ namespace {
 struct WorldNormal {
   Vec3 pu, pv, n, nu, nv;
 };
-WorldNormal WorldNormalOf(const SurfaceDerivs& o, const Affine3& worldFromObject) {
-  const auto L = worldFromObject.linear();
+WorldNormal WorldNormalOf(const SurfaceDerivs& o, const ThetaFrame& frame) {
   WorldNormal w;
+  if (frame.worldIsObject) {
+    w.pu = o.dpdu, w.pv = o.dpdv;
+    w.n = w.pu.cross(w.pv);
+    w.nu = o.d2pdu2.cross(w.pv) + w.pu.cross(o.d2pduv);
+    w.nv = o.d2pduv.cross(w.pv) + w.pu.cross(o.d2pdv2);
+    return w;
+  }
+  const auto L = frame.World().linear();
   w.pu = L * o.dpdu;
   w.pv = L * o.dpdv;
   const Vec3 puu = L * o.d2pdu2, puv = L * o.d2pduv, pvv = L * o.d2pdv2;
@@ -26,10 +33,9 @@ WorldNormal WorldNormalOf(const SurfaceDerivs& o, const Affine3& worldFromObject
 // TableFunction at `angle`, or (null) at the point's own angle θ: (cos θ, sin θ) = (S, T) /
 // |(S, T)|, with the normal, the view ray and s found once for both (NaN where the normal
 // is across the scan plane).
-TableResidual TableAt(const SurfaceDerivs& o, const Affine3& worldFromObject, const ThetaFrame& frame,
-                      const Vec2* angle) {
-  const Vec3 p = worldFromObject * o.p;
-  const WorldNormal w = WorldNormalOf(o, worldFromObject);
+TableResidual TableAt(const SurfaceDerivs& o, const ThetaFrame& frame, const Vec2* angle) {
+  const Vec3 p = frame.worldIsObject ? o.p : Vec3(frame.World() * o.p);
+  const WorldNormal w = WorldNormalOf(o, frame);
   const Vec3 &n = w.n, &nu = w.nu, &nv = w.nv, &pu = w.pu, &pv = w.pv;
   // The view ray r and its derivatives along the surface (zero in orthographic).
   Vec3 r, ru = Vec3::Zero(), rv = Vec3::Zero();
@@ -72,20 +78,18 @@ TableResidual TableAt(const SurfaceDerivs& o, const Affine3& worldFromObject, co
 
 }  // namespace
 
-TableResidual TableFunction(const SurfaceDerivs& o, const Affine3& worldFromObject, const ThetaFrame& frame,
-                            const Vec2& angle) {
-  return TableAt(o, worldFromObject, frame, &angle);
+TableResidual TableFunction(const SurfaceDerivs& o, const ThetaFrame& frame, const Vec2& angle) {
+  return TableAt(o, frame, &angle);
 }
 
-double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const Affine3& worldFromObject,
-                    const ThetaFrame& frame) {
+double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const ThetaFrame& frame) {
   // At the point's own angle θ, G_θ = 0 and G_φ/|N| = ρ sin(φ - θ) with ρ the in-plane part
   // of the unit normal, so G_θ's gradient at fixed φ = θ is -ρ ∇θ.
-  return TurnRate(TableAt(object, worldFromObject, frame, nullptr), gradY);
+  return TurnRate(TableAt(object, frame, nullptr), gradY);
 }
 
-Vec3 NormalSlope(const SurfaceDerivs& o, const Vec2& duv, const Affine3& worldFromObject) {
-  const WorldNormal w = WorldNormalOf(o, worldFromObject);
+Vec3 NormalSlope(const SurfaceDerivs& o, const Vec2& duv, const ThetaFrame& frame) {
+  const WorldNormal w = WorldNormalOf(o, frame);
   const double len = w.n.norm();
   if (!(len > kCollapsedRel * w.pu.norm() * w.pv.norm())) return Vec3::Constant(NAN);  // FragmentAt's limit normal
   const Vec3 N = w.n / len, dn = w.nu * duv.x() + w.nv * duv.y();

@@ -35,6 +35,10 @@ struct ThetaFrame {
   // and (cos θ_i, sin θ_i) for i < N (empty: computed when needed).
   const Affine3* worldFromObject = nullptr;
   std::span<const Vec2> angles;
+  // Whether that map is the identity (a patch file's surfaces, an untransformed cage): the
+  // trackers then take object derivatives as world ones, without the products. False is
+  // always right, only slower.
+  bool worldIsObject = false;
   // θ of world normal n at world point p, in (-π, π].
   double Theta(const Vec3& p, const Vec3& n) const {
     const Vec3 r = Ray(p);
@@ -80,15 +84,13 @@ struct TableResidual {
   double g = 0.0, along = 0.0, t = 0.0;
   Vec2 grad = Vec2::Zero();
 };
-TableResidual TableFunction(const SurfaceDerivs& object, const Affine3& worldFromObject, const ThetaFrame& frame,
-                            const Vec2& angle);
+TableResidual TableFunction(const SurfaceDerivs& object, const ThetaFrame& frame, const Vec2& angle);
 
 // §4.3's turn function: θ's derivative along the level curve y = const at a surface
 // point, per unit (u,v) length along the curve's tangent (-y_v, y_u)/|∇y| (radians per
 // unit of (u,v)); zero at a turn point. NaN where the normal is perpendicular to the scan
 // plane (θ undefined). `gradY` is screen y's (u,v) gradient there.
-double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const Affine3& worldFromObject,
-                    const ThetaFrame& frame);
+double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const ThetaFrame& frame);
 // The same from G_i's residual at a point where θ = θ_i (a solved θ tracker): there G_i's
 // gradient is -ρ ∇θ, with ρ = `along`.
 double TurnRate(const TableResidual& atOwnAngle, const Vec2& gradY);
@@ -97,7 +99,7 @@ double TurnRate(const TableResidual& atOwnAngle, const Vec2& gradY);
 // derivatives `o` as (u,v) moves by `duv` (LevelPoint::UvPerPixelAlongRow: per pixel along
 // the scan line, the tangent a θ chain's vertex gives its chords). NaN where undefined: a
 // collapsed normal, or an infinite duv (on the silhouette).
-Vec3 NormalSlope(const SurfaceDerivs& o, const Vec2& duv, const Affine3& worldFromObject);
+Vec3 NormalSlope(const SurfaceDerivs& o, const Vec2& duv, const ThetaFrame& frame);
 
 // A turn tracker's turn function is solved to this (radians per unit of (u,v)): where θ
 // turns at a rate of 1 per unit² of (u,v) (a gentle crinkle), the point is within 1e-7 of
@@ -123,7 +125,7 @@ constexpr int kThetaMaxIterations = 12;
 template <class ShapeT>
 double TurnAt(const ShapeT& shape, const ScreenMap& map, const ThetaFrame& frame, const Vec2& uv) {
   const LevelPoint p = EvalLevelPoint(shape, map, uv, DerivOrder::Second);
-  return p.ok ? TurnFunction(p.object, p.gradY, frame.World(), frame) : NAN;
+  return p.ok ? TurnFunction(p.object, p.gradY, frame) : NAN;
 }
 
 // A tracker's rate along the scan lines, d(u,v)/d(ys), from its system's Jacobian J at the
@@ -145,7 +147,6 @@ template <class ShapeT>
 bool SolveThetaTracker(const ShapeT& shape, const ScreenMap& map, double ys, const ThetaFrame& frame,
                        const Vec2& angle, const Vec2& start, LevelPoint* out, std::int64_t* iterations,
                        TableResidual* residual = nullptr, Vec2* rate = nullptr) {
-  const Affine3& world = frame.World();
   NewtonOptions opt;
   opt.maxIterations = kThetaMaxIterations;
   opt.domain = DomainRule::Fail;  // a tracker leaving [0,1]² has left the patch
@@ -153,7 +154,7 @@ bool SolveThetaTracker(const ShapeT& shape, const ScreenMap& map, double ys, con
   const auto r = SolveNewton2(
       [&](const Vec2& uv, Vec2* f, Mat2* jac) {
         *out = EvalLevelPoint(shape, map, uv, DerivOrder::Second);
-        const TableResidual g = TableFunction(out->object, world, frame, angle);
+        const TableResidual g = TableFunction(out->object, frame, angle);
         if (residual) *residual = g;
         *f = Vec2(out->y - ys, g.g);
         jac->row(0) = out->gradY.transpose();
@@ -169,7 +170,7 @@ bool SolveThetaTracker(const ShapeT& shape, const ScreenMap& map, double ys, con
   if (r.status != NewtonStatus::Converged) return false;
   if (out->uv != r.uv) {
     *out = EvalLevelPoint(shape, map, r.uv, DerivOrder::Second);
-    const TableResidual g = TableFunction(out->object, world, frame, angle);
+    const TableResidual g = TableFunction(out->object, frame, angle);
     if (residual && out->ok) *residual = g;
     last.row(0) = out->gradY.transpose();
     last.row(1) = g.grad.transpose();
@@ -186,7 +187,6 @@ bool SolveThetaTracker(const ShapeT& shape, const ScreenMap& map, double ys, con
 template <class ShapeT>
 bool SolveTurnTracker(const ShapeT& shape, const ScreenMap& map, double ys, const ThetaFrame& frame,
                       const Vec2& start, LevelPoint* out, std::int64_t* iterations, Vec2* rate = nullptr) {
-  const Affine3& world = frame.World();
   NewtonOptions opt;
   opt.maxIterations = kThetaMaxIterations;
   opt.domain = DomainRule::Fail;
@@ -201,7 +201,7 @@ bool SolveTurnTracker(const ShapeT& shape, const ScreenMap& map, double ys, cons
   const auto r = SolveNewton2(
       [&](const Vec2& uv, Vec2* f, Mat2* jac) {
         *out = EvalLevelPoint(shape, map, uv, DerivOrder::Second);
-        const double tau = out->ok ? TurnFunction(out->object, out->gradY, world, frame) : NAN;
+        const double tau = out->ok ? TurnFunction(out->object, out->gradY, frame) : NAN;
         *f = Vec2(out->y - ys, tau);
         jac->row(0) = out->gradY.transpose();
         Vec2 grad = gradKnown;

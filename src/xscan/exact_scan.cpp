@@ -176,7 +176,8 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
   const Surface& surface = surfaces_[a.index];
   VisitShape(surface, [&](const auto& shape) {
     using ShapeT = std::decay_t<decltype(shape)>;
-    const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_};
+    const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_,
+                           surface.worldFromObject.matrix().isIdentity(0.0)};
     ThetaWalker<ShapeT> walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_, thetaTable_, frame);
     walker.SetChainSink(chainSink_);
     walker.SetNormalSlopes(true);

@@ -332,7 +332,7 @@ bool ThetaWalker<ShapeT>::Advance(const ChainSet& from, double dy, const RowTrac
       if (V.kind == ThetaVertex::Kind::Table) {
         rate = sense * TurnRate(residual, p.gradY);
       } else if (V.kind != ThetaVertex::Kind::Turn) {
-        rate = sense * TurnFunction(p.object, p.gradY, frame_.World(), frame_);  // TurnAt(p.uv), p evaluated
+        rate = sense * TurnFunction(p.object, p.gradY, frame_);  // TurnAt(p.uv), p evaluated
       }
       if (!link(k, MakeVertex(p, make, V.kind, V.index), p, rate, uvRate)) return false;
     }

@@ -268,7 +268,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
         const Vec2 duv = p.UvPerPixelAlongRow();
         const Vec3 dpdx = p.object.dpdu * duv.x() + p.object.dpdv * duv.y();  // object space
         v.dwdx = this->map_.ViewDepthChange(dpdx);
-        v.dndx = NormalSlope(*o, duv, frame_.World());
+        v.dndx = NormalSlope(*o, duv, frame_);
         v.tiltRate = v.dndx.dot(plane) / std::cos(v.tilt);
         v.silhouetteX = SilhouetteX(v, ray, plane, frame_.World().linear() * dpdx);
       }
@@ -293,7 +293,7 @@ class ThetaWalker : public LevelWalker<ShapeT> {
       return d.x() * d.x() * s.d2pdu2[k] + 2.0 * d.x() * d.y() * s.d2pduv[k] + d.y() * d.y() * s.d2pdv2[k];
     };
     const double xpp = along(0) - lambda * along(1);
-    const Vec3 dn = NormalSlope(o, d, frame_.World());
+    const Vec3 dn = NormalSlope(o, d, frame_);
     const double facing = -dn.dot(ray);
     if (!(std::abs(xpp) > 0.0) || !(std::abs(facing) > 0.0) || !std::isfinite(xpp)) return;
     const double perRoot = (facing > 0.0 ? 1.0 : -1.0) * std::sqrt(2.0 / std::abs(xpp));
