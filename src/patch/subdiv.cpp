@@ -309,6 +309,8 @@ std::optional<GregoryPatch> FitGregory(const At& at, double tol) {
 // FitGregory), independently of how it orders and builds its points: the face whole, else
 // each quadrant, else each quarter of a quadrant; what fits neither is left to Bfr.
 struct BicubicPieces {
+  // The 4 x 4 grid of quarters: at most this many pieces of either kind.
+  static constexpr int kCells = 16;
   std::vector<BicubicPatch> patches;
   // Per cell of the 4 x 4 grid of quarters, [4 j + i] for u in quarter i and v in quarter j:
   // the patch covering it (-1: none, Bfr) and that patch's level (0: the whole face, over
@@ -673,16 +675,22 @@ void SubdivFace::EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDeri
   EvaluateMapped(face.surface, face.patchPoints.data(), map_, u, v, order, out);
 }
 
-bool SubdivFace::BicubicAt(double u, double v) const { return BicubicPieceAt(u, v) >= 0; }
+bool SubdivFace::BicubicAt(double u, double v) const {
+  const BicubicPieces* pc = Pieces(cage_->Data(face_));
+  return pc && pc->PatchAt(u, v) >= 0;
+}
 
 bool SubdivFace::GregoryAt(double u, double v) const {
   const BicubicPieces* pc = Pieces(cage_->Data(face_));
   return pc && pc->GregoryAt(u, v) >= 0;
 }
 
-int SubdivFace::BicubicPieceAt(double u, double v) const {
+int SubdivFace::PieceAt(double u, double v) const {
   const BicubicPieces* pc = Pieces(cage_->Data(face_));
-  return pc ? pc->PatchAt(u, v) : -1;
+  if (!pc) return -1;
+  if (const int k = pc->PatchAt(u, v); k >= 0) return k;
+  const int g = pc->GregoryAt(u, v);
+  return g >= 0 ? BicubicPieces::kCells + g : -1;  // after every bicubic's index
 }
 
 int SubdivFace::BicubicCover(std::array<const BicubicPatch*, 16>* out) const {

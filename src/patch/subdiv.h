@@ -102,10 +102,12 @@ class SubdivFace {
   void EvaluateByBfr(double u, double v, DerivOrder order, SurfaceDerivs* out) const;
   // Whether Evaluate takes a bicubic at (u, v) (prepares the face).
   bool BicubicAt(double u, double v) const;
-  // Which of the fitted bicubic pieces Evaluate takes at (u, v), as an index that two points
-  // share exactly when one polynomial serves both; -1 where Bfr's evaluation serves (or
-  // before a fitting hold). Prepares the face.
-  int BicubicPieceAt(double u, double v) const;
+  // Which fitted piece, bicubic or Gregory, Evaluate takes at (u, v), as an index two points
+  // share exactly when one piece serves both; -1 where Bfr's evaluation serves (or before a
+  // fitting hold). Along the face's edges every such piece is one cubic in the edge's
+  // parameter: a Gregory patch's boundary curves are the cubic Bézier curves of its
+  // boundary points (its blended interior points weigh nothing there). Prepares the face.
+  int PieceAt(double u, double v) const;
   // Whether a hold has fitted the (sub-)face as bicubic pieces in every cell; if so the
   // pieces (each over its own [0,1]^2, a square of the face's (u, v) scaled by a positive
   // factor), at most 16, in *out, and how many. -1 when a cell is a Gregory patch or Bfr's.

@@ -69,8 +69,9 @@ double PredictedStart(const EdgeTracker& tr, double yNext, double tolerancePx, Y
 // Edge e cut where the shape's evaluation changes polynomial: span k is [breaks[k],
 // breaks[k + 1]], and cubic[k] says the shape evaluates one polynomial of degree <= 3 in t
 // there. A bicubic patch's edge (any basis) or a bilinear one's is one cubic span; a
-// subdivision face's has one span per fitted bicubic piece along it and one per quarter
-// that Bfr evaluates (its irregular cells); any other shape's edge is one span, not cubic.
+// subdivision face's has one span per fitted piece along it (a bicubic, or a Gregory patch
+// at an extraordinary corner, whose boundary curves are cubics) and one per quarter that
+// Bfr evaluates; any other shape's edge is one span, not cubic.
 struct EdgeSpans {
   int n = 1;
   std::array<double, 5> breaks{0.0, 1.0};
@@ -86,7 +87,7 @@ EdgeSpans SpansOf(const ShapeT& shape, PatchEdge e) {
     spans.n = 0;
     for (int q = 0, last = -1; q < 4; ++q) {  // the pieces are fitted per quarter of the domain
       const Vec2 uv = EdgePoint(e, (q + 0.5) / 4.0);
-      const int k = shape.BicubicPieceAt(uv.x(), uv.y());
+      const int k = shape.PieceAt(uv.x(), uv.y());
       if (k < 0 || k != last) {
         spans.breaks[static_cast<std::size_t>(spans.n)] = q / 4.0;
         spans.cubic[static_cast<std::size_t>(spans.n++)] = k >= 0;

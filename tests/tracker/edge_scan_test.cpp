@@ -86,14 +86,16 @@ TEST(EdgeScan, TrackersMatchBruteForceRootsOnTheTeapot) {
 }
 
 // Where the surface is a cubic polynomial along an edge (a bicubic patch; a subdivision
-// face's fitted pieces) a span whose Bernstein form of y_t's numerator has one sign is
-// taken as monotone without sampling; the edge's pieces must be exactly those of sampling
-// the whole edge. Checked on every teapot patch and every face of a wavy grid (regular),
-// a torus cage with extraordinary vertices (fitted pieces and Bfr's cells along one edge)
-// and a pyramid (n-gon sub-faces), each seen from four sides in perspective and once
-// orthographically; and the proof must carry: 1038 of these 2420 edges are proven whole
-// (the others turn, or run along Bfr's cells, or lie level on the screen in the
-// orthographic view, where y_t is rounding and sampling finds its noise pieces).
+// face's fitted pieces, bicubic or Gregory) a span whose Bernstein form of y_t's numerator
+// has one sign is taken as monotone without sampling; the edge's pieces must be exactly
+// those of sampling the whole edge. Checked on every teapot patch and every face of a wavy
+// grid (regular), a torus cage with extraordinary vertices (fitted pieces and Bfr's cells
+// along one edge) and a pyramid (n-gon sub-faces), each seen from four sides in
+// perspective and once orthographically; and the proof must carry: 1427 of these 2420
+// edges are proven whole, more than half (1038 with the bicubic spans alone: the
+// Gregory patches' spans count), the others turn, or run along Bfr's cells, or lie level
+// on the screen in the orthographic view, where y_t is rounding and sampling finds its
+// noise pieces.
 TEST(EdgeScan, ProvenMonotoneSpansCutEdgesAsSamplingDoes) {
   std::vector<Surface> surfaces = Teapot(64, 48).scene.surfaces;
   for (const SubdivMesh& mesh : {test::Grid(4, 1), test::Torus(8, 6), test::Pyramid(5)})
@@ -144,7 +146,7 @@ TEST(EdgeScan, ProvenMonotoneSpansCutEdgesAsSamplingDoes) {
   RecordProperty("edges", std::to_string(edges));
   RecordProperty("proven_monotone", std::to_string(proven));
   EXPECT_GT(cut, 0);             // some edges turn, and are cut where sampling cuts them
-  EXPECT_GT(proven, edges / 3);  // and many are proven whole
+  EXPECT_GT(proven, edges / 2);  // and many are proven whole
 }
 
 TEST(EdgeScan, ExtrapolationCutsNewtonIterations) {
