@@ -110,8 +110,10 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderOptions* o) {
   cmd->add_option("--theta-steps", o->thetaSteps,
                   "theta mode: tabulated normal angles per turn of a cross-section (chord error "
                   "R (1 - cos(pi/N)) pixels for a section of radius R pixels); with chains on "
-                  "every row, a surface whose chains hold more vertices per sample than exact "
-                  "samples cost takes the exact scan instead")
+                  "every row, a surface whose normal turns through more than 0.1 of a step per "
+                  "pixel of its extent on the screen, or whose chains come to hold more vertices "
+                  "per sample than exact samples cost, takes the exact scan instead (cheaper there; "
+                  "--stats: theta_exact_surfaces)")
       ->check(CLI::Range(1, 4096))
       ->capture_default_str();
   cmd->add_option("--y-step", o->yStep,

@@ -79,6 +79,44 @@ constexpr double kDegenerateSlabPx = 2.0;
 constexpr double kThetaVerticesPerSampleMax = 0.5;
 constexpr long kThetaShareMinSamples = 64;
 
+// θ rows: a surface whose normal turns through more θ steps per pixel of its extent on the
+// screen than this (ThetaStepsPerPixel) takes the exact X scan from its first row, before
+// its rows could tell: the judgement above waits for kThetaShareMinSamples, half of a
+// small surface, and a surface's first rows (near its top) hold more vertices per sample
+// than the rest. Its rows' vertices per sample came out 3 to 4 times it on the teapot,
+// teacup and teaspoon, 1.5 to 2 times on the torus cage (1024x768, 64 steps). Counted
+// whole renders at 1024x768 aa 1 (θ16, 32 and 64 on those four scenes) chose 0.1 of 0.08,
+// 0.1 and 0.12: the largest with no θ render costlier than exact mode's.
+constexpr double kThetaStepsPerPixelMax = 0.1;
+
+// The θ steps a surface's normal turns through per pixel of its extent on the screen: N x
+// (the largest angle between its world normals at (u, v) in {0.1, 0.5, 0.9}^2) / (2 pi x
+// the diagonal of those points' screen box). Its rows' chains hold about that many
+// vertices per sample, times a factor of the surface's shape. NaN where undefined (no
+// normal at those points). The points' box, not the hull's: a subdivision face's hull
+// (its ring of cage points) is several times the face.
+double ThetaStepsPerPixel(const Surface& surface, const ScreenMap& map, int steps) {
+  static constexpr double kAt[3] = {0.1, 0.5, 0.9};
+  const Mat3 normalFromObject = surface.worldFromObject.linear().inverse().transpose();
+  std::array<Vec3, 9> n;
+  Vec2 lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
+  VisitShape(surface, [&](const auto& shape) {
+    for (std::size_t k = 0; k < n.size(); ++k) {
+      SurfaceDerivs d;
+      shape.Evaluate(kAt[k % 3], kAt[k / 3], DerivOrder::First, &d);
+      n[k] = (normalFromObject * d.dpdu.cross(d.dpdv)).normalized();
+      ScreenDerivs sd;
+      map.FromObject(d, DerivOrder::Position, &sd);
+      lo = lo.cwiseMin(sd.p.head<2>());
+      hi = hi.cwiseMax(sd.p.head<2>());
+    }
+  });
+  double spread = 0.0;
+  for (std::size_t i = 0; i < n.size(); ++i)
+    for (std::size_t j = i + 1; j < n.size(); ++j) spread = std::max(spread, std::acos(std::clamp(n[i].dot(n[j]), -1.0, 1.0)));
+  return steps * spread / (2.0 * std::numbers::pi * (hi - lo).norm());
+}
+
 Vec2 ClampLength(const Vec2& v, double len) {
   const double n = v.norm();
   return std::isfinite(n) ? (n > len ? Vec2(v * (len / n)) : v) : Vec2(len, 0.0);
@@ -154,6 +192,11 @@ void ExactScan::Activate(const ScanEntry& entry, double y, double spacing) {
   a->yMax = entry.yMax;
   a->scan = std::make_unique<SurfaceScan>(surfaces_[index], camera_, options_.extrapolate, counters_);
   a->scan->StartAt(y, spacing);
+  if (options_.thetaSteps > 0 && options_.slabRows == 0 && options_.exactWhereCheaper &&
+      ThetaStepsPerPixel(surfaces_[index], a->scan->Map(), options_.thetaSteps) > kThetaStepsPerPixelMax) {
+    a->exactX = true;
+    ++counters_[Counter::ThetaExactSurfaces];
+  }
   active_.push_back(std::move(a));
   counters_.Raise(Counter::MaxActiveSurfaces, static_cast<std::int64_t>(active_.size()));
 }

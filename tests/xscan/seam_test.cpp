@@ -103,6 +103,7 @@ Image Render(const Surface& s, const Camera& cam, const ModeCase& m, int aa, con
     ExactScanOptions o;
     o.thetaSteps = m.thetaSteps;
     o.slabRows = m.slabRows < 0 ? aa : m.slabRows;
+    o.exactWhereCheaper = false;  // θ's own seams (exact mode's are its own case)
     ExactScan scan(surfaces, cam, o);
     EXPECT_TRUE(raster::RenderFragments(scan, rs, sink).has_value());
     // Known gap, not a seam (the same without the degenerate-line step): one walk given up.

@@ -405,9 +405,11 @@ TEST(ThetaRows, TiltVerticesAreCarriedFromRowToRow) {
 TEST(ThetaRows, ASurfaceWhoseChainsCostMoreThanExactSamplesGoesExact) {
   // A surface whose chains hold more Newton-solved vertices per sample covered than
   // kThetaVerticesPerSampleMax (many angles on a surface few samples wide) takes the exact
-  // X scan from then on: its layers stay exact mode's. At 64 steps most of the teaspoon's
-  // narrow patches do (13 of 16 at this size); at 4 steps few of the teapot's (1 of 32 at
-  // this size, none at 1024x768).
+  // X scan from then on, or, where its normal turns through many steps per pixel of its
+  // extent, from its first row: its layers stay exact mode's. At 64 steps most of the
+  // teaspoon's narrow patches do (15 of 16 at this size); at 4 steps few of the teapot's
+  // (1 of 32 at 384 px, none at 1024x768; its smallest patches, the knob's and the spout's
+  // tip, turn 0.1 steps a pixel at 192 px, as far as exact samples pay).
   const Scene spoon = Load("teaspoon.bpt");
   const auto fine = CompareWithExact(spoon, Framed(spoon, Vec3(0, 1, 0), 192), 0.5, 64, 0, 1);
   std::cout << "teaspoon, 64 steps: " << fine.stats[Counter::ThetaExactSurfaces] << " of "
@@ -418,10 +420,30 @@ TEST(ThetaRows, ASurfaceWhoseChainsCostMoreThanExactSamplesGoesExact) {
   EXPECT_EQ(fine.differ, 0);
   EXPECT_EQ(fine.stats[Counter::Failures], 0);
   const Scene pot = Load("teapot.bpt");
-  const auto coarse = CompareWithExact(pot, Framed(pot, Vec3(0, 0, 1), 192), 0.5, 4, 0, 1);
+  const auto coarse = CompareWithExact(pot, Framed(pot, Vec3(0, 0, 1), 384), 1.0, 4, 0, 1);
   std::cout << "teapot, 4 steps: " << coarse.stats[Counter::ThetaExactSurfaces] << " of "
             << coarse.stats[Counter::SurfacesSetUp] << " surfaces went exact\n";
   EXPECT_LE(coarse.stats[Counter::ThetaExactSurfaces], coarse.stats[Counter::SurfacesSetUp] / 8);
+}
+
+TEST(ThetaRows, ASurfaceWhoseNormalTurnsManyStepsPerPixelIsExactFromItsFirstRow) {
+  // A surface whose normal turns through many θ steps per pixel of its extent (N x the
+  // spread of its normals / (2 pi x its screen extent): a sphere some 15 px across at 64
+  // steps, about 1.5) takes the exact X scan from its first row: no chain is ever crawled
+  // and its layers are exact mode's. Hundreds of pixels across at 4 steps (about 0.005) it
+  // stays θ.
+  const std::vector<Surface> sphere = {Surface{Sphere(1.0, -1.0, 1.0, 360), Affine3::Identity()}};
+  const Vec3 eye(3, -2, 1.5);
+  Counters small, exactStats;
+  const std::vector<int> exact = Layers(sphere, View(eye, 32), 0.5, 0, 0, &exactStats);
+  EXPECT_EQ(Layers(sphere, View(eye, 32), 0.5, 64, 0, &small), exact);
+  EXPECT_EQ(small[Counter::ThetaExactSurfaces], 1);
+  EXPECT_EQ(small[Counter::ThetaChains], 0);
+  EXPECT_EQ(small[Counter::ThetaRowsAdvanced], 0);
+  Counters large;
+  Layers(sphere, View(eye, 512), 1.0, 4, 0, &large);
+  EXPECT_EQ(large[Counter::ThetaExactSurfaces], 0);
+  EXPECT_GT(large[Counter::ThetaRowsAdvanced], 100);
 }
 
 TEST(ThetaSlab, ASurfaceWithAnEventInAnIntervalWalksNoLine) {
@@ -543,6 +565,7 @@ raster::ComparableImage RenderComparable(std::span<const Surface> surfaces, cons
   ExactScanOptions o;
   o.thetaSteps = thetaSteps;
   o.slabRows = slabRows;
+  o.exactWhereCheaper = false;  // θ's own error: no surface handed to the exact X scan
   ExactScan scan(surfaces, camera, o);
   test::KeepRows rows(camera.width);
   EXPECT_TRUE(raster::RenderFragments(scan, rs, rows).has_value());
