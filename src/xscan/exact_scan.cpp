@@ -92,9 +92,10 @@ constexpr double kThetaStepsPerPixelMax = 0.1;
 // The θ steps a surface's normal turns through per pixel of its extent on the screen: N x
 // (the largest angle between its world normals at (u, v) in {0.1, 0.5, 0.9}^2) / (2 pi x
 // the diagonal of those points' screen box). Its rows' chains hold about that many
-// vertices per sample, times a factor of the surface's shape. NaN where undefined (no
-// normal at those points). The points' box, not the hull's: a subdivision face's hull
-// (its ring of cage points) is several times the face.
+// vertices per sample, times a factor of the surface's shape. A point without a normal (a
+// collapsed edge) is left out of the spread; NaN when the box is a point and no normal
+// differs. The points' box, not the hull's: a subdivision face's hull (its ring of cage
+// points) is several times the face.
 double ThetaStepsPerPixel(const Surface& surface, const ScreenMap& map, int steps) {
   static constexpr double kAt[3] = {0.1, 0.5, 0.9};
   const Mat3 normalFromObject = surface.worldFromObject.linear().inverse().transpose();
