@@ -71,12 +71,18 @@ constexpr double kDegenerateSlabPx = 2.0;
 // chains still cost less than the exact X scan. A vertex advanced costs ~7.5 k
 // instructions (θ, tilt and turn trackers, link checks and repairs, amortised fresh
 // crawls), an exact sample's Newton solve ~3.0 k, a sample interpolated along a chord
-// ~0.3 k (teapot 1024x768 aa 1, 64 steps, callgrind): even at ~0.36; counted whole
-// renders chose 0.5 of 0.3, 0.5 and 0.7 (teapot θ16 and θ64, teaspoon θ32 and θ64). A
-// surface over it, once its rows have covered kThetaShareMinSamples samples, goes over to
-// the exact X scan for the rest of its rows (its samples then exact: no worse). The
-// teaspoon at 64 steps has one vertex per sample.
-constexpr double kThetaVerticesPerSampleMax = 0.5;
+// ~0.3 k (teapot 1024x768 aa 1, 64 steps, callgrind), and an exact walk of a row ~16 k
+// more than a chain advanced (fitted over the teapot, teaspoon and cage): even at ~0.36
+// on wide surfaces, higher on narrow ones. A surface over it, once its rows have covered
+// kThetaShareMinSamples samples, goes over to the exact X scan for the rest of its rows
+// (its samples then exact: no worse). Surfaces dense from the start are sent before
+// (kThetaStepsPerPixelMax), so this judges the rest, on their top rows: counted whole
+// renders (1024x768 aa 1: teapot θ16, 32, 64; teaspoon θ4, 32, 64; teacup θ64; cage θ32,
+// 64) chose 0.7 of 0.5, 0.7, 0.9 and 1.2 (0.5 before the prediction): 0.9 was 1 % cheaper
+// on the teapot at 16 steps, 0.4 % dearer at 64, and left the teacup at 16 steps one pixel
+// whose normal is 28° off (θ's own, on the rim's inside; 2.2° at 0.7); 1.2 sent the
+// teacup's and teapot's at 64 steps too late.
+constexpr double kThetaVerticesPerSampleMax = 0.7;
 constexpr long kThetaShareMinSamples = 64;
 
 // θ rows: a surface whose normal turns through more θ steps per pixel of its extent on the
