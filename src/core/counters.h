@@ -100,6 +100,7 @@ enum class CounterMerge : std::uint8_t { Sum, Max };
   X(Theta, ThetaLineRepairs, "theta_line_repairs", "quiet lines crawled afresh (a chain could not be advanced)", "lines", Sum) \
   X(Theta, ThetaRowsAdvanced, "theta_rows_advanced", "surface rows whose chains were advanced from the row before", "rows", Sum) \
   X(Theta, ThetaExactSurfaces, "theta_exact_surfaces", "surfaces that take the exact X scan: their normal turns many θ steps per pixel, or their chains came to hold more vertices than samples pay for", "surfaces", Sum) \
+  X(Theta, ThetaExactJudged, "theta_exact_judged", "of those, sent by their rows: chains holding more vertices per sample than pay (the others by their normal, before their first row)", "surfaces", Sum) \
   X(Slabs, SlabIntervals, "slab_intervals", "surfaces' intervals between two lines taken as slabs", "intervals", Sum) \
   X(Slabs, RowIntervals, "row_intervals", "surfaces' intervals taken row by row", "intervals", Sum)                 \
   X(Slabs, EventIntervals, "event_intervals", "of those, with an event of the surface's Y scan (no line walked)", "intervals", Sum) \

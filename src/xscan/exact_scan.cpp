@@ -46,6 +46,8 @@ struct ExactScan::Active {
   // chains hold more such vertices per sample than kThetaVerticesPerSampleMax).
   long thetaVertices = 0, thetaSamples = 0;
   bool exactX = false;
+  // θ: whether the surface's object-to-world map is the identity (ThetaFrame::worldIsObject).
+  bool worldIsObject = false;
   RowTrackers topTrackers;
   std::vector<RowTrackers> rowTrackers;
   std::vector<ChainSet> rows;
@@ -101,10 +103,10 @@ constexpr double kThetaStepsPerPixelMax = 0.1;
 // vertices per sample, times a factor of the surface's shape. A point without a normal (a
 // collapsed edge) is left out of the spread; NaN when the box is a point and no normal
 // differs. The points' box, not the hull's: a subdivision face's hull (its ring of cage
-// points) is several times the face.
-double ThetaStepsPerPixel(const Surface& surface, const ScreenMap& map, int steps) {
+// points) is several times the face. `normalFromObject`: the surface's world normals from
+// dp/du x dp/dv (SurfaceScan::NormalFromObject).
+double ThetaStepsPerPixel(const Surface& surface, const ScreenMap& map, const Mat3& normalFromObject, int steps) {
   static constexpr double kAt[3] = {0.1, 0.5, 0.9};
-  const Mat3 normalFromObject = surface.worldFromObject.linear().inverse().transpose();
   std::array<Vec3, 9> n;
   Vec2 lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
   VisitShape(surface, [&](const auto& shape) {
@@ -118,9 +120,13 @@ double ThetaStepsPerPixel(const Surface& surface, const ScreenMap& map, int step
       hi = hi.cwiseMax(sd.p.head<2>());
     }
   });
+  // A zero normal (Eigen's normalized() leaves it zero) would add a right angle.
+  const auto hasNormal = [](const Vec3& v) { return v.squaredNorm() > 0.0; };
   double spread = 0.0;
   for (std::size_t i = 0; i < n.size(); ++i)
-    for (std::size_t j = i + 1; j < n.size(); ++j) spread = std::max(spread, std::acos(std::clamp(n[i].dot(n[j]), -1.0, 1.0)));
+    for (std::size_t j = i + 1; j < n.size(); ++j)
+      if (hasNormal(n[i]) && hasNormal(n[j]))
+        spread = std::max(spread, std::acos(std::clamp(n[i].dot(n[j]), -1.0, 1.0)));
   return steps * spread / (2.0 * std::numbers::pi * (hi - lo).norm());
 }
 
@@ -199,8 +205,10 @@ void ExactScan::Activate(const ScanEntry& entry, double y, double spacing) {
   a->yMax = entry.yMax;
   a->scan = std::make_unique<SurfaceScan>(surfaces_[index], camera_, options_.extrapolate, counters_);
   a->scan->StartAt(y, spacing);
+  a->worldIsObject = surfaces_[index].worldFromObject.matrix().isIdentity(0.0);
   if (options_.thetaSteps > 0 && options_.slabRows == 0 && options_.exactWhereCheaper &&
-      ThetaStepsPerPixel(surfaces_[index], a->scan->Map(), options_.thetaSteps) > kThetaStepsPerPixelMax) {
+      ThetaStepsPerPixel(surfaces_[index], a->scan->Map(), a->scan->NormalFromObject(), options_.thetaSteps) >
+          kThetaStepsPerPixelMax) {
     a->exactX = true;
     ++counters_[Counter::ThetaExactSurfaces];
   }
@@ -227,7 +235,7 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
   VisitShape(surface, [&](const auto& shape) {
     using ShapeT = std::decay_t<decltype(shape)>;
     const ThetaFrame frame{eye_, right_, forward_, camera_.orthographic, &surface.worldFromObject, angles_,
-                           surface.worldFromObject.matrix().isIdentity(0.0)};
+                           a.worldIsObject};
     ThetaWalker<ShapeT> walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_, thetaTable_, frame);
     walker.SetChainSink(chainSink_);
     walker.SetNormalSlopes(true);
@@ -327,6 +335,7 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
         static_cast<double>(a.thetaVertices) > kThetaVerticesPerSampleMax * static_cast<double>(a.thetaSamples)) {
       a.exactX = true;
       ++counters_[Counter::ThetaExactSurfaces];
+      ++counters_[Counter::ThetaExactJudged];
     }
     std::swap(a.line, a.next);
     a.lineBroken = !advanced && WalkBroken();

@@ -426,6 +426,28 @@ TEST(ThetaRows, ASurfaceWhoseChainsCostMoreThanExactSamplesGoesExact) {
   EXPECT_LE(coarse.stats[Counter::ThetaExactSurfaces], coarse.stats[Counter::SurfacesSetUp] / 8);
 }
 
+TEST(ThetaRows, ASurfaceWhoseRowsHoldTooManyVerticesGoesExactMidway) {
+  // The per-row judgement alone: a surface the prediction left to θ (its normal turns
+  // under kThetaStepsPerPixelMax steps a pixel at its nine points) whose chains then hold
+  // more than kThetaVerticesPerSampleMax Newton-solved vertices per sample covered, once
+  // they cover kThetaShareMinSamples, takes the exact X scan for its remaining rows
+  // (theta_exact_judged): so its chains were crawled first, and its layers are exact
+  // mode's on every row, before and after. The teaspoon at 16 steps, 384 px: 2 of its 16
+  // patches are sent by their rows, 6 more by the prediction (at 192 px 1 and 9, at 768 px
+  // 5 and 2).
+  const Scene spoon = Load("teaspoon.bpt");
+  const auto r = CompareWithExact(spoon, Framed(spoon, Vec3(0, 1, 0), 384), 1.0, 16, 0, 1);
+  std::cout << r.stats[Counter::ThetaExactJudged] << " of " << r.stats[Counter::ThetaExactSurfaces]
+            << " exact surfaces sent by their rows, of " << r.stats[Counter::SurfacesSetUp] << "; " << r.differ << " of "
+            << r.covered << " samples' layers differ from exact away from an edge\n";
+  EXPECT_GT(r.stats[Counter::ThetaExactJudged], 0);
+  EXPECT_LT(r.stats[Counter::ThetaExactJudged], r.stats[Counter::ThetaExactSurfaces]);
+  EXPECT_GT(r.stats[Counter::ThetaChains], 0);
+  EXPECT_GT(r.covered, 5000);
+  EXPECT_EQ(r.differ, 0);
+  EXPECT_EQ(r.stats[Counter::Failures], 0);
+}
+
 TEST(ThetaRows, ASurfaceWhoseNormalTurnsManyStepsPerPixelIsExactFromItsFirstRow) {
   // A surface whose normal turns through many θ steps per pixel of its extent (N x the
   // spread of its normals / (2 pi x its screen extent): a sphere some 15 px across at 64
