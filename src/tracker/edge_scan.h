@@ -11,6 +11,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <utility>
 #include <vector>
 
@@ -96,6 +97,10 @@ class EdgeScan {
 
   const std::vector<EdgeTracker>& Trackers() const { return trackers_; }
   const std::vector<EdgePiece>& Pieces() const { return pieces_; }
+  // The top of the topmost piece (+inf: the edges have none), and whether the scan has
+  // passed them all: no tracker alive and no piece left to begin.
+  double FirstTop() const { return pieces_.empty() ? INFINITY : pieces_.front().yTop; }
+  bool Done() const { return trackers_.empty() && nextPiece_ == pieces_.size(); }
   // Ranges of y, sorted and disjoint, on which a scan line meets a degenerate level set:
   // within kDegenerateNearPx of a flat piece or of a collapsed edge's point.
   const std::vector<std::pair<double, double>>& DegenerateRanges() const { return degenerate_; }

@@ -70,6 +70,9 @@ class SilhouetteScan {
   void Adopt(const Vec2& uv);
 
   const std::vector<SilhouetteTracker>& Trackers() const { return trackers_; }
+  // Whether no tracker is alive and no maximum or saddle is left below the scan line: then
+  // none can be born but at a fold, where an edge tracker crosses a silhouette.
+  bool Done() const { return trackers_.empty() && nextStationary_ == stationary_.size(); }
   // Events so far: trackers born, died, left, merged and adopted, searches (as
   // EdgeScan::Events).
   long Events() const { return events_; }

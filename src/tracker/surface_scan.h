@@ -5,6 +5,8 @@
 // of the surfaces.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -56,6 +58,16 @@ class SurfaceScan {
 
   // The topmost maximum's y (+inf if the pre-pass found none): where the scan begins.
   double Top() const { return yTop_; }
+  // Where the surface can first meet a scan line: its topmost maximum or the top of its
+  // topmost edge piece (the top of a compact surface is one of them). Above it the scan
+  // has no tracker and none is born, so the X scan finds nothing there. -inf for a trimmed
+  // surface (its trim curves' trackers are not looked at).
+  double FirstY() const { return trims_ ? -INFINITY : std::min(yTop_, edges_.FirstTop()); }
+  // Whether the scan has passed all of the surface: no tracker of its edges or silhouettes
+  // alive and none left to be born (no edge piece left to begin, no maximum or saddle
+  // below; a fold needs a live edge tracker, and a tracker adopted from the X scan a walk,
+  // which needs a tracker). False for a trimmed surface.
+  bool Done() const { return !trims_ && edges_.Done() && silhouettes_.Done(); }
   // For a scan that begins at line yStart below Top() (the surface's top is above the
   // image, or between two lines): advances the trackers from Top() towards yStart in steps
   // of max(spacing, 1) px, so that they are born where the seeds of §3.2.2 are good.

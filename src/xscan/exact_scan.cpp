@@ -13,6 +13,16 @@ namespace patchscan {
 struct ExactScan::Active {
   std::size_t index;
   double yMax = INFINITY;
+  // θ and exact rows: above yFirst the surface has no tracker and none is born
+  // (SurfaceScan::FirstY), so its rows are not visited; done once the scan has passed all
+  // of it (SurfaceScan::Done): then it leaves the active set before its box's bottom. A
+  // surface's box (its hull's) is often several times its height on the screen (a
+  // subdivision face's ring of cage points): most of its rows have nothing of it.
+  double yFirst = -INFINITY;
+  bool done = false;
+  // θ slabs: the surface's intervals so far lay wholly above yFirst (its scan still at its
+  // set-up line, nothing of it walked).
+  bool idle = false;
   std::unique_ptr<SurfaceScan> scan;
   std::size_t nextStationary = 0;  // for the trace: the next stationary point to pass
   // θ slabs: the chains on the interval's top line and on its bottom line (whether a walk
@@ -96,6 +106,10 @@ constexpr long kThetaShareMinSamples = 64;
 // whole renders at 1024x768 aa 1 (θ16, 32 and 64 on those four scenes) chose 0.1 of 0.08,
 // 0.1 and 0.12: the largest with no θ render costlier than exact mode's.
 constexpr double kThetaStepsPerPixelMax = 0.1;
+
+// Rows this far above a surface's first line (SurfaceScan::FirstY) are skipped: LineFor
+// moves a line by at most 64 of its 4e-6 px steps.
+constexpr double kFirstYSlackPx = 1e-3;
 
 // The θ steps a surface's normal turns through per pixel of its extent on the screen: N x
 // (the largest angle between its world normals at (u, v) in {0.1, 0.5, 0.9}^2) / (2 pi x
@@ -206,6 +220,7 @@ void ExactScan::Activate(const ScanEntry& entry, double y, double spacing) {
   a->scan = std::make_unique<SurfaceScan>(surfaces_[index], camera_, options_.extrapolate, counters_);
   a->scan->StartAt(y, spacing);
   a->worldIsObject = surfaces_[index].worldFromObject.matrix().isIdentity(0.0);
+  a->yFirst = a->scan->FirstY();
   if (options_.thetaSteps > 0 && options_.slabRows == 0 && options_.exactWhereCheaper &&
       ThetaStepsPerPixel(surfaces_[index], a->scan->Map(), a->scan->NormalFromObject(), options_.thetaSteps) >
           kThetaStepsPerPixelMax) {
@@ -217,7 +232,7 @@ void ExactScan::Activate(const ScanEntry& entry, double y, double spacing) {
 }
 
 void ExactScan::UpdateActive(double yLo, double yHi, double spacing) {
-  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yLo; });
+  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yLo || a->done; });
   for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= yHi; ++nextPending_)
     if (pending_[nextPending_].yMax >= yLo) Activate(pending_[nextPending_], yLo, spacing);
 }
@@ -310,8 +325,15 @@ bool ExactScan::ScanRow(double y, const raster::SampleColumns& columns, raster::
 
   for (const auto& ap : active_) {
     Active& a = *ap;
+    // Nothing of the surface on this row (LineFor moves a line down by far less than the
+    // slack), or nothing left of it: not visited.
+    if (y < a.yFirst - kFirstYSlackPx) continue;
     const long events = a.scan->Events();
     AdvanceTo(a, y);
+    if (a.scan->Done()) {
+      a.done = true;
+      continue;
+    }
     if (options_.thetaSteps == 0 || a.exactX) {
       WalkSurface(a, y, a.scan->Trackers(), columns, out, [](std::span<const ThetaVertex>, bool) {});
       continue;
@@ -391,12 +413,17 @@ void ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
   const auto lines = IntervalLines(columns);
   const double yTop = lines.first, yBottom = lines.second;
   const std::size_t firstNew = [&] {
-    std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yTop; });
+    std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yTop || a->done; });
     return active_.size();
   }();
   UpdateActive(yTop, yBottom, dy);
+  // An interval wholly above a surface's first line has nothing of it (as rows skip such
+  // rows): the surface is not advanced or walked there.
+  const auto above = [&](const Active& a) { return yBottom < a.yFirst - kFirstYSlackPx; };
   for (std::size_t k = firstNew; k < active_.size(); ++k) {
     Active& a = *active_[k];
+    a.idle = above(a);
+    if (a.idle) continue;
     AdvanceTo(a, yTop);
     WalkLine(a, yTop, a.scan->Trackers(), columns, out, &a.line, &a.lineBroken);
     a.lineWalked = true;
@@ -409,6 +436,13 @@ void ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
   // each lie in or touch one of them).
   for (const auto& ap : active_) {
     Active& a = *ap;
+    if (a.idle) {
+      if (above(a)) continue;
+      // Its first interval: the scan to its top line (nothing of it lies above), which is
+      // walked when the surface is taken (WalkTopLine).
+      a.idle = false;
+      AdvanceTo(a, yTop);
+    }
     a.topTrackers = a.scan->Trackers();
     a.stepCalm.resize(static_cast<std::size_t>(m) + 1);
     a.jumped = false;
@@ -591,6 +625,7 @@ void ExactScan::ScanInterval(double y, const raster::SampleColumns& columns, ras
   // beside it would (SnapEnds): so a partition of the scene changes nothing.
   for (const auto& ap : active_) {
     Active& a = *ap;
+    if (a.idle) continue;  // never taken yet: not by rows, no line walked, nothing carried
     a.byRows = !PairSurface(a, columns, out);
     if (a.byRows && a.jumped) {
       // Calm to the bottom line, but its chains there do not pair: back to the top line,
@@ -619,6 +654,8 @@ void ExactScan::ScanInterval(double y, const raster::SampleColumns& columns, ras
     a.nextRefined = false;
     a.lineBroken = a.nextBroken;
     a.lineWalked = a.nextWalked;
+    // Passed wholly (its rows here still to be emitted): dropped at the next interval.
+    a.done = a.scan->Done();
   }
 }
 
