@@ -33,8 +33,8 @@ SCENES = [  # name, file, extra camera options
 THETA_STEPS = [4, 6, 8, 12, 16, 32, 64]
 # θ with slabs between lines of chains (--y-step h pixels) instead of the default chains
 # on every sample row, as (steps, h): only differs with supersampling (at aa 1 every row is
-# a line). Two-pixel slabs trade silhouette error (h²/(8R)) for fewer lines.
-THETA_SLABS = [(4, 1), (8, 1), (16, 1), (32, 1), (64, 1), (4, 2), (16, 2)]
+# a line). Two- and four-pixel slabs trade silhouette error (h/4 + h²/(8R)) for fewer lines.
+THETA_SLABS = [(4, 1), (8, 1), (16, 1), (32, 1), (64, 1), (4, 2), (16, 2), (4, 4)]
 TESS_RATES = [2, 4, 8, 12, 16, 24, 32]
 TESS_PIXELS = [16, 8, 4, 2, 1]
 AAS = [1, 4]
@@ -235,7 +235,7 @@ def plot(rows, csv_path, png_path):
     scenes = list(dict.fromkeys(r["scene"] for r in rows))
     with open(data, "w") as f:
         for scene in scenes:
-            for mode in ["theta", "theta 1-px slabs", "theta 2-px slabs", "tess", "tess-pixels", "povray"]:
+            for mode in ["theta", "theta 1-px slabs", "theta 2-px slabs", "theta 4-px slabs", "tess", "tess-pixels", "povray"]:
                 for aa in AAS:
                     sub = [r for r in rows if r["scene"] == scene and Series(r) == mode and r["aa"] == aa]
                     if not sub:
@@ -250,7 +250,7 @@ def plot(rows, csv_path, png_path):
         f"set terminal {'pngcairo' if has_cairo else 'png'} size {400 * len(scenes)},800",
         f"set output '{png_path}'", "set logscale xy", "set grid", "set key top right font ',8'",
         f"set multiplot layout 2,{len(scenes)} title 'error against time, per mode (aa 1 open, aa 4 filled)'"]
-    colours = {"theta": "#d62728", "theta 1-px slabs": "#ff9896", "theta 2-px slabs": "#8c564b",
+    colours = {"theta": "#d62728", "theta 1-px slabs": "#ff9896", "theta 2-px slabs": "#8c564b", "theta 4-px slabs": "#e377c2",
                "tess": "#1f77b4", "tess-pixels": "#2ca02c",
                "povray": "#9467bd"}
     for col, label in [(2, "max silhouette error, px (0 drawn at 0.01)"), (3, "colour RMSE")]:
