@@ -20,6 +20,8 @@ struct ExactScan::Active {
   // subdivision face's ring of cage points): most of its rows have nothing of it.
   double yFirst = -INFINITY;
   bool done = false;
+  // Whether the scan has left the surface behind on line y: below its box, or done.
+  bool Passed(double y) const { return yMax < y || done; }
   // θ slabs: the surface's intervals so far lay wholly above yFirst (its scan still at its
   // set-up line, nothing of it walked).
   bool idle = false;
@@ -232,7 +234,7 @@ void ExactScan::Activate(const ScanEntry& entry, double y, double spacing) {
 }
 
 void ExactScan::UpdateActive(double yLo, double yHi, double spacing) {
-  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yLo || a->done; });
+  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->Passed(yLo); });
   for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= yHi; ++nextPending_)
     if (pending_[nextPending_].yMax >= yLo) Activate(pending_[nextPending_], yLo, spacing);
 }
@@ -413,7 +415,7 @@ void ExactScan::PrepareInterval(double y, const raster::SampleColumns& columns, 
   const auto lines = IntervalLines(columns);
   const double yTop = lines.first, yBottom = lines.second;
   const std::size_t firstNew = [&] {
-    std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->yMax < yTop || a->done; });
+    std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->Passed(yTop); });
     return active_.size();
   }();
   UpdateActive(yTop, yBottom, dy);
