@@ -21,12 +21,28 @@ namespace {
 constexpr int kTableSteps = 65535;
 using Codes = std::array<std::uint8_t, kTableSteps + 1>;  // per linear step, its 8-bit code
 
+// Code of table step i: round(255 SrgbFromLinear(i / kTableSteps)), the definition.
+int CodeOfStep(int i) {
+  return static_cast<int>(std::lround(255.0 * SrgbFromLinear(static_cast<double>(i) / kTableSteps)));
+}
+
+// The table holds 256 runs of equal codes: each run's first step is found near where the
+// inverse puts it (LinearFromSrgb of the code's lower rounding bound) and confirmed by the
+// definition on either side, about a thousand powers instead of one per step (65536, half
+// the instructions of a small render).
 const Codes& Table() {
   static const auto table = [] {
     Codes t{};
-    for (int i = 0; i <= kTableSteps; ++i)
-      t[static_cast<std::size_t>(i)] =
-          static_cast<std::uint8_t>(std::lround(255.0 * SrgbFromLinear(static_cast<double>(i) / kTableSteps)));
+    int first = 0;  // first step of the current code's run
+    for (int code = 1; code <= 255; ++code) {
+      int i = static_cast<int>(std::ceil(LinearFromSrgb((code - 0.5) / 255.0) * kTableSteps));
+      i = std::clamp(i, first, kTableSteps + 1);
+      while (i > first && CodeOfStep(i - 1) >= code) --i;
+      while (i <= kTableSteps && CodeOfStep(i) < code) ++i;
+      std::fill(t.begin() + first, t.begin() + i, static_cast<std::uint8_t>(code - 1));
+      first = i;
+    }
+    std::fill(t.begin() + first, t.end(), std::uint8_t{255});
     return t;
   }();
   return table;

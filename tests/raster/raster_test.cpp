@@ -1240,6 +1240,25 @@ TEST(ImageWriter, CompressionByFormat) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Srgb, EveryTableStepHoldsTheRoundedEncoding) {
+  // The code table is built from its runs' first steps; each of its 65536 steps must still
+  // hold round(255 SrgbFromLinear(i / 65535)), its definition, exactly. A float of i /
+  // 65535 lands on step i (its rounding is ~1e-7 of a step's 65535).
+  constexpr int kSteps = 65535;
+  int wrong = 0;
+  for (int i = 0; i <= kSteps; ++i) {
+    const auto want = static_cast<int>(std::lround(255.0 * SrgbFromLinear(static_cast<double>(i) / kSteps)));
+    const int got = SrgbCode(static_cast<float>(i) / static_cast<float>(kSteps));
+    if (got != want && ++wrong <= 5) ADD_FAILURE() << "step " << i << ": code " << got << ", want " << want;
+  }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_EQ(SrgbCode(0.0f), 0);
+  EXPECT_EQ(SrgbCode(1.0f), 255);
+  EXPECT_EQ(SrgbCode(2.0f), 255);
+  EXPECT_EQ(SrgbCode(-1.0f), 0);
+  EXPECT_EQ(SrgbCode(std::numeric_limits<float>::quiet_NaN()), 0);
+}
+
 TEST(ImageWriter, EightBitOutputsAreSrgbOthersLinear) {
   // A ramp of linear values, half of it at alpha 0.5 (premultiplied): the PNG holds the
   // straight colour sRGB-encoded (and says so), the JPEG the colour over black encoded,
