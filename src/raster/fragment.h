@@ -75,8 +75,9 @@ class Chord {
   // From xa to xb. An end's normal slope is kept where it would turn the normal by at most
   // kNormalTurnRatio times the turn between the ends across the chord (plus kSlopeFloor
   // radians), its depth slope where the normal's would turn it by at most kSlopeTurnRatio
-  // times that: on a silhouette, or near one, the section turns as the square root of x
-  // and the slopes there are infinite or huge, no tangents for a cubic in x.
+  // times that and, along the depth's change, it is at most kDepthSlopeRatio times that
+  // change: on a silhouette, or near one, the section turns as the square root of x and
+  // the slopes there are infinite or huge, no tangents for a cubic in x.
   Chord(double xa, const Fragment& a, double xb, const Fragment& b, bool orthographic, const Slope& slopeA = {},
         const Slope& slopeB = {})
       : xa_(xa), xb_(xb), invSpan_(1.0 / (xb - xa)), invWa_(1.0 / a.w), invWb_(1.0 / b.w), a_(a), b_(b),
@@ -128,10 +129,22 @@ class Chord {
       HermiteCoefficients(Depth(a.w), Depth(b.w), qa, qb, da, db, cubics_.depth);
       return;
     }
-    // An end on the silhouette gives no tangent in x (its slopes are per root pixel).
+    // An end on the silhouette gives no tangent in x (its slopes are per root pixel). A
+    // depth tangent along the depth's change across the chord and steeper than
+    // kDepthSlopeRatio times it is no tangent of the chord either: the section's depth is
+    // steep only over a part of it near that end (a turn point all but on a silhouette,
+    // whose estimate of the silhouette's place says nothing, θ standing still there), and
+    // the cubic through it overshot both ends. One against the change (the depth's
+    // extremum within the chord) is kept as the normal's bound allows.
     const bool onA = slopeA.silhouette == 0.0, onB = slopeB.silhouette == 0.0;
+    const double depthChange = Depth(b.w) - Depth(a.w);
+    const double depthFloor = kSlopeFloor * std::max(std::abs(Depth(a.w)), std::abs(Depth(b.w)));
+    const auto depthFits = [&](double s) {
+      return s * depthChange <= 0.0 || std::abs(s) <= kDepthSlopeRatio * std::abs(depthChange) + depthFloor;
+    };
     const bool ka = !onA && fits(ta, sa, kNormalTurnRatio), kb = !onB && fits(tb, sb, kNormalTurnRatio);
-    const bool da = !onA && fits(ta, sa, kSlopeTurnRatio), db = !onB && fits(tb, sb, kSlopeTurnRatio);
+    const bool da = !onA && fits(ta, sa, kSlopeTurnRatio) && depthFits(sa);
+    const bool db = !onB && fits(tb, sb, kSlopeTurnRatio) && depthFits(sb);
     cubic_ = ka || kb;  // kNormalTurnRatio >= kSlopeTurnRatio: da implies ka
     if (!cubic_) return;
     HermiteCoefficients(a.normal, b.normal, ta, tb, ka, kb, cubics_.normal);
@@ -149,6 +162,11 @@ class Chord {
   // normal's, the cubic in 1/w overshot by 29% of the depth beside the spout's silhouette.
   static constexpr double kNormalTurnRatio = 8.0;
   static_assert(kNormalTurnRatio >= kSlopeTurnRatio);
+  // A cubic whose end tangents are at most 3 times its secant's slope, and of its sign,
+  // stays between its end values (Fritsch and Carlson's condition for a monotone cubic,
+  // SIAM J. Numer. Anal. 17(2), 1980): the bound on a depth tangent against the depth's
+  // change across the chord (plus kSlopeFloor of the depth), in the chord's own parameter.
+  static constexpr double kDepthSlopeRatio = 3.0;
   // A silhouette this many times the chord's length past an end, or nearer, makes the
   // chord's parameter the root of the distance from it.
   static constexpr double kSilhouetteNear = 1.0;

@@ -561,10 +561,24 @@ inline double SilhouetteGap(const ThetaVertex& v, const ThetaVertex& to) {
   return gap >= 0.0 ? gap : INFINITY;  // false for NaN
 }
 
+// A turn point (θ standing still) this near a silhouette angle in θ (radians): the section
+// there is all but edge-on, its x all but still, and its slopes per pixel, steep, hold
+// only near it, as a silhouette's do; its silhouette estimate says nothing (θ does not move
+// towards it). A chord from it takes no slopes there (a quadratic from its other end, or
+// the blend): a tangent of several times the chord's turn swung the normal of a whole
+// chord 25° off on one row of the teapot's base (θ4, turn at 0.047 rad). Measured against
+// the exact render (1024x768 aa 1, teapot θ4/8/16, teacup θ4/16, cage θ4, teapot aa 4 θ4
+// 4-px slabs) at 0.05, 0.1 and 0.2: the teapot's largest normal error 26.5° -> 18.9 /
+// 17.3 / 17.3° at 4 steps, 11.5 -> 7.0° at 8, 4.3 -> 2.5° at 16, every RMSE lower; the
+// teacup's at 16 steps 2.16 / 2.53 / 2.53° (RMSE +0.5 % at 0.1, +1.6 % at 0.2).
+constexpr double kTurnNearSilhouetteRad = 0.1;
+
 // Vertex v's slopes for its chord to `to`: a silhouette's toward the side `to` lies on
-// (θ > 0 faces the eye).
+// (θ > 0 faces the eye); none at a turn point all but on a silhouette.
 inline raster::ChordSlope ChordSlopeOf(const ThetaVertex& v, const ThetaVertex& to) {
   const double gap = SilhouetteGap(v, to);
+  if (v.kind == ThetaVertex::Kind::Turn && SilhouetteAngle(v.theta) < kTurnNearSilhouetteRad)
+    return {Vec3::Constant(NAN), NAN, gap};
   if (gap != 0.0 || to.theta > 0.0) return {v.dndx, v.dwdx, gap};
   return {-v.dndx, -v.dwdx, gap};
 }

@@ -672,6 +672,33 @@ TEST(Chord, ANormalTurningFasterAtOneEndKeepsItsSlope) {
   EXPECT_LE(cd, qd);  // the depth: the same quadratic (its far tangent is left out)
 }
 
+TEST(Chord, ADepthSlopeFarSteeperThanTheChordIsLeftOut) {
+  // A link of the teapot's body, θ16 at 1024x768 (row 573.5, surface 8): from a table
+  // vertex to a turn point all but on a silhouette (θ 0.007 rad from it, standing still
+  // there), whose eye distance changes by 1.29 per pixel where the chord's changes by 0.08:
+  // its normal's slope fits the chord, its depth's is 16 times the change across it. Kept,
+  // the cubic in 1/w put the chord's middle 0.25 behind both ends (the column at 573.5 at
+  // w 13.652, exact 13.396), and the bottom, 13.617 away, showed through the body. Left out,
+  // the chord stays between its ends' depths, nearer the surface than the ends' blend.
+  Fragment a, b;
+  a.w = 13.426562669558088, b.w = 13.294929942047412;
+  a.position = Vec3(1.2739970387071056, -0.82143667586133784, 0.17270547179050888);
+  b.position = Vec3(1.299852470773261, -0.9302715856976298, 0.24727841952688678);
+  a.normal = Vec3(0.66534615026798949, -0.4246262919265778, -0.61400896779139202);
+  b.normal = Vec3(0.5152298889256135, -0.365903293727457, -0.77501802636912809);
+  const double xa = 574.474906, xb = 572.820767;
+  const Chord::Slope sa{Vec3(0.081945934571399662, -0.040548592621047423, 0.11683935314945386), 0.021980748049581996};
+  const Chord::Slope sb{Vec3(0.21790398752203316, 0.13976846211402669, 0.078874173968653261), 1.2858660819660497};
+  const Chord c(xa, a, xb, b, false, sa, sb), blend(xa, a, xb, b, false);
+  constexpr double kExactAtMiddle = 13.396255;  // the exact scan's eye distance at x = 573.5
+  for (int k = 0; k <= 20; ++k) {
+    const double x = xa + (xb - xa) * k / 20.0;
+    EXPECT_GE(c.At(x).w, b.w) << x;
+    EXPECT_LE(c.At(x).w, a.w) << x;
+  }
+  EXPECT_LT(std::abs(c.At(573.5).w - kExactAtMiddle), std::abs(blend.At(573.5).w - kExactAtMiddle));
+}
+
 TEST(Chord, SlopeAtASilhouetteIsLeftOut) {
   // Towards the silhouette (φ → atan(1/√24) here, where the ray grazes the circle) x stops
   // and the slopes per pixel grow without bound: an end's slope that would turn the normal
