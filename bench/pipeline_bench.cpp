@@ -7,7 +7,7 @@
 #include <random>
 #include <sstream>
 
-#include "cli/camera_options.h"
+#include "render/load.h"
 #include "patch/tessellate.h"
 #include "raster/scanline_renderer.h"
 #include "raster/triangle_setup.h"
@@ -19,17 +19,17 @@
 namespace patchscan {
 namespace {
 
-const cli::LoadedScene& Teapot() {
-  static const cli::LoadedScene loaded = [] {
-    cli::CameraOptions opts;
+const render::LoadedScene& Teapot() {
+  static const render::LoadedScene loaded = [] {
+    render::CameraOptions opts;
     opts.size = "1024x768";
     std::ostringstream err;
-    auto r = cli::LoadSceneAndCamera(PATCHSCAN_SURFACES_DIR "/teapot.bpt", opts, err);
-    if (!std::holds_alternative<cli::LoadedScene>(r)) {
-      std::cerr << err.str();
+    auto r = render::LoadSceneAndCamera(PATCHSCAN_SURFACES_DIR "/teapot.bpt", opts, err);
+    if (const auto* failed = std::get_if<render::Failure>(&r)) {
+      std::cerr << err.str() << failed->message << '\n';
       std::abort();
     }
-    return std::get<cli::LoadedScene>(std::move(r));
+    return std::get<render::LoadedScene>(std::move(r));
   }();
   return loaded;
 }

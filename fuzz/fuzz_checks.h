@@ -6,7 +6,7 @@
 #include <string>
 #include <string_view>
 
-#include "patch/source_error.h"
+#include "scene/source_error.h"
 
 namespace patchscan::fuzz {
 

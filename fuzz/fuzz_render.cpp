@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "fuzz_checks.h"
-#include "patch/rib_reader.h"
+#include "scene/rib/reader.h"
 #include "raster/scanline_renderer.h"
 #include "xscan/exact_scan.h"
 #include "xscan/polygon_feed.h"
-#include "xscan/render_settings.h"
+#include "render/load.h"
 #include "xscan/tess_feed.h"
 
 namespace {
@@ -60,9 +60,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   camera = FrameBounds(box, camera, DefaultViewDirection(Vec3(0, 0, 1)));
   if (ValidateCamera(camera)) return 0;
   scene->FaceCamera(camera);
-  const raster::RenderSettings settings = test::SettingsFor(camera, 2);
-  raster::TriangleMesh polygons;
-  AppendPolygonTriangles(scene->polygons, camera, static_cast<std::uint32_t>(scene->surfaces.size()), &polygons);
+  const raster::RenderSettings settings = render::SettingsFor(camera, 2);
+  const raster::TriangleMesh polygons = render::PolygonTriangles(*scene, camera);
   for (const auto& [theta, slabs] : {std::pair{0, 0}, {16, 0}, {16, 2}}) {
     ExactScanOptions o;
     o.thetaSteps = theta;
@@ -76,7 +75,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::Require(mesh.has_value());
   CheckRows rows(camera.width);
   raster::TriangleMesh triangles = ToRasterMesh(*mesh, camera);
-  AppendPolygonTriangles(scene->polygons, camera, static_cast<std::uint32_t>(scene->surfaces.size()), &triangles);
+  render::AppendScenePolygons(*scene, camera, &triangles);
   fuzz::Require(raster::RenderMesh(triangles, settings, rows).has_value());
   return 0;
 }

@@ -6,7 +6,7 @@
 #include <variant>
 
 #include "fuzz_checks.h"
-#include "patch/rib_reader.h"
+#include "scene/rib/reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);

@@ -1,15 +1,18 @@
-// Renders a sphere and a Bézier patch through the patchscan library, in exact mode
-// (Blinn's scan-line algorithm, every sample found by Newton iteration), to a PNG:
-//   render_sphere OUT.png [SCENE.rib|SCENE.bpt]
-// With a scene file, that scene framed by the library's camera instead.
+// Renders through the patchscan library:
+//   render_sphere OUT.png           a sphere and a Bézier patch made here, in exact mode
+//                                   (Blinn's scan-line algorithm, every sample found by Newton
+//                                   iteration), through the scan and the back end directly;
+//   render_sphere OUT.png SCENE     a scene file, whole pipeline in one call (render/frame.h).
 #include <cstdio>
+#include <iostream>
 #include <memory>
 #include <string>
 #include <variant>
 #include <vector>
 
 #include "patch/camera.h"
-#include "patch/scene.h"
+#include "render/frame.h"
+#include "render/load.h"
 #include "raster/image_writer.h"
 #include "raster/scanline_renderer.h"
 #include "raster/shading.h"
@@ -22,26 +25,27 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: %s OUT.png [SCENE]\n", argv[0]);
     return 2;
   }
-  // The surfaces: a scene file's, or a unit sphere and a bicubic Bézier patch beside it.
-  std::vector<Surface> surfaces;
-  Bounds3 bounds;
+  // A scene file: the whole pipeline in one call, as `patchscan render` runs it.
   if (argc > 2) {
-    auto loaded = LoadScene(argv[2]);
-    if (const auto* e = std::get_if<SourceError>(&loaded)) {
-      std::fprintf(stderr, "%s\n", e->What().c_str());
-      return 1;
+    render::RenderOptions options;
+    options.file = argv[2];
+    options.output = argv[1];
+    auto rendered = render::RenderFrame(options, std::cerr);
+    if (const auto* failed = std::get_if<render::Failure>(&rendered)) {
+      std::fprintf(stderr, "%s\n", failed->message.c_str());
+      return failed->outcome == render::Outcome::OutputError ? 3 : 1;
     }
-    Scene& scene = std::get<Scene>(loaded);
-    bounds = scene.WorldBounds();
-    surfaces = std::move(scene.surfaces);
-  } else {
-    surfaces.push_back(Surface{Sphere(1.0, -1.0, 1.0, 360.0), Affine3::Identity()});
-    std::array<Vec3, 16> cv;
-    for (int j = 0; j < 4; ++j)
-      for (int i = 0; i < 4; ++i) cv[4 * j + i] = Vec3(1.5 + i / 1.5, -1.0 + j / 1.5, (i == 1 || i == 2) && (j == 1 || j == 2) ? 0.8 : -0.5);
-    surfaces.push_back(Surface{BicubicPatch(cv), Affine3::Identity()});
-    for (const Surface& s : surfaces) bounds.Extend(WorldBounds(s));
+    return 0;
   }
+  // Otherwise surfaces made here: a unit sphere and a bicubic Bézier patch beside it.
+  std::vector<Surface> surfaces;
+  surfaces.push_back(Surface{Sphere(1.0, -1.0, 1.0, 360.0), Affine3::Identity()});
+  std::array<Vec3, 16> cv;
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) cv[4 * j + i] = Vec3(1.5 + i / 1.5, -1.0 + j / 1.5, (i == 1 || i == 2) && (j == 1 || j == 2) ? 0.8 : -0.5);
+  surfaces.push_back(Surface{BicubicPatch(cv), Affine3::Identity()});
+  Bounds3 bounds;
+  for (const Surface& s : surfaces) bounds.Extend(WorldBounds(s));
 
   // A camera framing them from the front, above and to the right (z up).
   Camera camera;
@@ -50,15 +54,7 @@ int main(int argc, char** argv) {
   camera = FrameBounds(bounds, camera, DefaultViewDirection(Vec3(0, 0, 1)));
 
   // The back end's settings: the default material and a light rig that moves with the eye.
-  raster::RenderSettings settings;
-  settings.width = camera.width;
-  settings.height = camera.height;
-  settings.aa = 3;
-  settings.hither = camera.hither;
-  settings.eye = EyePoint(camera);
-  settings.forward = ViewForward(camera);
-  const Vec3 right = ViewRight(camera);
-  settings.lights = raster::DefaultLightRig(settings.forward, right.cross(settings.forward).normalized(), right);
+  const raster::RenderSettings settings = render::SettingsFor(camera, 3);
 
   // Rows go straight to the file, which appears only when the image is complete.
   auto opened = raster::ImageWriter::Open(argv[1], camera.width, camera.height);

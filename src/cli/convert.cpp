@@ -4,8 +4,8 @@
 
 #include "cli/exit_codes.h"
 #include "cli/file_output.h"
-#include "cli/render.h"
-#include "patch/rib_writer.h"
+#include "render/load.h"
+#include "scene/rib/writer.h"
 
 namespace patchscan::cli {
 
@@ -29,11 +29,11 @@ CLI::App* AddConvertCommand(CLI::App* app, ConvertOptions* o) {
 }
 
 int RunConvert(const ConvertOptions& o, std::ostream& err) {
-  auto loaded = LoadSceneAndCamera(o.file, o.camera, err);
-  if (const int* code = std::get_if<int>(&loaded)) return *code;
-  const LoadedScene& ls = std::get<LoadedScene>(loaded);
+  auto loaded = render::LoadSceneAndCamera(o.file, o.camera, err);
+  if (const auto* failed = std::get_if<render::Failure>(&loaded)) return Fail(*failed, err);
+  const render::LoadedScene& ls = std::get<render::LoadedScene>(loaded);
   RibWriteOptions wo;
-  wo.pixelSamples = o.aa.value_or(ls.scene.image.pixelSamples.value_or(kDefaultAa));
+  wo.pixelSamples = o.aa.value_or(ls.scene.image.pixelSamples.value_or(render::kDefaultAa));
   wo.displayName = o.display;
   auto text = WriteRib(ls.scene, ls.view.camera, wo);
   if (auto* e = std::get_if<RibWriteError>(&text)) {

@@ -15,7 +15,7 @@ struct ConvertOptions {
   std::string file, output;
   std::optional<int> aa;  // PixelSamples written; none: the render command's default
   std::string display;    // Display's file name written; empty: none
-  CameraOptions camera;
+  render::CameraOptions camera;
 };
 
 CLI::App* AddConvertCommand(CLI::App* app, ConvertOptions* opts);

@@ -10,6 +10,7 @@
 
 #include "cli/exit_codes.h"
 #include "patch/screen.h"
+#include "render/load.h"
 
 namespace patchscan::cli {
 namespace {
@@ -53,11 +54,11 @@ CLI::App* AddInfoCommand(CLI::App* app, InfoOptions* o) {
 }
 
 int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
-  auto loaded = LoadSceneAndCamera(o.file, o.camera, err);
-  if (const int* code = std::get_if<int>(&loaded)) return *code;
-  const Scene& scene = std::get<LoadedScene>(loaded).scene;
-  const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
-  const bool framed = std::get<LoadedScene>(loaded).view.framed;
+  auto loaded = render::LoadSceneAndCamera(o.file, o.camera, err);
+  if (const auto* failed = std::get_if<render::Failure>(&loaded)) return Fail(*failed, err);
+  const Scene& scene = std::get<render::LoadedScene>(loaded).scene;
+  const Camera& camera = std::get<render::LoadedScene>(loaded).view.camera;
+  const bool framed = std::get<render::LoadedScene>(loaded).view.framed;
 
   // Step 1: scene totals.
   size_t nPatches = 0, nCollapsed = 0;

@@ -11,7 +11,7 @@ namespace patchscan::cli {
 
 struct InfoOptions {
   std::string file;
-  CameraOptions camera;
+  render::CameraOptions camera;
 };
 
 CLI::App* AddInfoCommand(CLI::App* app, InfoOptions* opts);

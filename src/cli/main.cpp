@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
 
   InfoOptions info;
   CLI::App* infoCmd = AddInfoCommand(&app, &info);
-  RenderOptions render;
+  RenderCommand render;
   CLI::App* renderCmd = AddRenderCommand(&app, &render);
   CompareOptions compare;
   CLI::App* compareCmd = AddCompareCommand(&app, &compare);

@@ -1,4 +1,4 @@
-// Every count the renderer keeps (DESIGN.md: count what the papers count), declared once
+// Every count the renderer keeps (what the papers count), declared once
 // in the table below: its key in `--stats-json`, what it counts, and the unit of one count.
 // A stage bumps the Counters its owner hands it (`++counters[Counter::Walks]`); `--stats`,
 // `--stats-json` and the tests read them through this table. Counters are reports only:
@@ -15,12 +15,12 @@ namespace patchscan {
 
 // Which part of the pipeline a counter belongs to, in the order `--stats` prints them.
 enum class CounterGroup : std::uint8_t {
-  Setup,    // surfaces set up and the maxima pre-pass (paper 001 §3.2.2.1)
+  Setup,    // surfaces set up and the maxima pre-pass (Blinn 1978 §3.2.2.1)
   YScan,    // edge and silhouette trackers and their events (§3.2)
   XScan,    // walks along each scan line's level curves, exact samples (§3.3)
   Theta,    // θ chains and θ and turn trackers (§4)
   Slabs,    // θ slabs handed to the back end as triangles
-  BackEnd,  // the scan-line back end (paper 000)
+  BackEnd,  // the scan-line back end (Woo and Chall 1990)
 };
 inline constexpr std::array<std::string_view, 6> kCounterGroupTitles = {
     "set up", "y scan", "x scan", "theta", "slabs", "back end"};

@@ -1,6 +1,6 @@
 // The roots of a function of one variable on an interval, found by sampling for sign
 // changes and refining each bracket: where a curve's coordinate or screen y turns (the
-// trackers' monotone pieces, paper 001 §3.2.1) or crosses a line (trim curves).
+// trackers' monotone pieces, Blinn 1978 §3.2.1) or crosses a line (trim curves).
 #pragma once
 
 #include <cmath>

@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <deque>
 #include <limits>
 #include <ostream>
 #include <stdexcept>
@@ -14,15 +13,18 @@
 #include <thread>
 #include <vector>
 
-#include "cli/camera_options.h"
-#include "cli/render_setup.h"
+#include "mpi/link.h"
+#include "mpi/wire.h"
+#include "render/back_end.h"
+#include "render/interrupt.h"
+#include "render/load.h"
 #include "raster/triangle_setup.h"
 #include "xscan/polygon_feed.h"
 
 namespace patchscan::mpi {
 namespace {
 
-enum Tag : int { kGo = 1, kRow, kPixels, kDone, kFinish };
+using Process = render::ProcessReport;
 
 double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
@@ -32,283 +34,16 @@ long PeakKiB() {
   return u.ru_maxrss;
 }
 
-// ---- the frame's rows and who renders them ----
-
-struct Layout {
-  int size = 1;                 // processes
-  int aa = 1, height = 0, width = 0;  // the lattice: l, pixel rows and columns
-  // Channels of a pixel row sent to process 0: colour and alpha, or with the AOVs (an EXR
-  // with --aov, a depth map) all of raster::kChannels.
-  int channels = raster::kChannels;
-  int nRows = 0;                // sample rows
-  double y0 = 0.0, dy = 1.0;    // sample row j lies at y0 + j dy
-  int Owner(int p) const { return (p / kBandRows) % size; }
-  int FirstSample(int p) const { return aa == 1 ? p : p * (aa - 1); }
-  // The first pixel row that uses sample row j (with aa > 1 a row on a pixel edge is the
-  // last of the pixel row above and the first of the one below).
-  int FirstPixelOf(int j) const {
-    if (aa == 1) return j;
-    const int p = j / (aa - 1);
-    return std::min(j % (aa - 1) == 0 && j > 0 ? p - 1 : p, height - 1);
-  }
-  // The first sample row at or below j that process o renders (nRows: none).
-  int NextOwned(int o, int j) const {
-    if (j >= nRows) return nRows;
-    int p = FirstPixelOf(j);
-    if (Owner(p) != o) {
-      const int band = p / kBandRows;
-      p = (band + ((o - band % size) % size + size) % size) * kBandRows;
-      if (p >= height) return nRows;
-    }
-    return std::max(j, FirstSample(p));
-  }
-  bool Owns(int o, int j) const { return NextOwned(o, j) == j; }
-  // The last pixel row process o renders (-1: none).
-  int LastOwnedPixel(int o) const {
-    const int bands = (height + kBandRows - 1) / kBandRows;
-    for (int b = bands - 1; b >= 0 && b >= bands - size; --b)
-      if (b % size == o) return std::min(height - 1, (b + 1) * kBandRows - 1);
-    return -1;
-  }
-  // The last sample row a triangle covers, as the back end bounds it (FragmentGeometry).
-  int LastRowOf(const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c) const {
-    if (!(a.h.z() > 0 && b.h.z() > 0 && c.h.z() > 0)) return nRows - 1;
-    const double yMax = std::max({a.h.y() / a.h.z(), b.h.y() / b.h.z(), c.h.y() / c.h.z()}) + raster::kBoundsSlackPx;
-    const double k = std::floor((yMax - y0) / dy);
-    return k >= nRows - 1 ? nRows - 1 : (k >= -1.0 ? static_cast<int>(k) : -1);
-  }
-};
-
-// ---- rows as flat messages of doubles (every value of a fragment or triangle is a double
-// or an integer far below 2^53, so nothing is rounded on the way) ----
-
-constexpr std::size_t kHeader = 5;     // row, ok, fragments, chords, triangles
-constexpr std::size_t kFragmentBody = 17;  // w, position, normal, uv, duvdx, duvdy, id, colour
-constexpr std::size_t kFragment = 2 + kFragmentBody;  // rank, column, fragment
-// rank, xa, xb, orthographic, cubic, the ends' fragments, the normal's and depth's cubics
-// and the root's u0
-constexpr std::size_t kChord = 5 + 2 * kFragmentBody + 17;
-constexpr std::size_t kVertex = 15;    // h, position, normal, uv, depth, colour
-constexpr std::size_t kTriangle = 3 + 3 * kVertex;  // origin row, rank, id, three vertices
-
-void Put(std::vector<double>& m, const Vec3& v) { m.insert(m.end(), {v.x(), v.y(), v.z()}); }
-void Put(std::vector<double>& m, const Vec2& v) { m.insert(m.end(), {v.x(), v.y()}); }
-Vec3 Get3(const double* d) { return Vec3(d[0], d[1], d[2]); }
-Vec2 Get2(const double* d) { return Vec2(d[0], d[1]); }
-
-void PutFragment(std::vector<double>& m, const raster::Fragment& f) {
-  m.push_back(f.w);
-  Put(m, f.position);
-  Put(m, f.normal);
-  Put(m, f.uv);
-  Put(m, f.duvdx);
-  Put(m, f.duvdy);
-  m.push_back(f.surfaceId);
-  Put(m, f.colour);
-}
-
-raster::Fragment GetFragment(const double* d) {
-  raster::Fragment f;
-  f.w = d[0];
-  f.position = Get3(d + 1);
-  f.normal = Get3(d + 4);
-  f.uv = Get2(d + 7);
-  f.duvdx = Get2(d + 9);
-  f.duvdy = Get2(d + 11);
-  f.surfaceId = static_cast<std::uint32_t>(d[13]);
-  f.colour = Get3(d + 14);
-  return f;
-}
-
-// What one process's scan hands over on one sample row, each entry with its surface's
-// rank in the scan order of all surfaces (polygons after every surface), each triangle
-// with the last sample row it covers.
-class RowEncoder final : public raster::FragmentRow {
- public:
-  RowEncoder(const std::vector<std::uint32_t>& rank, const Layout& layout) : rank_(rank), layout_(layout) {}
-  void Begin(int row) {
-    row_ = row;
-    fragments.clear();
-    chords.clear();
-    triangles.clear();
-    lastRows.clear();
-  }
-  void Add(int column, const raster::Fragment& f) override {
-    fragments.insert(fragments.end(), {Rank(f.surfaceId), static_cast<double>(column)});
-    PutFragment(fragments, f);
-  }
-  // A chord travels whole, as the back end keeps it (its samples shaded from it, a run of
-  // a pixel's at their mean column): ends and cubics, made again bit for bit.
-  void AddChord(const raster::Chord& c, const raster::SampleColumns&) override {
-    const raster::Chord::Cubics* cubics = c.cubics();
-    chords.insert(chords.end(), {Rank(c.a().surfaceId), c.xa(), c.xb(), c.orthographic() ? 1.0 : 0.0,
-                                 cubics ? 1.0 + cubics->root : 0.0});
-    PutFragment(chords, c.a());
-    PutFragment(chords, c.b());
-    const raster::Chord::Cubics none;
-    const raster::Chord::Cubics& k = cubics ? *cubics : none;
-    for (const Vec3& n : k.normal) Put(chords, n);
-    chords.insert(chords.end(), std::begin(k.depth), std::end(k.depth));
-    chords.push_back(k.u0);
-  }
-  void AddTriangle(const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c,
-                   std::uint32_t surfaceId) override {
-    triangles.insert(triangles.end(), {static_cast<double>(row_), Rank(surfaceId), static_cast<double>(surfaceId)});
-    for (const raster::RasterVertex* v : {&a, &b, &c}) {
-      Put(triangles, v->h);
-      Put(triangles, v->position);
-      Put(triangles, v->normal);
-      Put(triangles, v->uv);
-      triangles.push_back(v->depth);
-      Put(triangles, v->colour);
-    }
-    lastRows.push_back(layout_.LastRowOf(a, b, c));
-  }
-  std::vector<double> fragments, chords, triangles;
-  std::vector<int> lastRows;  // per triangle
-
- private:
-  double Rank(std::uint32_t id) const { return id < rank_.size() ? rank_[id] : static_cast<double>(rank_.size()); }
-  const std::vector<std::uint32_t>& rank_;
-  const Layout& layout_;
-  int row_ = 0;
-};
-
-raster::Chord DecodeChord(const double* d) {
-  const double* cubic = d + 5 + 2 * kFragmentBody;
-  raster::Chord::Cubics k;
-  for (int i = 0; i < 4; ++i) k.normal[i] = Get3(cubic + 3 * i), k.depth[i] = cubic[12 + i];
-  k.root = static_cast<int>(d[4]) - 1;
-  k.u0 = cubic[16];
-  return raster::Chord(d[1], GetFragment(d + 5), d[2], GetFragment(d + 5 + kFragmentBody), d[3] != 0.0,
-                       d[4] != 0.0 ? &k : nullptr);
-}
-
-raster::RasterVertex DecodeVertex(const double* d) {
-  raster::RasterVertex v;
-  v.h = Get3(d);
-  v.position = Get3(d + 3);
-  v.normal = Get3(d + 6);
-  v.uv = Get2(d + 9);
-  v.depth = d[11];
-  v.colour = Get3(d + 12);
-  return v;
-}
-
-// A row as received, and where its lists are.
-struct RowMessage {
-  std::vector<double> data;
-  std::size_t nFragments = 0, nChords = 0, nTriangles = 0;
-  bool ok = true;
-  bool Parse(int row) {
-    if (data.size() < kHeader || data[0] != row) return false;
-    ok = data[1] != 0.0;
-    nFragments = static_cast<std::size_t>(data[2]);
-    nChords = static_cast<std::size_t>(data[3]);
-    nTriangles = static_cast<std::size_t>(data[4]);
-    return data.size() == kHeader + nFragments * kFragment + nChords * kChord + nTriangles * kTriangle;
-  }
-  const double* Fragment(std::size_t k) const { return data.data() + kHeader + k * kFragment; }
-  const double* Chord(std::size_t k) const { return data.data() + kHeader + nFragments * kFragment + k * kChord; }
-  const double* Triangle(std::size_t k) const {
-    return data.data() + kHeader + nFragments * kFragment + nChords * kChord + k * kTriangle;
-  }
-};
-
-// The entries of several messages in the order of their keys (fragments: the rank;
-// triangles: the row they were handed over on, then the rank): each message's are in that
-// order already and no two messages share a rank, so a k-way merge, ties kept in order.
-template <class Count, class Less, class At, class Take>
-void Merge(const std::vector<RowMessage>& m, Count count, At at, Less less, Take take, std::vector<std::size_t>* next) {
-  next->assign(m.size(), 0);
-  for (;;) {
-    std::size_t best = m.size();
-    for (std::size_t k = 0; k < m.size(); ++k)
-      if ((*next)[k] < count(m[k]) && (best == m.size() || less(at(m[k], (*next)[k]), at(m[best], (*next)[best]))))
-        best = k;
-    if (best == m.size()) return;
-    take(at(m[best], (*next)[best]++));
-  }
-}
-
-std::vector<double> Text(const std::string& s) { return std::vector<double>(s.begin(), s.end()); }
-std::string TextOf(const double* d, std::size_t n) {
-  std::string s;
-  for (std::size_t k = 0; k < n; ++k) s += static_cast<char>(d[k]);
-  return s;
-}
-
-// Point to point: sends that do not wait (each buffer kept until its send completes), and
-// receives of one tag from one process; bytes counted.
-class Link {
- public:
-  explicit Link(MPI_Comm comm) : comm_(comm) {
-    MPI_Comm_rank(comm, &rank_);
-    MPI_Comm_size(comm, &size_);
-  }
-  ~Link() { WaitAll(); }
-  int Rank() const { return rank_; }
-  int Size() const { return size_; }
-  template <class T>
-  void Send(int to, Tag tag, std::vector<T> data) {
-    Pending p;
-    p.doubles = std::is_same_v<T, double>;
-    if constexpr (std::is_same_v<T, double>) p.d = std::move(data);
-    else p.f = std::move(data);
-    const int n = static_cast<int>(p.doubles ? p.d.size() : p.f.size());
-    pending_.push_back(std::move(p));
-    Pending& q = pending_.back();
-    MPI_Isend(q.doubles ? static_cast<void*>(q.d.data()) : static_cast<void*>(q.f.data()), n,
-              q.doubles ? MPI_DOUBLE : MPI_FLOAT, to, tag, comm_, &q.request);
-    sent += static_cast<std::int64_t>(n) * (q.doubles ? 8 : 4);
-    // Buffers of sends that completed are let go.
-    while (!pending_.empty()) {
-      int done = 0;
-      MPI_Test(&pending_.front().request, &done, MPI_STATUS_IGNORE);
-      if (!done) break;
-      pending_.pop_front();
-    }
-  }
-  void Receive(int from, Tag tag, std::vector<double>* data) { ReceiveAs(from, tag, MPI_DOUBLE, data); }
-  void Receive(int from, Tag tag, std::vector<float>* data) { ReceiveAs(from, tag, MPI_FLOAT, data); }
-  void WaitAll() {
-    for (Pending& p : pending_) MPI_Wait(&p.request, MPI_STATUS_IGNORE);
-    pending_.clear();
-  }
-  std::int64_t sent = 0, received = 0;
-
- private:
-  template <class T>
-  void ReceiveAs(int from, Tag tag, MPI_Datatype type, std::vector<T>* data) {
-    MPI_Status status;
-    MPI_Probe(from, tag, comm_, &status);
-    int n = 0;
-    MPI_Get_count(&status, type, &n);
-    data->resize(static_cast<std::size_t>(n));
-    MPI_Recv(data->data(), n, type, from, tag, comm_, MPI_STATUS_IGNORE);
-    received += static_cast<std::int64_t>(n) * static_cast<std::int64_t>(sizeof(T));
-  }
-  struct Pending {
-    MPI_Request request = MPI_REQUEST_NULL;
-    bool doubles = true;
-    std::vector<double> d;
-    std::vector<float> f;
-  };
-  MPI_Comm comm_;
-  int rank_ = 0, size_ = 1;
-  std::deque<Pending> pending_;  // a deque: its elements stay where they are while it grows
-};
-
 // ---- one frame on one process ----
 
 // A process's part of a frame: it scans its share of the surfaces on every sample row,
 // sends each owner what lands on the owner's rows, and hands its own back end its rows
 // merged from every process. It goes on with the frame's messages after a failure
 // (Fail), sending empty rows, so that the others finish.
-class Band final : public DirectScanSource {
+class Band final : public DirectScanSource, public render::SharedRows {
  public:
   Band(MPI_Comm comm, const Scene& scene, const Camera& camera, const ExactScanOptions& options, int threads,
-       const std::vector<double>* go)
+       const FrameRequest* go)
       : link_(comm), options_(options) {
     const std::vector<ScanEntry> order = ScanOrder(scene.surfaces, camera);
     local_ = std::make_unique<PartitionedScan>(scene.surfaces, camera, options, threads, threads,
@@ -321,8 +56,7 @@ class Band final : public DirectScanSource {
     messages_.resize(static_cast<std::size_t>(link_.Size()));
     // Process 0 hands the polygons over with its rows, after every surface (their rank).
     if (link_.Rank() == 0 && !scene.polygons.empty()) {
-      raster::TriangleMesh triangles;
-      AppendPolygonTriangles(scene.polygons, camera, static_cast<std::uint32_t>(scene.surfaces.size()), &triangles);
+      raster::TriangleMesh triangles = render::PolygonTriangles(scene, camera);
       polygons_ = std::make_unique<PolygonQueue>(std::move(triangles));
     }
     // A test's fault: a process other than 0 fails at that sample row
@@ -353,12 +87,18 @@ class Band final : public DirectScanSource {
     // Every process's back end keeps the same of each sample (the same settings).
     local_->KeepDepths(kept, columns.n);
     if (started_) return;
-    std::vector<double> go = {0.0, options_.extrapolate ? 1.0 : 0.0, static_cast<double>(options_.thetaSteps),
-                              static_cast<double>(options_.slabRows), columns.x0, columns.dx,
-                              static_cast<double>(columns.n), y0, dy, static_cast<double>(nRows),
-                              static_cast<double>(aa_), static_cast<double>(layout_.channels)};
-    go[0] = frame_;
-    for (int k = 1; k < link_.Size(); ++k) link_.Send(k, kGo, go);
+    FrameRequest go;
+    go.frame = frame_;
+    go.extrapolate = options_.extrapolate;
+    go.thetaSteps = options_.thetaSteps;
+    go.slabRows = options_.slabRows;
+    go.columns = columns;
+    go.y0 = y0;
+    go.dy = dy;
+    go.nRows = nRows;
+    go.aa = aa_;
+    go.channels = layout_.channels;
+    for (int k = 1; k < link_.Size(); ++k) link_.Send(k, kGo, go.Encode());
     Start(go);
   }
   void SetFrame(int frame, int aa, int channels) {
@@ -449,7 +189,7 @@ class Band final : public DirectScanSource {
     const int me = link_.Rank();
     return [l, me](int p) { return l.Owner(p) == me; };
   }
-  bool FeedsPolygons() const override { return true; }
+  DirectScanSource& Source() override { return *this; }
   std::unique_ptr<raster::RowSink> AssembleRows(raster::RowSink& next) override;
 
   // This process's figures, and (process 0) the others' from their kDone.
@@ -520,13 +260,13 @@ class Band final : public DirectScanSource {
   const Layout& Rows() const { return layout_; }
 
  private:
-  void Start(const std::vector<double>& go) {
-    layout_.y0 = go[7];
-    layout_.dy = go[8];
-    layout_.nRows = static_cast<int>(go[9]);
-    layout_.aa = static_cast<int>(go[10]);
-    layout_.channels = static_cast<int>(go[11]);
-    columns_ = raster::SampleColumns{go[4], go[5], static_cast<int>(go[6])};
+  void Start(const FrameRequest& go) {
+    layout_.y0 = go.y0;
+    layout_.dy = go.dy;
+    layout_.nRows = go.nRows;
+    layout_.aa = go.aa;
+    layout_.channels = go.channels;
+    columns_ = go.columns;
     started_ = true;
   }
 
@@ -640,7 +380,7 @@ class SendRows final : public raster::RowSink {
     for (std::size_t x = 0; x < w; ++x) std::copy(pixels + x * raster::kChannels, pixels + x * raster::kChannels + c, row.begin() + static_cast<std::ptrdiff_t>(x * c));
     link_.Send(0, kPixels, std::move(row));
     next_ = y + 1;
-    return cli::gInterrupted == 0;
+    return render::gInterrupted == 0;
   }
   void SendTheRest() {
     for (; next_ < layout_.height; ++next_)
@@ -661,38 +401,37 @@ class NullBuffer final : public std::streambuf {
 };
 
 // One frame on a process other than 0, as process 0 asked for it in `go`.
-void ServeFrame(MPI_Comm comm, const cli::RenderOptions& o, const std::vector<double>& go) {
-  if (go.size() != 12) throw std::runtime_error("a malformed frame request");
+void ServeFrame(MPI_Comm comm, const render::RenderOptions& o, const FrameRequest& go) {
   NullBuffer none;
   std::ostream quiet(&none);
-  cli::CameraOptions cameraOptions = o.camera;
-  cameraOptions.frame = static_cast<int>(go[0]);
+  render::CameraOptions cameraOptions = o.camera;
+  cameraOptions.frame = go.frame;
   ExactScanOptions options;
-  options.extrapolate = go[1] != 0.0;
-  options.thetaSteps = static_cast<int>(go[2]);
-  options.slabRows = static_cast<int>(go[3]);
-  const int aa = static_cast<int>(go[10]);
-  const int threads = o.threads > 0 ? o.threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  auto loaded = cli::LoadSceneAndCamera(o.file, cameraOptions, quiet);
+  options.extrapolate = go.extrapolate;
+  options.thetaSteps = go.thetaSteps;
+  options.slabRows = go.slabRows;
+  const int aa = go.aa;
+  const int threads = render::ThreadsFor(o.threads);
+  auto loaded = render::LoadSceneAndCamera(o.file, cameraOptions, quiet);
   // A scene this process cannot read: it still takes its part in the frame's messages.
   Scene empty;
-  const Scene& scene = std::holds_alternative<cli::LoadedScene>(loaded) ? std::get<cli::LoadedScene>(loaded).scene : empty;
+  const Scene& scene = std::holds_alternative<render::LoadedScene>(loaded) ? std::get<render::LoadedScene>(loaded).scene : empty;
   Camera camera;
-  if (std::holds_alternative<cli::LoadedScene>(loaded)) camera = std::get<cli::LoadedScene>(loaded).view.camera;
+  if (std::holds_alternative<render::LoadedScene>(loaded)) camera = std::get<render::LoadedScene>(loaded).view.camera;
   Band band(comm, scene, camera, options, threads, &go);
-  band.SetFrame(static_cast<int>(go[0]), aa, static_cast<int>(go[11]));
+  band.SetFrame(go.frame, aa, go.channels);
   SendRows sink(band.Channel(), band.Rows());
   Counters counted;
-  if (!std::holds_alternative<cli::LoadedScene>(loaded)) band.Fail("cannot read " + o.file);
+  if (!std::holds_alternative<render::LoadedScene>(loaded)) band.Fail("cannot read " + o.file);
   if (band.Why().empty()) {
     try {
-      auto setup = cli::SetUpBackEnd(o, scene, camera, aa, quiet);
-      if (std::holds_alternative<int>(setup)) throw std::runtime_error("cannot set up the back end");
-      raster::RenderSettings& settings = std::get<std::unique_ptr<cli::BackEndSetup>>(setup)->settings;
+      auto setup = render::SetUpBackEnd(o, scene, camera, aa);
+      if (std::holds_alternative<render::Failure>(setup)) throw std::runtime_error("cannot set up the back end");
+      raster::RenderSettings& settings = std::get<std::unique_ptr<render::BackEndSetup>>(setup)->settings;
       settings.threads = threads;
       settings.ownsRow = band.OwnedRows();
       if (auto c = raster::RenderFragments(band, settings, sink)) counted = *c;
-      else band.Fail(cli::gInterrupted ? "interrupted" : "its render stopped");
+      else band.Fail(render::gInterrupted ? "interrupted" : "its render stopped");
     } catch (const std::exception& e) {
       band.Fail(e.what());
     }
@@ -707,18 +446,18 @@ void ServeFrame(MPI_Comm comm, const cli::RenderOptions& o, const std::vector<do
 
 }  // namespace
 
-std::unique_ptr<DirectScanSource> MakeSharedScan(MPI_Comm comm, const cli::RenderOptions& o, const Scene& scene,
+std::unique_ptr<render::SharedRows> MakeSharedScan(MPI_Comm comm, const render::RenderOptions& o, const Scene& scene,
                                                  const Camera& camera, const ExactScanOptions& options, int aa,
                                                  int threads) {
   auto band = std::make_unique<Band>(comm, scene, camera, options, threads, nullptr);
   // The AOVs travel only when the image keeps them: an EXR with --aov, or a depth map
   // (a "zfile" or "shadow" Display, as render writes it when no -o is given).
-  band->SetFrame(o.camera.frame, aa, o.aov || cli::WritesDepthMap(o, scene) ? raster::kChannels : 4);
+  band->SetFrame(o.camera.frame, aa, o.aov || render::WritesDepthMap(o, scene) ? raster::kChannels : 4);
   return band;
 }
 
-int ServeFrames(MPI_Comm comm, const cli::RenderOptions& options) {
-  cli::CatchInterrupts();  // process 0 decides when to stop; an interrupt reaches it too
+int ServeFrames(MPI_Comm comm, const render::RenderOptions& options) {
+  render::CatchInterrupts();  // process 0 decides when to stop; an interrupt reaches it too
   Link link(comm);
   std::vector<double> in;
   for (;;) {
@@ -729,7 +468,10 @@ int ServeFrames(MPI_Comm comm, const cli::RenderOptions& options) {
       return in.empty() ? 70 : static_cast<int>(in[0]);
     }
     link.Receive(0, static_cast<Tag>(status.MPI_TAG), &in);
-    if (status.MPI_TAG == kGo) ServeFrame(comm, options, in);
+    if (status.MPI_TAG != kGo) continue;
+    const std::optional<FrameRequest> request = FrameRequest::Decode(in);
+    if (!request) throw std::runtime_error("a malformed frame request");
+    ServeFrame(comm, options, *request);
   }
 }
 

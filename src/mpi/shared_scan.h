@@ -1,4 +1,4 @@
-// patchscan-mpi: Molnar's object partition and z-composition (paper 002) across MPI
+// patchscan-mpi: Molnar's object partition and z-composition (1990) across MPI
 // processes, composited by direct send (as IceT does it). Every process reads the scene;
 // its surfaces, in scan order, are dealt out to the processes as PartitionSurfaces deals
 // them to workers, and each process scans its share row by row on its own threads (a
@@ -29,27 +29,23 @@
 #include <memory>
 #include <string>
 
-#include "cli/render.h"
+#include "mpi/wire.h"
+#include "render/options.h"
+#include "render/shared_rows.h"
 
 namespace patchscan::mpi {
 
-// Pixel rows of a band: bands are dealt out to the processes round robin, so each renders
-// a share of every part of the image (a scene's busy parts are shared too). Small bands
-// share the load evenly; each band's first sample row is also its neighbour's last (with
-// aa > 1), and triangles reaching across a band go to each owner.
-constexpr int kBandRows = 8;
-
-// Process 0's front end for a frame of a direct render (RenderOptions::makeDirectScan): its
+// Process 0's front end for a frame of a direct render (RenderOptions::shareRows): its
 // share's scan, the rows it owns merged from every process, the others' finished rows
-// brought in to the image (DirectScanSource::AssembleRows).
-std::unique_ptr<DirectScanSource> MakeSharedScan(MPI_Comm comm, const cli::RenderOptions& options, const Scene& scene,
+// brought in to the image (SharedRows::AssembleRows).
+std::unique_ptr<render::SharedRows> MakeSharedScan(MPI_Comm comm, const render::RenderOptions& options, const Scene& scene,
                                                  const Camera& camera, const ExactScanOptions& scanOptions, int aa,
                                                  int threads);
 
 // The other processes: scan and render their parts of the frames process 0 asks for, until
 // it says the program is over; returns the exit code it sends. `options` is the command
 // line process 0 has.
-int ServeFrames(MPI_Comm comm, const cli::RenderOptions& options);
+int ServeFrames(MPI_Comm comm, const render::RenderOptions& options);
 
 // Process 0, when the program is over: every other process returns `code`.
 void FinishAll(MPI_Comm comm, int code);

@@ -1,4 +1,4 @@
-// The perspective camera and the screen space it defines (DESIGN.md, "Space").
+// The perspective camera and the screen space it defines.
 // Screen space: x right and y down in pixels (pixel (i, j) covers [i, i+1) x [j, j+1)),
 // and depth = 1 - hither / z, with z the distance along the view axis: depth is linear in
 // 1/z, 0 on the hither plane, approaching 1 at infinity, negative between eye and hither.

@@ -102,13 +102,4 @@ std::string CurveRibbon::Describe() const {
   return s.str();
 }
 
-std::string CurveRibbon::RibRequest() const {
-  std::ostringstream s;
-  s.precision(17);
-  s << "Basis \"bezier\" 3 \"bezier\" 3\nCurves \"cubic\" [4] \"nonperiodic\" \"P\" [";
-  for (const Vec3& p : b_) s << ' ' << p.x() << ' ' << p.y() << ' ' << p.z();
-  s << " ] \"width\" [" << w0_ << ' ' << w1_ << ']';
-  return s.str();
-}
-
 }  // namespace patchscan

@@ -41,8 +41,6 @@ class CurveRibbon {
   // The control points, each widened by half the largest width along every axis.
   std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
-  // A Curves request of this segment alone (Bézier basis, its two widths), to 17 digits.
-  std::string RibRequest() const;
 
   const std::array<Vec3, 4>& Bezier() const { return b_; }
   double Width0() const { return w0_; }

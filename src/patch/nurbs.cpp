@@ -1,6 +1,6 @@
 #include "patch/nurbs.h"
 
-#include "patch/text_file.h"
+#include "core/shortest_number.h"
 #include "patch/trim.h"
 
 #include <algorithm>

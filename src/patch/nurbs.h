@@ -1,4 +1,4 @@
-// NURBS surfaces (RenderMan's NuPatch) as surfaces (DESIGN.md, round 2): a patch of any
+// NURBS surfaces (RenderMan's NuPatch) as surfaces: a patch of any
 // order and knot vector, rational or not, is split at its knots into rational Bézier
 // pieces by knot insertion (Boehm's algorithm: every knot inside the parameter range raised
 // to multiplicity degree, so that each span's control points are its Bézier points). One

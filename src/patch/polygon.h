@@ -1,6 +1,6 @@
 // Polygons (RIB Polygon, GeneralPolygon, PointsPolygons, PointsGeneralPolygons): planar
 // pieces of surface that are already exact as triangles, so they go to the back end as
-// triangles in every mode (DESIGN.md, round 2). A polygon may be concave and have holes;
+// triangles in every mode. A polygon may be concave and have holes;
 // it is triangulated once, at reading, by ear clipping in its own plane.
 #pragma once
 

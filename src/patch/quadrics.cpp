@@ -45,12 +45,6 @@ std::string Words(const char* kind, const T&... values) {
 
 double Deg(double rad) { return rad / kRadPerDeg; }
 
-// A RIB request with its numbers to 17 significant digits: read back, the same doubles.
-template <class... T>
-std::string RibWords(const char* request, const T&... values) {
-  return DigitWords(17, request, values...);
-}
-
 }  // namespace
 
 Bounds2 SectorBox(double rhoMin, double rhoMax, double t0, double t1) {
@@ -76,7 +70,7 @@ Bounds2 SectorBox(double rhoMin, double rhoMax, double t0, double t1) {
 }
 
 Sphere::Sphere(double radius, double zMin, double zMax, double thetaMaxDeg)
-    : r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg), rib_(RibWords("Sphere", radius, zMin, zMax, thetaMaxDeg)) {
+    : RenderManQuadric({radius, zMin, zMax, thetaMaxDeg}), r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg) {
   const double r = std::abs(radius);
   const double z0 = std::clamp(std::min(zMin, zMax), -r, r);
   const double z1 = std::clamp(std::max(zMin, zMax), -r, r);
@@ -91,8 +85,8 @@ std::string Sphere::Describe() const {
 }
 
 Cylinder::Cylinder(double radius, double zMin, double zMax, double thetaMaxDeg)
-    : r_(radius), zMin_(zMin), zMax_(zMax), thetaMax_(thetaMaxDeg * kRadPerDeg),
-      rib_(RibWords("Cylinder", radius, zMin, zMax, thetaMaxDeg)) {
+    : RenderManQuadric({radius, zMin, zMax, thetaMaxDeg}),
+      r_(radius), zMin_(zMin), zMax_(zMax), thetaMax_(thetaMaxDeg * kRadPerDeg) {
   hull_ = RevolutionHull(r_, r_, thetaMax_, zMin, zMax);
 }
 std::string Cylinder::Describe() const {
@@ -100,7 +94,7 @@ std::string Cylinder::Describe() const {
 }
 
 Cone::Cone(double height, double radius, double thetaMaxDeg)
-    : h_(height), r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg), rib_(RibWords("Cone", height, radius, thetaMaxDeg)) {
+    : RenderManQuadric({height, radius, thetaMaxDeg}), h_(height), r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg) {
   hull_ = RevolutionHull(std::min(0.0, r_), std::max(0.0, r_), thetaMax_, 0.0, h_);
 }
 std::string Cone::Describe() const {
@@ -108,8 +102,8 @@ std::string Cone::Describe() const {
 }
 
 Paraboloid::Paraboloid(double rMax, double zMin, double zMax, double thetaMaxDeg)
-    : rMax_(rMax), zMin_(zMin), zMax_(zMax), thetaMax_(thetaMaxDeg * kRadPerDeg),
-      rib_(RibWords("Paraboloid", rMax, zMin, zMax, thetaMaxDeg)) {
+    : RenderManQuadric({rMax, zMin, zMax, thetaMaxDeg}),
+      rMax_(rMax), zMin_(zMin), zMax_(zMax), thetaMax_(thetaMaxDeg * kRadPerDeg) {
   // rho = rMax sqrt(z / zMax) is monotonic in z, so its range is set by the two ends.
   auto rho = [&](double z) { return rMax_ * std::sqrt(std::max(z / zMax_, 0.0)); };
   const double a = rho(zMin), b = rho(zMax);
@@ -120,8 +114,8 @@ std::string Paraboloid::Describe() const {
 }
 
 Hyperboloid::Hyperboloid(const Vec3& point1, const Vec3& point2, double thetaMaxDeg)
-    : p1_(point1), p2_(point2), thetaMax_(thetaMaxDeg * kRadPerDeg),
-      rib_(RibWords("Hyperboloid", point1.x(), point1.y(), point1.z(), point2.x(), point2.y(), point2.z(), thetaMaxDeg)) {
+    : RenderManQuadric({point1.x(), point1.y(), point1.z(), point2.x(), point2.y(), point2.z(), thetaMaxDeg}),
+      p1_(point1), p2_(point2), thetaMax_(thetaMaxDeg * kRadPerDeg) {
   // The sweep of a segment about z: its distance from the axis is convex along the
   // segment, so the largest is at an end; the smallest is the segment's distance to the
   // axis in the xy projection. The start angle of each point differs, so bound the full
@@ -139,7 +133,7 @@ std::string Hyperboloid::Describe() const {
 }
 
 Disk::Disk(double height, double radius, double thetaMaxDeg)
-    : h_(height), r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg), rib_(RibWords("Disk", height, radius, thetaMaxDeg)) {
+    : RenderManQuadric({height, radius, thetaMaxDeg}), h_(height), r_(radius), thetaMax_(thetaMaxDeg * kRadPerDeg) {
   hull_ = RevolutionHull(std::min(0.0, r_), std::max(0.0, r_), thetaMax_, h_, h_);
 }
 std::string Disk::Describe() const {
@@ -148,12 +142,11 @@ std::string Disk::Describe() const {
 
 Torus::Torus(double majorRadius, double minorRadius, double phiMinDeg, double phiMaxDeg,
              double thetaMaxDeg)
-    : major_(majorRadius),
+    : RenderManQuadric({majorRadius, minorRadius, phiMinDeg, phiMaxDeg, thetaMaxDeg}), major_(majorRadius),
       minor_(minorRadius),
       phiMin_(phiMinDeg * kRadPerDeg),
       phiMax_(phiMaxDeg * kRadPerDeg),
-      thetaMax_(thetaMaxDeg * kRadPerDeg),
-      rib_(RibWords("Torus", majorRadius, minorRadius, phiMinDeg, phiMaxDeg, thetaMaxDeg)) {
+      thetaMax_(thetaMaxDeg * kRadPerDeg) {
   // The tube circle (minor cos phi, minor sin phi) over the phi sweep is an arc; its box
   // gives the range of rho = major + minor cos phi and of z = minor sin phi.
   const Bounds2 tube = minor_ >= 0.0

@@ -34,65 +34,64 @@ inline double Turn(double t) {
 }
 }  // namespace detail
 
+// What each RenderMan quadric keeps beside its shape: its hull (a box about its swept
+// profile) and the N arguments it was made from, as given, in the request's order (what
+// makes the same surface again: scene/rib/writer.cpp).
+template <std::size_t N>
+class RenderManQuadric {
+ public:
+  std::span<const Vec3> Hull() const { return hull_; }
+  std::span<const double> Given() const { return given_; }
+
+ protected:
+  explicit RenderManQuadric(const std::array<double, N>& given) : given_(given) {}
+  BoxHull hull_;
+
+ private:
+  std::array<double, N> given_;
+};
+
 // Sphere: radius, zmin, zmax (clamped to [-radius, radius]), thetamax.
-class Sphere {
+class Sphere : public RenderManQuadric<4> {
  public:
   Sphere(double radius, double zMin, double zMax, double thetaMaxDeg);
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
-  std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
-  // The RIB request that makes this surface, its arguments as given, to 17 digits.
-  const std::string& RibRequest() const { return rib_; }
   double Radius() const { return r_; }
 
  private:
   double r_, phiMin_, phiMax_, thetaMax_;
-  BoxHull hull_;
-  std::string rib_;
 };
 
 // Cylinder: radius, zmin, zmax, thetamax.
-class Cylinder {
+class Cylinder : public RenderManQuadric<4> {
  public:
   Cylinder(double radius, double zMin, double zMax, double thetaMaxDeg);
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
-  std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
-  // The RIB request that makes this surface, its arguments as given, to 17 digits.
-  const std::string& RibRequest() const { return rib_; }
 
  private:
   double r_, zMin_, zMax_, thetaMax_;
-  BoxHull hull_;
-  std::string rib_;
 };
 
 // Cone: height, base radius, thetamax; base circle at z = 0, apex at (0, 0, height) for v = 1.
-class Cone {
+class Cone : public RenderManQuadric<3> {
  public:
   Cone(double height, double radius, double thetaMaxDeg);
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
-  std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
-  // The RIB request that makes this surface, its arguments as given, to 17 digits.
-  const std::string& RibRequest() const { return rib_; }
 
  private:
   double h_, r_, thetaMax_;
-  BoxHull hull_;
-  std::string rib_;
 };
 
 // Paraboloid: rmax, zmin, zmax, thetamax; radius rmax * sqrt(z / zmax).
 // At the apex (z = 0) the true v-derivative is unbounded; see kParaboloidApexRatio.
-class Paraboloid {
+class Paraboloid : public RenderManQuadric<4> {
  public:
   Paraboloid(double rMax, double zMin, double zMax, double thetaMaxDeg);
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
-  std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
-  // The RIB request that makes this surface, its arguments as given, to 17 digits.
-  const std::string& RibRequest() const { return rib_; }
 
   // z / zmax is floored at this ratio when derivatives are taken, so that the collapsed
   // apex edge yields large finite derivatives (a rho' of about 5e5 * rmax) instead of inf.
@@ -100,58 +99,41 @@ class Paraboloid {
 
  private:
   double rMax_, zMin_, zMax_, thetaMax_;
-  BoxHull hull_;
-  std::string rib_;
 };
 
 // Hyperboloid: the segment point1 -> point2 swept about the z axis by thetamax.
-class Hyperboloid {
+class Hyperboloid : public RenderManQuadric<7> {
  public:
   Hyperboloid(const Vec3& point1, const Vec3& point2, double thetaMaxDeg);
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
-  std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
-  // The RIB request that makes this surface, its arguments as given, to 17 digits.
-  const std::string& RibRequest() const { return rib_; }
 
  private:
   Vec3 p1_, p2_;
   double thetaMax_;
-  BoxHull hull_;
-  std::string rib_;
 };
 
 // Disk: height, radius, thetamax; v = 0 on the rim, v = 1 at the centre.
-class Disk {
+class Disk : public RenderManQuadric<3> {
  public:
   Disk(double height, double radius, double thetaMaxDeg);
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
-  std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
-  // The RIB request that makes this surface, its arguments as given, to 17 digits.
-  const std::string& RibRequest() const { return rib_; }
 
  private:
   double h_, r_, thetaMax_;
-  BoxHull hull_;
-  std::string rib_;
 };
 
 // Torus: major radius, minor radius, phimin, phimax (the tube angle), thetamax.
-class Torus {
+class Torus : public RenderManQuadric<5> {
  public:
   Torus(double majorRadius, double minorRadius, double phiMinDeg, double phiMaxDeg,
         double thetaMaxDeg);
   void Evaluate(double u, double v, DerivOrder order, SurfaceDerivs* d) const;
-  std::span<const Vec3> Hull() const { return hull_; }
   std::string Describe() const;
-  // The RIB request that makes this surface, its arguments as given, to 17 digits.
-  const std::string& RibRequest() const { return rib_; }
 
  private:
   double major_, minor_, phiMin_, phiMax_, thetaMax_;
-  BoxHull hull_;
-  std::string rib_;
 };
 
 // Test surface z = x^2 - y^2 over the square x, y in [-a, a] (x = a(2u-1), y = a(2v-1)).

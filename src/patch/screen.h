@@ -1,6 +1,6 @@
 // The screen-space view of a surface: S(u,v) carried through the camera's projective map
-// with the quotient rule, to second order (DESIGN.md, "Space"). In screen space view rays
-// are parallel to the depth axis, so Blinn's orthographic formulas (paper 001 §3) hold.
+// with the quotient rule, to second order. In screen space view rays
+// are parallel to the depth axis, so Blinn's orthographic formulas (Blinn 1978 §3) hold.
 #pragma once
 
 #include <optional>
@@ -65,7 +65,7 @@ inline void EvaluateScreen(const Surface& s, const ScreenMap& map, double u, dou
   VisitShape(s, [&](const auto& shape) { EvaluateScreen(shape, map, u, v, order, out); });
 }
 
-// Blinn's silhouette function Zn (paper 001 §3.1): the depth component of the screen
+// Blinn's silhouette function Zn (Blinn 1978 §3.1): the depth component of the screen
 // normal, J = x_u y_v - x_v y_u. Zero on the silhouette; its sign says which side faces
 // the eye. Needs first derivatives.
 inline double SilhouetteJ(const SurfaceDerivs& s) {

@@ -1,6 +1,6 @@
 // Subdivision surfaces as surfaces: every base face of a Catmull-Clark control cage is a
 // Surface on [0,1]^2, evaluated on its limit surface with first and second derivatives by
-// OpenSubdiv's Bfr (DESIGN.md, round 2). A quadrilateral face is one surface; a face of n != 4
+// OpenSubdiv's Bfr. A quadrilateral face is one surface; a face of n != 4
 // sides is n surfaces, Bfr's quadrangulated sub-faces (each the quarter of the face at one
 // corner). Faces that share an edge evaluate the same limit curve along it, so the scans see
 // no cracks between them.

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "core/sign_changes.h"
-#include "patch/text_file.h"
+#include "core/shortest_number.h"
 
 namespace patchscan {
 namespace {

@@ -1,4 +1,4 @@
-// Trim curves (RenderMan's TrimCurve; DESIGN.md, round 2): closed loops of NURBS curves in
+// Trim curves (RenderMan's TrimCurve): closed loops of NURBS curves in
 // a NuPatch's (u,v) that cut part of it away. A point is inside the loops when a ray from
 // it crosses them an odd number of times (the specification's odd winding rule). The
 // inside is kept and the rest cut away — an exporter's loop around the whole patch keeps

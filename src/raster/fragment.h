@@ -1,5 +1,5 @@
-// The back end's second input (DESIGN.md): exact per-sample fragments, for renders whose
-// front end finds each visible sample's surface point itself (paper 001 §3.3, the exact
+// The back end's second input: exact per-sample fragments, for renders whose
+// front end finds each visible sample's surface point itself (Blinn 1978 §3.3, the exact
 // X scan) instead of handing over triangles.
 #pragma once
 
@@ -56,7 +56,7 @@ struct ChordSlope {
   double silhouette = INFINITY;  // pixels
 };
 
-// A chord of a surface's section along one sample row (θ mode, paper 001 §4: the link
+// A chord of a surface's section along one sample row (θ mode, Blinn 1978 §4: the link
 // between two chain vertices): the screen x and fragment of each end, in front of the eye.
 // It covers the columns past xa up to xb (within kColumnEpsPx), or, a point chord (xa ==
 // xb), the one column at xa. Along it the attributes are blended perspective-correctly
@@ -364,7 +364,7 @@ class Chord {
 };
 
 // Receives the fragments of one sample row (implemented by the back end), and triangles:
-// the slabs of a θ scan (paper 001 §4), one-pixel-high pieces of surface between two
+// the slabs of a θ scan (Blinn 1978 §4), one-pixel-high pieces of surface between two
 // scan lines whose samples the back end finds and interpolates itself. A triangle handed
 // over while sample row y is scanned covers its samples on that row and below; none of it
 // may lie above y.

@@ -9,6 +9,7 @@
 #include <limits>
 #include <system_error>
 
+#include "core/check.h"
 #include "raster/image_io.h"
 #include "raster/png_encoder.h"
 #include "raster/srgb.h"
@@ -26,6 +27,7 @@ struct ImageWriter::Impl {
   std::vector<std::uint8_t> bytes;  // that row
   std::vector<float> depth;         // a depth map's row (OpenDepthMap)
   bool committed = false;
+  int nextRow = 0;  // rows come top to bottom, each once (RowSink's contract)
   // Until committed, the temporary file goes, also when Open fails after creating it.
   ~Impl() {
     if (committed) return;
@@ -210,6 +212,8 @@ std::variant<std::unique_ptr<ImageWriter>, std::string> ImageWriter::OpenDepthMa
 bool ImageWriter::EncodesInParallel() const { return impl_->png != nullptr; }
 
 bool ImageWriter::WriteRow(int y, const float* pixels) {
+  PATCHSCAN_DCHECK(y == impl_->nextRow, "an image's rows written top to bottom, each once");
+  ++impl_->nextRow;
   if (impl_->png) return impl_->png->WriteRow(pixels, kChannels);
   if (!impl_->depth.empty()) {  // a depth map: Z alone, no surface as the largest float
     for (int x = 0; x < impl_->width; ++x)

@@ -1,6 +1,6 @@
 // What the back end eats: triangles whose vertices carry homogeneous screen position,
 // world position and normal, and uv, tagged with the surface they come from. The back
-// end never sees a surface (DESIGN.md): tessellated and direct renders differ only in
+// end never sees a surface: tessellated and direct renders differ only in
 // where these come from.
 #pragma once
 

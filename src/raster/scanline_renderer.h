@@ -1,4 +1,4 @@
-// The shared scan-line back end (paper 000, Woo and Chall): a y-sorted list of triangles
+// The shared scan-line back end (Woo and Chall 1990, Woo and Chall): a y-sorted list of triangles
 // with integer sample-row bounds, an active list per sample row, nearest-depth resolve per
 // sample on an l x l grid whose samples on pixel edges are shared with the neighbours,
 // and one shading call per pixel per visible surface. No image-sized buffer: memory grows
@@ -35,7 +35,7 @@ struct RenderSettings {
   double hither = 0.0;  // eye distance of the hither plane: nearer samples are dropped
   double opacity = 1.0;     // (0, 1]: below 1, linear transparency over kMaxLayers layers
   bool hiddenLine = false;  // white surfaces with their triangle edges in black, unshaded
-  std::uint64_t seed = 1;   // of the stochastic extra shading calls (paper 000 §3.4.2)
+  std::uint64_t seed = 1;   // of the stochastic extra shading calls (Woo and Chall 1990 §3.4.2)
   int threads = 1;          // rows are shaded on this many threads, a few in flight (same image for any)
   // Whether the AOV channels are made (an EXR with them, a depth map); else each pixel's
   // AOV channels hold the background's and only colour and alpha are the render's.
@@ -82,7 +82,7 @@ class RowSink {
   virtual bool WriteRow(int y, const float* pixels) = 0;
 };
 
-// The renders below return the counts paper 000 reports (core/counters.h, the back-end
+// The renders below return the counts Woo and Chall 1990 reports (core/counters.h, the back-end
 // group): n triangles, the most active on one sample row (m), the samples tested and
 // covered, and the shading calls.
 

@@ -77,7 +77,7 @@ Rgb Shade(const Vec3& p, const Vec3& n, const Rgb& base, const Vec3& eye, const 
   using Model = Material::Model;
   if (m.model == Model::Constant) return base;
   const Vec3 v = (eye - p).normalized();
-  // Interpolated unit normals are nearly unit: one Newton step (paper 000 §4.4) is enough
+  // Interpolated unit normals are nearly unit: one Newton step (Woo and Chall 1990 §4.4) is enough
   // inside the window, exact normalization outside it.
   const double n2 = n.squaredNorm();
   Vec3 nn = std::abs(n2 - 1.0) < kRenormWindow ? Renormalize(n) : n.normalized();

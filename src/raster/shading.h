@@ -1,6 +1,6 @@
 // Two illumination models, shaded two-sided (a normal facing away from the eye is turned
 // towards it):
-// - the default, paper 004 (COS 426, "Illumination model"):
+// - the default, COS 426 2022 (COS 426, "Illumination model"):
 //     I = I_E + K_A I_AL + sum_i (K_D (N . L_i) I_i + K_S (V . R_i)^n I_i);
 // - RenderMan's standard surface shaders (RenderMan Interface 3.2, appendix A: constant,
 //   matte, plastic, metal; paintedplastic is plastic with a texture), whose specular term
@@ -86,7 +86,7 @@ Rgb Shade(const Vec3& p, const Vec3& n, const Rgb& base, const Vec3& eye, const 
           const LightRig& rig);
 
 // Renormalization of a vector whose length is near 1 by one Newton step for 1/sqrt
-// (paper 000 §4.4, fast renormalization): exact to second order in (|v|^2 - 1).
+// (Woo and Chall 1990 §4.4, fast renormalization): exact to second order in (|v|^2 - 1).
 inline Vec3 Renormalize(const Vec3& v) { return v * (1.5 - 0.5 * v.squaredNorm()); }
 // Shade renormalizes by one step when | |n|^2 - 1 | is below this: the step leaves a
 // length error of at most (3/8) 0.02^2 = 1.5e-4, invisible in 8- or 16-bit output.

@@ -1,6 +1,6 @@
 // An image texture read through OpenImageIO's TextureSystem (mipmapped, filtered over the
 // footprint given by the screen derivatives of uv). Nothing is created and no file is
-// opened until a visible sample first asks for a colour (paper 000 §5: lazy texture
+// opened until a visible sample first asks for a colour (Woo and Chall 1990 §5: lazy texture
 // loading), so a texture on a hidden surface costs nothing.
 #pragma once
 

@@ -1,4 +1,4 @@
-// Triangle setup in 2D homogeneous coordinates after Olano and Greer (paper 003): the
+// Triangle setup in 2D homogeneous coordinates after Olano and Greer (1997): the
 // edge functions are the rows of the inverse of the vertex matrix M = [h0 h1 h2], so no
 // triangle is clipped or split. Triangles crossing the eye plane become "external"
 // triangles whose visible parts are still exactly the samples where all edge functions
@@ -12,7 +12,7 @@
 namespace patchscan::raster {
 
 // Below this |det M| relative to the product of the vertices' sizes, a triangle is seen
-// edge-on or is degenerate (paper 003 §"Computation of the inverse"): it covers no
+// edge-on or is degenerate (Olano and Greer 1997 §"Computation of the inverse"): it covers no
 // sample reliably and its inverse would amplify rounding without bound.
 constexpr double kMinRelativeDet = 1e-14;
 

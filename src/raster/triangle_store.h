@@ -1,4 +1,4 @@
-// The back end's sample lattice and its store of active triangles (paper 000 §3.3; paper
+// The back end's sample lattice and its store of active triangles (Woo and Chall 1990 §3.3; paper
 // 003 for the set-up): what a sample holds, the nearest-layer insertion, and the slots
 // of the triangles being scanned with their per-sample-row scan and per-pixel shading.
 // Private to the scan-line renderer (scanline_renderer.cpp), in a header so that its
@@ -21,7 +21,7 @@ namespace patchscan::raster {
 
 // The sample lattice: with l = 1 one sample at each pixel centre; with l > 1 samples at
 // spacing 1/(l-1) from the image's top-left corner, so a pixel's l x l samples include its
-// edges and corners, shared with its neighbours (paper 000 §3.3).
+// edges and corners, shared with its neighbours (Woo and Chall 1990 §3.3).
 struct Lattice {
   int l;
   double spacing, offset;

@@ -1,4 +1,4 @@
-// Boundary-edge trackers of the Y scan (paper 001 §3.2.1): the points where the scan line
+// Boundary-edge trackers of the Y scan (Blinn 1978 §3.2.1): the points where the scan line
 // crosses the four boundary edges of a surface, advanced from one scan line to the next
 // by univariate Newton on y(edge(t)) = yScan from a start extrapolated from the last two
 // positions (§3.5).

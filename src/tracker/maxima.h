@@ -1,4 +1,4 @@
-// The maxima pre-pass of paper 001 §3.2.2.1: before the Y scan, find per surface the
+// The maxima pre-pass of Blinn 1978 §3.2.2.1: before the Y scan, find per surface the
 // places where the scan line first meets it (local maxima of the height on screen) and
 // the saddles where its level curves change shape (§3.2.2.4).
 //

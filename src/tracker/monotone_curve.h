@@ -1,4 +1,4 @@
-// What the Y scan's curve trackers share (paper 001 §3.2.1): a curve in the domain —
+// What the Y scan's curve trackers share (Blinn 1978 §3.2.1): a curve in the domain —
 // a boundary edge, or a trim curve — is cut where screen y turns, so that each piece holds
 // one crossing of any scan line between its ends; the crossing is found by univariate
 // Newton from an extrapolated start (§3.5), or by Newton kept inside the piece, which
@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/check.h"
 #include "core/sign_changes.h"
 #include "tracker/newton.h"
 
@@ -30,6 +31,12 @@ template <class F>
 double CrossingOnPiece(F&& f, double t0, double t1, double tolerance) {
   double lo = t0, hi = t1, flo, dummy;
   f(lo, &flo, &dummy);
+#if PATCHSCAN_CHECKS_ON
+  double fhi;
+  f(hi, &fhi, &dummy);
+  PATCHSCAN_DCHECK(lo <= hi && (!(flo * fhi > 0.0) || std::min(std::abs(flo), std::abs(fhi)) < tolerance),
+                   "Newton's bracket holds a crossing: f changes sign on [t0, t1], or is within tolerance of 0 at an end");
+#endif
   double x = 0.5 * (lo + hi), stepBefore = hi - lo, step = stepBefore;
   for (int it = 0; it < 200; ++it) {
     if (x <= lo || x >= hi) break;  // the bracket is down to adjacent doubles

@@ -1,4 +1,4 @@
-// Newton solvers for the trackers (paper 001 §3.2.1, §3.5): univariate for edge trackers,
+// Newton solvers for the trackers (Blinn 1978 §3.2.1, §3.5): univariate for edge trackers,
 // bivariate for silhouette and X-scan trackers and for stationary points. Every solver is
 // damped by halving the step while the residual does not decrease (Blinn's thesis), is
 // capped, never returns NaN, and says how it ended. Templates over the function, so a
@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/check.h"
 #include "core/vec.h"
 
 namespace patchscan {
@@ -67,6 +68,7 @@ struct Newton1Result {
 template <class Eval>
 Newton1Result SolveNewton1(Eval&& eval, double t0, double lo, double hi, double tolerance,
                            const NewtonOptions& opt = {}) {
+  PATCHSCAN_DCHECK(lo <= hi, "Newton's bracket [lo, hi] not empty");
   Newton1Result r;
   r.t = std::clamp(t0, lo, hi);
   double df = 0.0;

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <array>
 
+#include "core/check.h"
+
 namespace patchscan {
 namespace {
 
@@ -120,7 +122,7 @@ void FindCrossingsBySubdivision(const ShapeT& shape, const ScreenMap& map, doubl
 
 // Two trackers dying on one line whose failed iterations ended this much closer together
 // than the trackers had been (as a fraction of that distance) ran into each other: the
-// silhouette curve's lowest point passed between the lines (paper 001 §3.2.3's minimum,
+// silhouette curve's lowest point passed between the lines (Blinn 1978 §3.2.3's minimum,
 // where Newton fails to converge). Measured on the teapot's pairs at 1024x768: 1e-4 to
 // 0.07; a lost tracker's failure point has no partner.
 constexpr double kMetFraction = 0.25;
@@ -137,7 +139,7 @@ const Vec2 kTolerance(kEdgeTolPx, kEdgeTolPx);
 // Steps between scan lines within this fraction of each other are equal.
 constexpr double kEqualStepRel = 1e-9;
 
-// Where a tracker's iteration starts on line yScan: ExtrapolatedStart (paper 001 §3.5) where
+// Where a tracker's iteration starts on line yScan: ExtrapolatedStart (Blinn 1978 §3.5) where
 // the lines of its last solutions were equally spaced, as the exact scan's are; else the
 // line through its last two solutions, in screen y. θ slabs step half a row from a line to
 // the first row, a row, half a row to the next line, or a whole interval from line to line:
@@ -188,6 +190,7 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
   births_.clear();
   exits_.clear();
   insideDeaths_.clear();
+  PATCHSCAN_DCHECK(!(yScan < yLast_), "a surface's scan lines non-decreasing (Save and Restore to go back)");
   yLast_ = yScan;
   bool search = false;  // an event no tracker explains: look for the crossings again
   std::erase_if(trackers_, [&](SilhouetteTracker& t) {

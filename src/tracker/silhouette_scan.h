@@ -1,4 +1,4 @@
-// Silhouette trackers of the Y scan (paper 001 §3.2.1–3.2.3): the points where the scan
+// Silhouette trackers of the Y scan (Blinn 1978 §3.2.1–3.2.3): the points where the scan
 // line crosses the silhouette J = 0 inside the domain, advanced scan line by scan line by
 // bivariate Newton on (y - yScan, J) = 0 from a start extrapolated from the last two
 // positions (§3.5).

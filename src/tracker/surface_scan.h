@@ -1,4 +1,4 @@
-// One surface's Y scan (paper 001 §3.2): the maxima pre-pass when the scan reaches the
+// One surface's Y scan (Blinn 1978 §3.2): the maxima pre-pass when the scan reaches the
 // surface, then line by line its boundary-edge and silhouette trackers advanced by Newton,
 // with the events of the scan (births at maxima, folds and saddles, deaths, repairs). The
 // exact and θ X scans both start from its trackers; a worker owns the scans of its share

@@ -1,8 +1,8 @@
-// θ trackers and turn trackers (paper 001 §4.1, §4.3) as kernels: each solves for one point
+// θ trackers and turn trackers (Blinn 1978 §4.1, §4.3) as kernels: each solves for one point
 // of a scan line by bivariate Newton, from a start on the line before (or from a crawl's
 // interpolated point), so the X scan can carry θ-sampled chains from line to line.
 //
-// In perspective (DESIGN.md) the surface normal N is resolved in the scan plane (the plane
+// In perspective the surface normal N is resolved in the scan plane (the plane
 // through the eye and the scan line) into T = -N·r, towards the eye along the view ray r
 // (zero on the silhouette), and S = N·s, sideways along s = r × q, q the scan plane's unit
 // normal; θ = atan2(T, S). A θ tracker of table angle θ_i follows G_i = S sin θ_i -

@@ -1,6 +1,6 @@
-// Trim-curve trackers of the Y scan (DESIGN.md, round 2): the points where the scan line
+// Trim-curve trackers of the Y scan: the points where the scan line
 // crosses the trim curves of a trimmed NURBS piece (patch/trim.h), tracked as the
-// boundary edges are (tracker/edge_scan.h, paper 001 §3.2.1): each curve, clipped to the
+// boundary edges are (tracker/edge_scan.h, Blinn 1978 §3.2.1): each curve, clipped to the
 // piece's domain, is cut where screen y turns; a tracker is born where the scan line
 // passes the top of a piece and dies at its bottom, and in between follows its crossing by
 // univariate Newton along the curve from an extrapolated start (§3.5), repaired inside

@@ -1,4 +1,4 @@
-// The exact render's front end (paper 001 §3): per surface the maxima pre-pass, then
+// The exact render's front end (Blinn 1978 §3): per surface the maxima pre-pass, then
 // scan line by scan line the boundary-edge and silhouette trackers of the Y scan and the
 // exact X scan between them, handing the back end one fragment per sample of every
 // surface layer (depth, exact normal, uv, surface id). A surface is set up when the scan

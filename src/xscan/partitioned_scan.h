@@ -1,4 +1,4 @@
-// Molnar's object partition and z-composition (paper 002) on threads: the scene's surfaces
+// Molnar's object partition and z-composition (1990) on threads: the scene's surfaces
 // are dealt out to workers, each an ExactScan of its share that scans every sample row in
 // order exactly as it would alone; the rows of all workers are composited for the back end,
 // which keeps the nearest layers per sample.
@@ -34,7 +34,7 @@ std::vector<std::vector<ScanEntry>> PartitionSurfaces(const std::vector<ScanEntr
 
 // What a direct render's front end gives the program besides the rows: its counts, its
 // times, and (with one process) the trackers drawn on an overlay. PartitionedScan is one;
-// a scan shared between processes (src/mpi) is another.
+// a scan shared between processes (src/mpi, through render/shared_rows.h) is another.
 class DirectScanSource : public raster::FragmentSource {
  public:
   // Each scanning worker's wall seconds, and the compositor's merging their rows.
@@ -42,26 +42,9 @@ class DirectScanSource : public raster::FragmentSource {
     std::vector<double> workerSeconds;
     double compositeSeconds = 0.0;
   };
-  // One process of a scan shared between processes: its rank, its seconds scanning, the
-  // bytes it sent and received, its peak resident memory.
-  struct Process {
-    int rank = 0;
-    double seconds = 0.0;
-    std::int64_t bytesSent = 0, bytesReceived = 0;
-    long peakKiB = 0;
-  };
   virtual Counters Stats() const = 0;
   virtual Timing Times() const = 0;
-  virtual std::vector<Process> Processes() const { return {}; }
   virtual void SetTrace(TraceSink* trace) = 0;
-  // A render shared between processes renders some pixel rows here (the back end's
-  // RenderSettings::ownsRow; empty: all), and its finished rows reach `next` through the
-  // sink this returns, which brings the other processes' rows in (null: straight to `next`).
-  virtual std::function<bool(int)> OwnedRows() const { return {}; }
-  virtual std::unique_ptr<raster::RowSink> AssembleRows(raster::RowSink& /*next*/) { return nullptr; }
-  // Whether the source hands the scene's polygons over itself (else the program wraps it
-  // in a PolygonFeed).
-  virtual bool FeedsPolygons() const { return false; }
 };
 
 class PartitionedScan final : public DirectScanSource {

@@ -6,21 +6,16 @@
 
 namespace patchscan {
 
-void AppendPolygonTriangles(std::span<const ScenePolygons> polygons, const Camera& camera, std::uint32_t firstId,
-                            raster::TriangleMesh* out) {
+void AppendPolygonTriangles(const PolygonMesh& mesh, const Camera& camera, std::uint32_t id, raster::TriangleMesh* out) {
   const Mat4 screenFromWorld = ScreenFromWorld(camera);
   const Vec4 depthRow = ViewDepthRow(camera);
-  for (std::size_t k = 0; k < polygons.size(); ++k) {
-    const PolygonMesh& mesh = polygons[k].mesh;
-    const auto base = static_cast<std::uint32_t>(out->vertices.size());
-    for (const PolygonVertex& v : mesh.vertices) {
-      const Vec4 h = screenFromWorld * v.position.homogeneous();
-      out->vertices.push_back({Vec3(h.x(), h.y(), h.w()), v.position, v.normal, v.st,
-                               depthRow.dot(v.position.homogeneous()), v.colour});
-    }
-    const auto id = firstId + static_cast<std::uint32_t>(k);
-    for (const auto& t : mesh.triangles) out->triangles.push_back({{base + t[0], base + t[1], base + t[2]}, id});
+  const auto base = static_cast<std::uint32_t>(out->vertices.size());
+  for (const PolygonVertex& v : mesh.vertices) {
+    const Vec4 h = screenFromWorld * v.position.homogeneous();
+    out->vertices.push_back({Vec3(h.x(), h.y(), h.w()), v.position, v.normal, v.st,
+                             depthRow.dot(v.position.homogeneous()), v.colour});
   }
+  for (const auto& t : mesh.triangles) out->triangles.push_back({{base + t[0], base + t[1], base + t[2]}, id});
 }
 
 PolygonQueue::PolygonQueue(raster::TriangleMesh triangles) : mesh_(std::move(triangles)) {
@@ -51,7 +46,7 @@ void PolygonFeed::BeginRows(const raster::SampleColumns& columns, double y0, dou
 
 void PolygonQueue::HandOver(double y, double dy, raster::FragmentRow& out) {
   // A triangle whose top lies above the next row has no sample above this one: it is
-  // handed over now (paper 000 §3.3's y-sorted list, met row by row).
+  // handed over now (Woo and Chall 1990 §3.3's y-sorted list, met row by row).
   for (; next_ < order_.size() && top_[next_] < y + dy; ++next_) {
     const raster::RasterTriangle& t = mesh_.triangles[order_[next_]];
     out.AddTriangle(mesh_.vertices[t.v[0]], mesh_.vertices[t.v[1]], mesh_.vertices[t.v[2]], t.surfaceId);

@@ -4,20 +4,17 @@
 #pragma once
 
 #include <cstdint>
-#include <span>
 #include <vector>
 
 #include "patch/camera.h"
-#include "patch/scene.h"
+#include "patch/polygon.h"
 #include "raster/fragment.h"
 #include "raster/mesh.h"
 
 namespace patchscan {
 
-// The triangles of `polygons` for `camera` appended to `out`, polygons[k]'s with surface
-// id firstId + k.
-void AppendPolygonTriangles(std::span<const ScenePolygons> polygons, const Camera& camera, std::uint32_t firstId,
-                            raster::TriangleMesh* out);
+// The triangles of `mesh` for `camera` appended to `out`, with surface id `id`.
+void AppendPolygonTriangles(const PolygonMesh& mesh, const Camera& camera, std::uint32_t id, raster::TriangleMesh* out);
 
 // Polygon triangles handed over row by row: at sample row y, those whose top is above the
 // next row (y + dy), in the order of their tops (then as given).

@@ -1,4 +1,4 @@
-// The θ walker's advance from one scan line to the next (paper 001 §4.1, §4.2, §3.5): each
+// The θ walker's advance from one scan line to the next (Blinn 1978 §4.1, §4.2, §3.5): each
 // chain of the line before is carried over vertex by vertex, its θ and turn trackers
 // solved by Newton from extrapolated starts and its ends and silhouettes taken from the Y
 // scan's trackers, and a link that looks suspicious is repaired sideways by a crawl

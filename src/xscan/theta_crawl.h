@@ -1,4 +1,4 @@
-// The θ walker's crawl (paper 001 §4.1–4.3): one chain walked sideways along its level
+// The θ walker's crawl (Blinn 1978 §4.1–4.3): one chain walked sideways along its level
 // curve from a boundary end or a silhouette, or one link of a chain crawled from its first
 // vertex to the tracker at its other end (§4.2). Each step of the walk (LevelWalker::
 // TryStep) turns θ, and the normal out of the scan plane, by at most half a table step; a

@@ -1,4 +1,4 @@
-// θ slabs (paper 001 §4; DESIGN.md): the chains of one surface on two consecutive scan
+// θ slabs (Blinn 1978 §4): the chains of one surface on two consecutive scan
 // lines bound the piece of surface between them, a polygon one scan step high whose top
 // and bottom are the chains themselves. Cut into triangles whose vertices are the chains'
 // vertices, with their exact positions, normals and uv, it goes to the shared triangle
@@ -61,11 +61,8 @@ raster::RasterVertex SlabVertex(const ThetaVertex& v, double y, bool orthographi
 // about kSlabNormalTolRad: n pieces where the blend across the whole link strays δ at its
 // middle, n = ⌈√(δ / tol)⌉ (a smooth curve's chord error falls as the square of its
 // length), at most kMaxLinkPieces and one more than the sample columns between its ends.
-// The chains' own vertices are kept, so the slabs stay as watertight as before. Measured
-// (teapot 1024x768, aa 4, 1-px slabs, against exact): colour RMSE at 4 / 8 / 16 steps
-// 0.0215 / 0.0098 / 0.0060 unrefined, 0.0086 / 0.0061 / 0.0050 at 0.05 rad, 0.0067 /
-// 0.0029 / 0.0019 at 0.02, 0.0057 / 0.0028 / 0.0017 at 0.01; the scan and shading's
-// instructions +5.6 % (0.02) and +7.8 % (0.01) at 4 steps, +1.2 % from 0.02 to 0.01 at 16.
+// The chains' own vertices are kept, so the slabs stay as watertight as before. How the
+// tolerance was chosen: docs/tuning.md.
 constexpr double kSlabNormalTolRad = 0.01;
 constexpr int kMaxLinkPieces = 8;
 // The chains of `in` with those vertices added (kind Table, index -1: no anchor), into

@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "patch/bicubic.h"
-#include "patch/bpt_reader.h"
+#include "scene/bpt_reader.h"
 #include "test_util.h"
 
 namespace patchscan {

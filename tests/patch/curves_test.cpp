@@ -8,7 +8,7 @@
 
 #include "patch/basis.h"
 #include "patch/curves.h"
-#include "patch/rib_reader.h"
+#include "scene/rib/reader.h"
 #include "patch/surface.h"
 #include "test_util.h"
 

@@ -11,8 +11,8 @@
 #include "patch/basis.h"
 #include "patch/bicubic.h"
 #include "patch/cages.h"
-#include "patch/rib_reader.h"
-#include "patch/rib_writer.h"
+#include "scene/rib/reader.h"
+#include "scene/rib/writer.h"
 #include "patch/subdiv.h"
 
 namespace patchscan {

@@ -4,7 +4,7 @@
 
 #include <map>
 
-#include "patch/scene.h"
+#include "scene/scene.h"
 #include "patch/tessellate.h"
 
 namespace patchscan {

@@ -5,7 +5,7 @@
 #include <map>
 
 #include "patch/cages.h"
-#include "patch/scene.h"
+#include "scene/scene.h"
 #include "tracker/edge_scan.h"
 
 namespace patchscan {

@@ -4,7 +4,7 @@
 #include <Eigen/Geometry>
 
 #include "patch/cages.h"
-#include "patch/scene.h"
+#include "scene/scene.h"
 #include "tracker/maxima.h"
 
 namespace patchscan {

@@ -110,7 +110,7 @@ TEST(SilhouetteScan, ACurveLeavingAcrossAnEdgeNeedsNoSearch) {
 
 TEST(SilhouetteScan, TrackersMeetingAtTheCurvesLowestPointAreSearchedAroundOnly) {
   // A sphere's silhouette circle ends at its lowest point, where its two trackers run
-  // into each other and both fail (paper 001 §3.2.3's minimum). A pair failing together
+  // into each other and both fail (Blinn 1978 §3.2.3's minimum). A pair failing together
   // is searched for lost crossings in the square around it, not over the whole domain (as
   // every death inside the domain was); the tracks still match the many-start solve on
   // every line.
@@ -159,7 +159,7 @@ TEST(SilhouetteScan, RepairSearchFindsWhatManyStartsFind) {
 }  // namespace
 }  // namespace patchscan
 
-#include "patch/scene.h"
+#include "scene/scene.h"
 
 namespace patchscan {
 namespace {

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <variant>
 
-#include "patch/rib_reader.h"
+#include "scene/rib/reader.h"
 #include "xscan/agreement.h"
 
 namespace patchscan {

@@ -10,7 +10,7 @@
 #include <sstream>
 #include <tuple>
 
-#include "patch/scene.h"
+#include "scene/scene.h"
 #include "xscan/exact_scan.h"
 #include "xscan/agreement.h"
 #include "xscan/ray_caster.h"
@@ -37,7 +37,7 @@ TEST(ExactScan, TorusMatchesRayCaster) {
 }
 
 TEST(ExactScan, SideOnCylinderMatchesRayCaster) {
-  // The axis across the view: a line of maxima along the top (paper 001 §3.4).
+  // The axis across the view: a line of maxima along the top (Blinn 1978 §3.4).
   Affine3 m = Affine3::Identity();
   m.rotate(Eigen::AngleAxisd(M_PI / 2, Vec3::UnitY()));
   ExpectAgree(Surface{Cylinder(0.6, -1.0, 1.0, 360), m}, View(Vec3(0, -4, 0)), "side-on cylinder");
@@ -267,7 +267,7 @@ constexpr double kTiltBetweenVerticesTolSteps = 2.0;
 // between their ends (ThetaWalker::TurnsPastStep judges no other).
 constexpr double kTurnBetweenVerticesTolSteps = 2.0;
 
-// Blinn's chain invariants (paper 001 §4.2, §4.3), checked on every chain a θ scan makes:
+// Blinn's chain invariants (Blinn 1978 §4.2, §4.3), checked on every chain a θ scan makes:
 // along a chain, consecutive tabulated-angle vertices differ in index by exactly 1 (mod N);
 // by 2 across a silhouette vertex (its angle, 0 or π, is not a table vertex); by 0 or 1
 // only across a turn point; and θ keeps its direction of travel except at turn points.

@@ -1,4 +1,4 @@
-// Molnar's object partition on threads (paper 002): the scene's surfaces dealt out to
+// Molnar's object partition on threads (1990): the scene's surfaces dealt out to
 // workers and their rows composited must give the very image one scan of all surfaces
 // gives, bit for bit in every channel, for any number of workers and threads, in every
 // direct mode; and the partition covers every surface once, in scan order, balanced.
@@ -10,7 +10,7 @@
 #include <variant>
 #include <vector>
 
-#include "patch/scene.h"
+#include "scene/scene.h"
 #include "raster/scanline_renderer.h"
 #include "xscan/exact_scan.h"
 #include "xscan/partitioned_scan.h"
@@ -80,8 +80,7 @@ TEST_P(SameImageForAnyNumberOfWorkers, InEveryScene) {
     o.slabRows = m.slabRows;
     const raster::RenderSettings s = SettingsFor(c.camera, m.aa);
     // The scene's polygons join every render's rows the same way.
-    raster::TriangleMesh polygons;
-    AppendPolygonTriangles(c.scene.polygons, c.camera, static_cast<std::uint32_t>(c.scene.surfaces.size()), &polygons);
+    raster::TriangleMesh polygons = render::PolygonTriangles(c.scene, c.camera);
     ExactScan alone(c.scene.surfaces, c.camera, o);
     PolygonFeed aloneFed(alone, polygons);
     KeepRows want(c.camera.width);

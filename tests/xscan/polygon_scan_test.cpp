@@ -9,7 +9,7 @@
 #include <sstream>
 #include <variant>
 
-#include "patch/rib_reader.h"
+#include "scene/rib/reader.h"
 #include "xscan/exact_scan.h"
 #include "xscan/polygon_feed.h"
 #include "xscan/render_settings.h"
@@ -39,8 +39,7 @@ Scene Read(const std::string& world) {
 }
 
 test::KeepRows Render(const Scene& scene, const Camera& camera, int aa) {
-  raster::TriangleMesh polygons;
-  AppendPolygonTriangles(scene.polygons, camera, static_cast<std::uint32_t>(scene.surfaces.size()), &polygons);
+  raster::TriangleMesh polygons = render::PolygonTriangles(scene, camera);
   ExactScan scan(scene.surfaces, camera, ExactScanOptions{});
   PolygonFeed fed(scan, std::move(polygons));
   test::KeepRows rows(camera.width);

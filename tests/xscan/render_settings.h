@@ -1,25 +1,16 @@
-// The back end's settings for rendering what `camera` sees at `aa`, as `patchscan render`
-// sets them (default material and lights), for the tests that render through the library.
+// What the tests that render through the library need: the back end's settings as every
+// render starts from them, and a sink that keeps the rows.
 #pragma once
 
 #include <vector>
 
-#include "patch/camera.h"
 #include "raster/scanline_renderer.h"
+#include "render/load.h"
 
 namespace patchscan::test {
 
-inline raster::RenderSettings SettingsFor(const Camera& camera, int aa) {
-  raster::RenderSettings s;
-  s.width = camera.width;
-  s.height = camera.height;
-  s.aa = aa;
-  s.hither = camera.hither;
-  s.eye = EyePoint(camera);
-  s.forward = ViewForward(camera);
-  s.orthographic = camera.orthographic;
-  return s;
-}
+// The settings every render through the library starts from (render/load.h).
+using render::SettingsFor;
 
 // Keeps every channel of every row a render writes.
 class KeepRows final : public raster::RowSink {

@@ -1,4 +1,4 @@
-// No seam, pole or streak on a smooth surface, in any mode, at any aa (paper 001 §3.2 meets
+// No seam, pole or streak on a smooth surface, in any mode, at any aa (Blinn 1978 §3.2 meets
 // the parameterisation's own degeneracies): a full quadric seen along its axis has its seam
 // (u = 0 and u = 1, a horizontal line on the screen) and its pole (a collapsed edge) on the
 // centre row, which is a sample row at even aa; the level set of that row is then a whole

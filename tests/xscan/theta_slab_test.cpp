@@ -10,7 +10,7 @@
 #include <random>
 #include <variant>
 
-#include "patch/scene.h"
+#include "scene/scene.h"
 #include "raster/image_compare.h"
 #include "raster/triangle_setup.h"
 #include "raster/scanline_renderer.h"

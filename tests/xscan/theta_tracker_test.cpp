@@ -1,4 +1,4 @@
-// θ trackers (paper 001 §4.1, §4.3): G_i's analytic gradient against finite differences; a
+// θ trackers (Blinn 1978 §4.1, §4.3): G_i's analytic gradient against finite differences; a
 // tracker solved by damped Newton sits on its scan line at its tabulated angle and never
 // on the other root θ_i + π; the turn function is θ's derivative along the level curve,
 // and a turn tracker solved by Newton sits where θ turns back; and chains advanced from
@@ -14,7 +14,7 @@
 #include <sstream>
 #include <variant>
 
-#include "patch/scene.h"
+#include "scene/scene.h"
 #include "patch/screen.h"
 #include "tracker/maxima.h"
 #include "xscan/agreement.h"

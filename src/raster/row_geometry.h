@@ -1,0 +1,310 @@
+// The back end's two kinds of geometry (raster/scanline_renderer.h): the triangles of a
+// mesh (TriangleGeometry) and a front end's exact fragments, chords and triangles row by
+// row (FragmentGeometry). RenderRows, a template over them, takes each sample row's
+// samples from either; they are here whole so that its inner loops inline them.
+#pragma once
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "raster/scanline_renderer.h"
+#include "raster/triangle_store.h"
+#include "raster/work_arena.h"
+
+namespace patchscan::raster::detail {
+
+// The triangles of a mesh as the back end's geometry: the y-sorted list with integer
+// sample-row bounds feeding the active store.
+class TriangleGeometry {
+ public:
+  TriangleGeometry(const TriangleMesh& mesh, const RenderSettings& s, const Lattice& lat,
+                   int layers, Counters& stats)
+      : mesh_(mesh), s_(s), lat_(lat), store_(s, lat, layers, s.shading, stats) {
+    stats[Counter::Triangles] = static_cast<std::int64_t>(mesh.triangles.size());
+    ySorted_.reserve(mesh.triangles.size());
+    for (std::uint32_t k = 0; k < mesh.triangles.size(); ++k) {
+      const RasterTriangle& t = mesh.triangles[k];
+      const Vec3 &a = mesh.vertices[t.v[0]].h, &b = mesh.vertices[t.v[1]].h, &c = mesh.vertices[t.v[2]].h;
+      double yMin = 0, yMax = s.height;
+      if (a.z() > 0 && b.z() > 0 && c.z() > 0) {
+        // Widened as SetupTriangle widens its bounds: a rounded division must not keep a
+        // triangle off a sample row its edge values give it.
+        yMin = std::min({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()}) - kBoundsSlackPx;
+        yMax = std::max({a.y() / a.z(), b.y() / b.z(), c.y() / c.z()}) + kBoundsSlackPx;
+      }
+      const int first = lat.Ceil(yMin, lat.ny), last = lat.Floor(yMax, lat.ny);
+      if (first <= last) ySorted_.push_back({first, last, k});
+    }
+    std::stable_sort(ySorted_.begin(), ySorted_.end(),
+                     [](const YEntry& p, const YEntry& q) { return p.first < q.first; });
+  }
+
+  // What a pixel row's samples refer to beyond the store: nothing.
+  struct Rows {
+    int j0 = 0;
+  };
+  Rows MakeRows() const { return {}; }
+
+  bool Failed() const { return store_.Failed(); }
+  void BeginPixelRow(int j0, int oldestInUse) { store_.BeginPixelRow(j0, oldestInUse); }
+  void CopySampleRow(const Rows&, int, Rows&, int) {}
+
+  // Resolves sample row j: the nearest triangles per sample.
+  void ScanRow(int j, int /*r*/, double y, Sample* row, Rows& /*rows*/) {
+    for (; nextY_ < ySorted_.size() && ySorted_[nextY_].first <= j; ++nextY_) {
+      const YEntry& e = ySorted_[nextY_];
+      const RasterTriangle& t = mesh_.triangles[e.index];
+      store_.Add(mesh_.vertices[t.v[0]], mesh_.vertices[t.v[1]], mesh_.vertices[t.v[2]], t.surfaceId, e.last);
+    }
+    store_.ScanRow(j, y, row, 0);
+  }
+
+  std::uint32_t SurfaceOf(const Rows&, int /*r*/, const Sample& smp) const { return store_.SurfaceOf(smp.handle); }
+  double EdgeDistance(const Rows&, int /*r*/, const Sample& smp, double x, double y) const {
+    return store_.EdgeDistance(smp.handle, x, y);
+  }
+  Rgb ShadeSample(const Rows&, int /*r*/, const Sample& smp, double x, double y, std::int64_t& nCalls) const {
+    return store_.ShadeAt(smp.handle, x, y, nCalls);
+  }
+  // A group of samples of one triangle-meshed surface is shaded once, at its centroid;
+  // `f` receives the fragment shaded (GroupFragment's).
+  Rgb ShadeGroup(const Rows&, const Member* m, int /*n*/, double cx, double cy, std::int64_t& nCalls,
+                 Fragment* f) const {
+    return store_.ShadeAt(m[0].smp.handle, cx, cy, nCalls, f);
+  }
+  Fragment GroupFragment(const Rows&, const Member* m, int /*n*/, double cx, double cy) const {
+    return store_.Interpolate(m[0].smp.handle, cx, cy);
+  }
+
+ private:
+  struct YEntry {
+    int first, last;
+    std::uint32_t index;
+  };
+  const TriangleMesh& mesh_;
+  const RenderSettings& s_;
+  const Lattice& lat_;
+  TriangleStore store_;
+  std::vector<YEntry> ySorted_;
+  size_t nextY_ = 0;
+};
+
+// Sample handles at or above this are triangles (handle - kTriangleHandle: the slot);
+// below, a fragment's index in its sample row's pool.
+constexpr std::int32_t kTriangleHandle = std::int32_t{1} << 30;
+// Handles from this one below kTriangleHandle are chords (handle - kChordHandle: the
+// index in their sample row's chords), below it fragments of the row's pool.
+constexpr std::int32_t kChordHandle = std::int32_t{1} << 29;
+
+// A direct render's geometry: exact per-sample fragments, each sample row's in a pool of
+// that row which lasts while the pixel row needs it, and the triangles of θ slabs the
+// source hands over as it goes (always shaded per sample's interpolated normal, as the
+// fragments are: flat, Gouraud and hidden-line modes need a mesh).
+class FragmentGeometry final : public FragmentRow {
+ public:
+  FragmentGeometry(FragmentSource& source, const RenderSettings& s, const Lattice& lat,
+                   int layers, Counters& stats)
+      : source_(source), s_(s), lat_(lat), layers_(layers), stats_(stats),
+        store_(s, lat, layers, ShadingMode::Phong, stats) {
+    sided_ = s.cullBackFaces || !s.material.twoSided;
+    for (const Material& m : s.materials) sided_ = sided_ || !m.twoSided;
+  }
+
+  // Whether a fragment's depth alone decides whether it is kept (else its side may drop it
+  // too: culling, or a one-sided material).
+  bool DepthDecides() const { return !sided_; }
+
+  // What a pixel row's samples refer to beyond the store: the fragments and chords of each
+  // of its sample rows (a sample's handle below kTriangleHandle indexes its row's pool or
+  // chords).
+  struct Rows {
+    int j0 = 0;  // the pixel row's first sample row
+    std::vector<std::vector<Fragment>> pools;
+    std::vector<std::vector<Chord>> chords;
+  };
+  Rows MakeRows() const {
+    Rows rows;
+    rows.pools.resize(static_cast<size_t>(s_.aa));
+    for (auto& p : rows.pools) p.reserve(static_cast<size_t>(lat_.nx) * layers_);
+    rows.chords.resize(static_cast<size_t>(s_.aa));
+    return rows;
+  }
+
+  bool Failed() const { return failed_ || store_.Failed(); }
+  void BeginPixelRow(int j0, int oldestInUse) { store_.BeginPixelRow(j0, oldestInUse); }
+  void CopySampleRow(const Rows& from, int rFrom, Rows& to, int rTo) {
+    to.pools[static_cast<size_t>(rTo)] = from.pools[static_cast<size_t>(rFrom)];  // within the reserve
+    to.chords[static_cast<size_t>(rTo)] = from.chords[static_cast<size_t>(rFrom)];
+  }
+
+  void ScanRow(int j, int r, double y, Sample* row, Rows& rows) {
+    pool_ = &rows.pools[static_cast<size_t>(r)];
+    pool_->clear();
+    chords_ = &rows.chords[static_cast<size_t>(r)];
+    chords_->clear();
+    row_ = row;
+    const SampleColumns columns{lat_.offset, lat_.spacing, lat_.nx};
+    if (!source_.ScanRow(y, columns, *this)) failed_ = true;
+    if (!store_.Empty()) store_.ScanRow(j, y, row, kTriangleHandle);
+  }
+
+  void Add(int column, const Fragment& f) override {
+    ++stats_[Counter::SamplesTested];
+    if (column < 0 || column >= lat_.nx || !(f.w >= s_.hither) || !Shows(f)) return;
+    const auto handle = static_cast<std::int32_t>(pool_->size());
+    if (InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / f.w, handle))
+      pool_->push_back(f);
+  }
+
+  bool Hidden(int column, double w) const override {
+    return column < 0 || column >= lat_.nx || !(w >= s_.hither) ||
+           Behind(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / w);
+  }
+
+  // A chord is kept whole, and a sample of it made only when shaded (a hidden one never),
+  // or when its side may drop it (culling, a one-sided material): then a sample the depth
+  // test would keep is made first to ask its side.
+  void AddChord(const Chord& c, const SampleColumns& columns) override {
+    const auto handle = kChordHandle + static_cast<std::int32_t>(chords_->size());
+    bool kept = false;
+    const double nearest = 1.0 / s_.hither;  // the largest 1/w in front of the hither plane
+    const auto inFront = [&](double invW) { return invW > 0.0 && invW <= nearest; };  // false for NaN
+    if (!sided_) {
+      stats_[Counter::SamplesTested] += c.ForEachColumnInverseDepth(columns, [&](int column, double invW) {
+        kept |= inFront(invW) && InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, invW, handle);
+      });
+    } else {
+      c.ForEachColumnInverseDepth(columns, [&](int column, double invW) {
+        if (!inFront(invW) || Behind(&row_[static_cast<size_t>(column) * layers_], layers_, invW)) return;
+        ++stats_[Counter::SamplesTested];
+        if (!Shows(c.At(columns.At(column)))) return;
+        if (InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, invW, handle)) kept = true;
+      });
+    }
+    if (kept) chords_->push_back(c);
+  }
+
+  void AddTriangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
+                   std::uint32_t surfaceId) override {
+    ++stats_[Counter::Triangles];
+    double yMax = s_.height;
+    if (a.h.z() > 0 && b.h.z() > 0 && c.h.z() > 0)
+      yMax = std::max({a.h.y() / a.h.z(), b.h.y() / b.h.z(), c.h.y() / c.h.z()}) + kBoundsSlackPx;
+    store_.Add(a, b, c, surfaceId, lat_.Floor(yMax, lat_.ny));
+  }
+
+  std::uint32_t SurfaceOf(const Rows& rows, int r, const Sample& smp) const {
+    if (smp.handle >= kTriangleHandle) return store_.SurfaceOf(smp.handle - kTriangleHandle);
+    if (smp.handle >= kChordHandle) return rows.chords[static_cast<size_t>(r)][smp.handle - kChordHandle].a().surfaceId;
+    return rows.pools[static_cast<size_t>(r)][smp.handle].surfaceId;
+  }
+  double EdgeDistance(const Rows&, int, const Sample&, double, double) const { return INFINITY; }
+  Rgb ShadeSample(const Rows& rows, int r, const Sample& smp, double x, double y, std::int64_t& nCalls) const {
+    if (smp.handle >= kTriangleHandle) return store_.ShadeAt(smp.handle - kTriangleHandle, x, y, nCalls);
+    ++nCalls;
+    if (smp.handle >= kChordHandle)
+      return ShadeFragment(rows.chords[static_cast<size_t>(r)][smp.handle - kChordHandle].At(x), s_, &failed_);
+    return ShadeFragment(rows.pools[static_cast<size_t>(r)][smp.handle], s_, &failed_);
+  }
+  Rgb ShadeGroup(const Rows& rows, const Member* m, int n, double cx, double cy, std::int64_t& nCalls,
+                 Fragment* f) const {
+    ++nCalls;
+    *f = GroupFragment(rows, m, n, cx, cy);
+    return ShadeFragment(*f, s_, &failed_);
+  }
+  // A group of exact samples of one surface is shaded once, with its samples' attributes
+  // averaged: the surface at their centroid to second order. A group with slab samples
+  // takes the slab triangle of the sample nearest the centroid, at the centroid.
+  Fragment GroupFragment(const Rows& rows, const Member* m, int n, double cx, double cy) const {
+    // A lone exact or chord sample (every pixel at aa 1): its own fragment, no search.
+    if (n == 1 && m[0].smp.handle < kTriangleHandle) return FragmentOf(rows, m[0], lat_.At(m[0].i));
+    int nearest = -1;
+    double best = INFINITY;
+    const auto consider = [&](int k) {
+      if (m[k].smp.handle < kTriangleHandle) return;
+      const double dx = lat_.At(m[k].i) - cx, dy = lat_.At(rows.j0 + m[k].r) - cy;
+      const double d = dx * dx + dy * dy;  // squared: the order is the distance's, without hypot's cost
+      if (d < best) best = d, nearest = k;
+    };
+    // A group of all the pixel's aa x aa samples (member r aa + c: row r's column c) has its
+    // centroid at the pixel's middle, nearer the middle samples (rows and columns (aa-1)/2
+    // and aa/2) than any other: they are searched alone, in the members' order, so the one
+    // chosen is the full search's. Most groups are whole pixels.
+    const int aa = s_.aa, lo = (aa - 1) / 2, hi = aa / 2;
+    if (n == aa * aa)
+      for (int r = lo; r <= hi; ++r)
+        for (int c = lo; c <= hi; ++c) consider(r * aa + c);
+    if (nearest < 0)
+      for (int k = 0; k < n; ++k) consider(k);
+    if (nearest >= 0) return store_.Interpolate(m[nearest].smp.handle - kTriangleHandle, cx, cy);
+    // The members come row by row, each row's from left to right: a run of samples of one
+    // chord is taken at its mean column, once (a chord's attributes are smooth along it,
+    // so to second order as their mean), weighted by its length.
+    Fragment f;  // the first member sets every field; the zeros only tell the compiler so
+    f.position.setZero(), f.normal.setZero(), f.uv.setZero(), f.duvdx.setZero(), f.duvdy.setZero();
+    for (int k = 0, run = 1; k < n; k += run) {
+      const Member& x = m[k];
+      run = 1;
+      double sx = lat_.At(x.i);
+      if (x.smp.handle >= kChordHandle)
+        for (; k + run < n && m[k + run].r == x.r && m[k + run].smp.handle == x.smp.handle; ++run)
+          sx += lat_.At(m[k + run].i);
+      const Fragment g = FragmentOf(rows, x, sx / run);
+      // The first member's fragment is taken as it is (a lone sample, or exact mode's first
+      // fragment: the sum starts from its values, signed zeros included, as it always has).
+      if (k == 0) {
+        f = g;
+        if (run == 1) continue;
+        f.w = 0.0, f.position.setZero(), f.normal.setZero(), f.uv.setZero(), f.duvdx.setZero(), f.duvdy.setZero();
+      }
+      const double weight = run;
+      f.w += weight * g.w;
+      f.position += weight * g.position;
+      f.normal += weight * g.normal;
+      f.uv += weight * g.uv;
+      f.duvdx += weight * g.duvdx;
+      f.duvdy += weight * g.duvdy;
+    }
+    const double inv = 1.0 / n;
+    f.w *= inv;
+    f.position *= inv;
+    f.normal *= inv;
+    f.uv *= inv;
+    f.duvdx *= inv;
+    f.duvdy *= inv;
+    return f;
+  }
+
+ private:
+  // The fragment of an exact or chord sample; a chord's at screen x.
+  static Fragment FragmentOf(const Rows& rows, const Member& x, double sx) {
+    if (x.smp.handle >= kChordHandle) return rows.chords[static_cast<size_t>(x.r)][x.smp.handle - kChordHandle].At(sx);
+    return rows.pools[static_cast<size_t>(x.r)][x.smp.handle];
+  }
+
+  // Whether a fragment's side lets it be seen: not culled, and a one-sided material's front.
+  bool Shows(const Fragment& f) const {
+    if (s_.cullBackFaces && f.normal.dot(s_.EyeFor(f.position) - f.position) < 0.0) return false;
+    const Material& m = s_.MaterialOf(f.surfaceId);
+    return m.twoSided || ShowsFront(m, f.normal, f.position, s_.EyeFor(f.position));
+  }
+
+  FragmentSource& source_;
+  const RenderSettings& s_;
+  const Lattice& lat_;
+  int layers_;
+  Counters& stats_;
+  // The source failed, or a texture (set while shading, on any thread).
+  mutable std::atomic<bool> failed_ = false;
+  std::vector<Fragment>* pool_ = nullptr;  // the pool of the sample row being scanned
+  std::vector<Chord>* chords_ = nullptr;   // and its chords
+  bool sided_ = false;                     // !DepthDecides()
+  Sample* row_ = nullptr;
+  TriangleStore store_;
+};
+
+}  // namespace patchscan::raster::detail

@@ -1,0 +1,177 @@
+#include "render/back_end.h"
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include "render/load.h"
+
+namespace patchscan::render {
+namespace {
+
+// RenderMan light sources as the back end's lights: ambient lights sum into the rig's
+// ambient light; the others keep their colour (intensity times lightcolor).
+raster::LightRig SceneLights(const std::vector<SceneLight>& lights) {
+  raster::LightRig rig;
+  rig.ambient = raster::Rgb::Zero();
+  for (const SceneLight& l : lights) {
+    raster::Light out;
+    out.intensity = l.colour;
+    switch (l.kind) {
+      case SceneLight::Kind::Ambient:
+        rig.ambient += l.colour;
+        continue;
+      case SceneLight::Kind::Distant:
+        out.kind = raster::Light::Kind::Directional;
+        out.vector = (l.to - l.from).normalized();
+        break;
+      case SceneLight::Kind::Point:
+        out.kind = raster::Light::Kind::Point;
+        out.vector = l.from;
+        out.inverseSquare = true;
+        break;
+      case SceneLight::Kind::Spot:
+        out.kind = raster::Light::Kind::Spot;
+        out.vector = l.from;
+        out.inverseSquare = true;
+        out.axis = (l.to - l.from).normalized();
+        out.cosOutside = std::cos(l.coneAngle);
+        out.cosInside = std::cos(std::max(0.0, l.coneAngle - l.coneDelta));
+        out.beamDistribution = l.beamDistribution;
+        break;
+    }
+    rig.lights.push_back(out);
+  }
+  return rig;
+}
+
+// A scene file's appearance as a back-end material. The default shader keeps the
+// renderer's material, tinted by the colour.
+raster::Material SceneMaterial(const Appearance& a, const raster::Material& fallback) {
+  using S = Appearance::Shader;
+  using M = raster::Material::Model;
+  raster::Material m = fallback;
+  m.opacity = a.opacity.mean();
+  m.twoSided = a.twoSided;
+  m.reversed = a.reversed;
+  if (a.shader == S::Default) {
+    m.colour = fallback.colour.cwiseProduct(a.colour);
+    return m;
+  }
+  m.model = a.shader == S::Constant ? M::Constant
+            : a.shader == S::Matte  ? M::Matte
+            : a.shader == S::Metal  ? M::Metal
+                                    : M::Plastic;
+  m.colour = a.colour;
+  m.emission = raster::Rgb::Zero();
+  m.ka = a.ka;
+  m.kd = a.kd;
+  m.ks = a.ks;
+  m.roughness = a.roughness;
+  m.specularColour = a.specularColour;
+  return m;
+}
+}  // namespace
+
+std::string BackEndSetup::TextureError() const {
+  if (texture && !texture->Error().empty()) return texture->Error();
+  for (const auto& [name, t] : sceneTextures)
+    if (!t->Error().empty()) return t->Error();
+  return {};
+}
+
+std::string BackEndSetup::TextureReport() const {
+  if (!texture) return "none";
+  return std::string(texture->Opened() ? "opened" : "never needed") + ", " + std::to_string(texture->Lookups()) +
+         " lookups";
+}
+
+bool WritesDepthMap(const RenderOptions& o, const Scene& scene) {
+  return o.output.empty() && (scene.image.displayType == "zfile" || scene.image.displayType == "shadow");
+}
+
+Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const Scene& scene, const Camera& camera,
+                                                   int aa) {
+  auto setup = std::make_unique<BackEndSetup>();
+  raster::RenderSettings& s = setup->settings;
+  s = SettingsFor(camera, aa);
+  s.aovs = o.aov || WritesDepthMap(o, scene);
+  s.shading = o.shading;
+  s.cullBackFaces = o.cullBackFaces;
+  s.hiddenLine = o.hiddenLine;
+  s.opacity = o.opacity;
+  s.seed = o.seed;
+  if (o.texture == "checker") {
+    s.material.checkerSquares = 8;
+  } else if (o.texture != "none") {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(o.texture, ec))
+      return Failure{Outcome::BadOption, "--texture: no such file '" + o.texture + "'"};
+    setup->texture = std::make_unique<raster::ImageTexture>(o.texture);
+    s.material.texture = setup->texture.get();
+  }
+  if (!scene.lights.empty()) s.lights = SceneLights(scene.lights);
+  // The lights' shadow maps, each read once (SceneLights keeps the scene's light order,
+  // less the ambient lights).
+  std::size_t next = 0;
+  for (const SceneLight& l : scene.lights) {
+    if (l.kind == SceneLight::Kind::Ambient) continue;
+    raster::Light& out = s.lights.lights[next++];
+    for (const std::string& name : l.shadowNames) {
+      auto& map = setup->shadowMaps[name];
+      if (!map) {
+        auto loaded = raster::ShadowMap::Load(name);
+        if (auto* why = std::get_if<std::string>(&loaded))
+          return Failure{Outcome::InputError, l.file + ':' + std::to_string(l.line) + ": LightSource: " + *why};
+        map = std::move(std::get<std::unique_ptr<raster::ShadowMap>>(loaded));
+      }
+      out.shadows.push_back(map.get());
+    }
+    out.shadowBias = l.shadowBias;
+    out.shadowBlur = l.shadowBlur;
+    out.shadowSamples = l.shadowSamples;
+  }
+  // The scene's own materials, each texture opened only when a visible sample needs it.
+  for (const Appearance& a : scene.appearances) {
+    raster::Material m = SceneMaterial(a, s.material);
+    if (!a.textureName.empty()) {
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(a.textureName, ec))
+        return Failure{Outcome::InputError,
+                       scene.source + ": paintedplastic texture '" + a.textureName + "' not found"};
+      auto& t = setup->sceneTextures[a.textureName];
+      if (!t) t = std::make_unique<raster::ImageTexture>(a.textureName);
+      m.texture = t.get();
+    }
+    s.materials.push_back(m);
+  }
+  s.materialOf = scene.appearanceOf;
+  return setup;
+}
+
+raster::ShadowCamera LightCamera(const Camera& camera) {
+  raster::ShadowCamera c;
+  const Vec3 eye = EyePoint(camera), forward = ViewForward(camera), right = ViewRight(camera);
+  const Vec3 up = right.cross(forward);
+  c.worldToCamera.block<1, 3>(0, 0) = right.transpose();
+  c.worldToCamera.block<1, 3>(1, 0) = up.transpose();
+  c.worldToCamera.row(2) = ViewDepthRow(camera).transpose();  // z: the depth the map holds
+  c.worldToCamera.block<2, 1>(0, 3) = -c.worldToCamera.block<2, 3>(0, 0) * eye;
+  // Pixels (x right, y down) to RenderMan's screen space (x, y in [-1, 1], y up).
+  Mat4 toScreen = Mat4::Identity();
+  toScreen(0, 0) = 2.0 / camera.width;
+  toScreen(0, 3) = -1.0;
+  toScreen(1, 1) = -2.0 / camera.height;
+  toScreen(1, 3) = 1.0;
+  c.worldToScreen = toScreen * ScreenFromWorld(camera);
+  return c;
+}
+
+std::optional<Failure> MakeShadows(const Scene& scene) {
+  for (const SceneMakeShadow& m : scene.makeShadows)
+    if (const auto why = raster::MakeShadowTexture(m.input, m.output))
+      return Failure{Outcome::InputError, m.file + ':' + std::to_string(m.line) + ": MakeShadow: " + *why};
+  return std::nullopt;
+}
+
+}  // namespace patchscan::render

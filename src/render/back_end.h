@@ -1,0 +1,48 @@
+// What a render builds before the first row: the back end's settings (lights, materials,
+// textures, shadow maps) from the scene and the options, and the scene's MakeShadow requests.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "patch/camera.h"
+#include "raster/scanline_renderer.h"
+#include "raster/shadow_map.h"
+#include "raster/texture.h"
+#include "render/options.h"
+#include "render/status.h"
+#include "scene/scene.h"
+
+namespace patchscan::render {
+
+// The back end's settings and the textures they point to (which must outlive them).
+struct BackEndSetup {
+  raster::RenderSettings settings;
+  std::unique_ptr<raster::ImageTexture> texture;  // RenderOptions::texture, a file
+  std::map<std::string, std::unique_ptr<raster::ImageTexture>> sceneTextures;
+  std::map<std::string, std::unique_ptr<raster::ShadowMap>> shadowMaps;  // by file name
+  // The first texture that could not be read, if any ("" when none failed).
+  std::string TextureError() const;
+  // What became of the textures, for reports: "none", "never needed", "opened, N lookups".
+  std::string TextureReport() const;
+};
+
+// Whether the render writes the frame's depth map: RenderMan's depth displays ("zfile",
+// "shadow") when no output is given, whatever the file's extension.
+bool WritesDepthMap(const RenderOptions& o, const Scene& scene);
+
+// The settings for rendering `scene` through `camera` at `aa` (the AOV channels made only
+// for an output that keeps them: aov, a depth map). Failure: a texture option naming no
+// file (BadOption), a scene's texture or shadow map missing (InputError).
+Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const Scene& scene, const Camera& camera,
+                                                   int aa);
+
+// The matrices of `camera` as a light's camera, for the depth maps it renders.
+raster::ShadowCamera LightCamera(const Camera& camera);
+
+// Runs the scene's MakeShadow requests, in order; the first that fails, with its file:line.
+std::optional<Failure> MakeShadows(const Scene& scene);
+
+}  // namespace patchscan::render

@@ -1,0 +1,253 @@
+#include "render/frame.h"
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <ostream>
+#include <vector>
+
+#include "patch/tessellate.h"
+#include "raster/async_row_sink.h"
+#include "raster/image_io.h"
+#include "raster/image_writer.h"
+#include "render/back_end.h"
+#include "render/crop.h"
+#include "render/interrupt.h"
+#include "render/load.h"
+#include "render/progress.h"
+#include "render/shared_rows.h"
+#include "scene/rib/reader.h"
+#include "xscan/overlay.h"
+#include "xscan/partitioned_scan.h"
+#include "xscan/polygon_feed.h"
+#include "xscan/tess_feed.h"
+
+namespace patchscan::render {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double Seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+
+Failure BadOption(std::string why) { return {Outcome::BadOption, std::move(why)}; }
+Failure Stopped() { return {Outcome::Interrupted, "interrupted; no image written"}; }
+
+// The options that do not fit the mode: the message for the user, or empty.
+std::string ModeConflict(const RenderOptions& o) {
+  const std::string mode = ModeName(o.mode);
+  if (Direct(o.mode) && (o.shading != raster::ShadingMode::Phong || o.hiddenLine))
+    return "--mode " + mode + " shades every sample with its own normal: --shading flat/gouraud and --hidden-line "
+           "need a triangle mode (--mode tess)";
+  if (!Direct(o.mode) && o.overlay != Overlay::None)
+    return "--overlay trackers draws the Y scan's trackers: it needs --mode exact or theta";
+  return {};
+}
+
+// The tessellated mode's mesh, tessellated on `threads` threads (nullopt: interrupted).
+std::optional<raster::TriangleMesh> TessellatedMesh(const RenderOptions& o, const Scene& scene, const Camera& camera,
+                                                    int threads) {
+  auto tess = TessellateScene(scene.surfaces, camera, TessSettings{o.tessRate, o.tessPixels, o.tessError}, threads,
+                              [] { return gInterrupted != 0; });
+  if (!tess) return std::nullopt;
+  WeldBoundaryVertices(&*tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
+  raster::TriangleMesh mesh = ToRasterMesh(*tess, camera);
+  AppendScenePolygons(scene, camera, &mesh);
+  return mesh;
+}
+
+// A frame's front end. Direct modes: the scan (this process's own, or its part of one
+// shared between processes) and the polygons fed with its rows; tess mode: the mesh.
+struct FrontEnd {
+  std::unique_ptr<PartitionedScan> own;
+  std::unique_ptr<SharedRows> shared;
+  std::unique_ptr<PolygonFeed> polygons;
+  std::optional<raster::TriangleMesh> mesh;
+
+  DirectScanSource* Scan() const { return shared ? &shared->Source() : own.get(); }
+  raster::FragmentSource& Rows() const {
+    return polygons ? static_cast<raster::FragmentSource&>(*polygons) : *Scan();
+  }
+};
+
+// The direct modes' front end: Blinn's Y scan with the exact or the θ-sampled X scan, its
+// surfaces dealt out to `threads` workers (one when tracing: the overlay is not shared).
+FrontEnd DirectFrontEnd(const RenderOptions& o, const Scene& scene, const Camera& camera, int aa, int threads) {
+  FrontEnd f;
+  const ExactScanOptions xo = ScanOptionsFor(o, aa);
+  if (o.shareRows) {
+    f.shared = o.shareRows(o, scene, camera, xo, aa, threads);  // it hands the polygons over itself
+    return f;
+  }
+  const int workers = o.overlay == Overlay::None ? threads : 1;
+  f.own = std::make_unique<PartitionedScan>(scene.surfaces, camera, xo, workers, threads);
+  if (!scene.polygons.empty()) f.polygons = std::make_unique<PolygonFeed>(*f.own, PolygonTriangles(scene, camera));
+  return f;
+}
+
+// The warning an empty image gives: why it may be empty.
+void WarnEmpty(const Scene& scene, std::ostream& log) {
+  if (!scene.warnings.empty())
+    log << "patchscan: warning: the image is empty: nothing drawn covers a sample, and " << scene.warnings.size()
+        << " kind" << (scene.warnings.size() == 1 ? " of request was" : "s of request were")
+        << " skipped (above): what the scene shows may be among them\n";
+  else
+    log << "patchscan: warning: the image is empty: no surface covers a sample (" << scene.Ids()
+        << " surfaces; is the camera looking at them?)\n";
+}
+
+}  // namespace
+
+Result<RenderReport> RenderFrame(const RenderOptions& o, std::ostream& log, std::set<std::string>* warned) {
+  const auto t0 = Clock::now();
+  // Step 1: the scene, the camera and what the options ask of them.
+  auto loaded = LoadSceneAndCamera(o.file, o.camera, log, warned);
+  if (auto* failed = std::get_if<Failure>(&loaded)) return *failed;
+  const Scene& scene = std::get<LoadedScene>(loaded).scene;
+  const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
+  const auto tLoaded = Clock::now();
+  const std::string output = !o.output.empty() ? o.output : scene.image.displayName;
+  const bool depthMap = WritesDepthMap(o, scene);
+  if (output.empty())
+    return BadOption(std::string("no output image: give -o IMAGE") +
+                     (scene.image.cameraFromWorld ? " (the scene has no Display file)" : ""));
+  if (std::string why = ModeConflict(o); !why.empty()) return BadOption(std::move(why));
+  const int aa = o.aa.value_or(scene.image.pixelSamples.value_or(kDefaultAa));
+  std::optional<Vec4> cropNdc = scene.image.cropWindow;
+  if (!o.crop.empty() && !(cropNdc = ParseCrop(o.crop)))
+    return BadOption(
+        "--crop: expected XMIN,XMAX,YMIN,YMAX with 0 <= XMIN < XMAX <= 1 and 0 <= YMIN < YMAX <= 1, found '" +
+        o.crop + "'");
+  const PixelWindow window = cropNdc ? CropPixels(*cropNdc, camera.width, camera.height)
+                                     : PixelWindow{0, 0, camera.width, camera.height};
+  if (window.x1 <= window.x0 || window.y1 <= window.y0)
+    return BadOption("the crop window holds no pixel centre of the " + std::to_string(camera.width) + "x" +
+                     std::to_string(camera.height) + " image");
+  const int outWidth = window.x1 - window.x0, outHeight = window.y1 - window.y0;
+
+  // Step 2: the front end: the direct scan, or the tessellated mesh.
+  const int threads = ThreadsFor(o.threads);
+  FrontEnd front;
+  if (Direct(o.mode)) front = DirectFrontEnd(o, scene, camera, aa, threads);
+  else if (!(front.mesh = TessellatedMesh(o, scene, camera, threads))) return Stopped();
+  DirectScanSource* scan = front.Scan();
+  const auto tSetUp = Clock::now();
+
+  // Step 3: the back end (after the scene's MakeShadow requests: its lights may read what
+  // they make), and the rows' way to the image file.
+  if (auto failed = MakeShadows(scene)) return *failed;
+  auto setup = SetUpBackEnd(o, scene, camera, aa);
+  if (auto* failed = std::get_if<Failure>(&setup)) return *failed;
+  BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);
+  backEnd.settings.threads = threads;
+  // The options' compression, else the scene's Display's when the scene names the file.
+  const std::string compression =
+      !o.compression.empty() || !o.output.empty() ? o.compression : scene.image.displayCompression;
+  if (const auto why = raster::ImageWriter::CheckFormat(output, o.aov, compression); why && !depthMap) {
+    if (compression != o.compression)
+      return BadOption(o.file + ':' + std::to_string(scene.image.displayLine) + ": Display: " + *why);
+    return BadOption(*why);
+  }
+  raster::ImageWriter::Window placement;
+  if (cropNdc) placement = {window.x0, window.y0, camera.width, camera.height};
+  // Opening the output is output time: for a format other than PNG it loads OpenImageIO.
+  const auto tOpen = Clock::now();
+  auto opened = depthMap ? raster::ImageWriter::OpenDepthMap(output, outWidth, outHeight, LightCamera(camera))
+                         : raster::ImageWriter::Open(output, outWidth, outHeight, o.aov, threads, placement, compression);
+  const double openSeconds = Seconds(tOpen, Clock::now());
+  if (auto* why = std::get_if<std::string>(&opened)) return Failure{Outcome::OutputError, *why};
+  auto& writer = *std::get<std::unique_ptr<raster::ImageWriter>>(opened);
+  // With more than one thread the image is encoded and written on a thread of its own,
+  // overlapping the rows still being rendered.
+  std::unique_ptr<raster::AsyncRowSink> async;
+  if (threads > 1 && !writer.EncodesInParallel()) async = std::make_unique<raster::AsyncRowSink>(writer, outWidth);
+  raster::RowSink* toImage = async ? static_cast<raster::RowSink*>(async.get()) : &writer;
+  // A crop: the full frame's rows are rendered (the scan needs every row above the window
+  // anyway), and only the window's part of them reaches the image.
+  std::unique_ptr<CropSink> cropped;
+  if (cropNdc) {
+    cropped = std::make_unique<CropSink>(*toImage, window);
+    toImage = cropped.get();
+  }
+  raster::RowSink* out = toImage;
+  std::unique_ptr<TrackerOverlay> overlay;
+  if (o.overlay == Overlay::Trackers) {
+    overlay = std::make_unique<TrackerOverlay>(*toImage, camera.width, camera.height);
+    scan->SetTrace(overlay.get());
+    out = overlay.get();
+  }
+
+  // Step 4: render the rows, streaming each to the image; then commit it.
+  ProgressSink progress(*out, camera.height, log, o.progress);
+  // A render shared between processes renders its own rows and brings the others' in.
+  raster::RowSink* rows = &progress;
+  std::unique_ptr<raster::RowSink> assembled;
+  if (front.shared) {
+    backEnd.settings.ownsRow = front.shared->OwnedRows();
+    if ((assembled = front.shared->AssembleRows(progress))) rows = assembled.get();
+  }
+  auto counted = scan ? raster::RenderFragments(front.Rows(), backEnd.settings, *rows)
+                      : raster::RenderMesh(*front.mesh, backEnd.settings, progress);
+  if (counted && overlay && !overlay->Finish()) counted.reset();
+  if (counted && async && !async->Finish()) counted.reset();
+  if (!counted) {
+    if (gInterrupted) return Stopped();
+    if (std::string why = backEnd.TextureError(); !why.empty()) return Failure{Outcome::InputError, std::move(why)};
+    return Failure{Outcome::OutputError, output + ": writing the image failed"};
+  }
+  progress.Finish();
+  if ((*counted)[Counter::SamplesCovered] == 0) WarnEmpty(scene, log);
+  const auto tCommit = Clock::now();
+  if (auto committed = writer.Commit(); auto* why = std::get_if<std::string>(&committed))
+    return Failure{Outcome::OutputError, *why};
+  const auto tDone = Clock::now();
+
+  // Step 5: what it took.
+  RenderReport report;
+  report.mode = o.mode;
+  report.counters = *counted;
+  if (scan) {
+    report.counters.Merge(scan->Stats());
+    const DirectScanSource::Timing times = scan->Times();
+    report.workerSeconds = times.workerSeconds;
+    report.compositeSeconds = times.compositeSeconds;
+  }
+  if (front.shared) report.processes = front.shared->Processes();
+  report.load = Seconds(t0, tLoaded);
+  report.setUp = Seconds(tLoaded, tSetUp);
+  report.render = Seconds(tSetUp, tDone);
+  // Encoding and writing, inside the render (on the writer's thread: overlapping it).
+  report.output = openSeconds + (async ? async->WriterSeconds() : progress.OutputSeconds()) + Seconds(tCommit, tDone);
+  report.peakKiB = PeakResidentKiB();
+  report.texture = backEnd.TextureReport();
+  report.imageLibrary = raster::imageio::Loaded();
+  return report;
+}
+
+std::optional<Failure> RenderFile(const RenderOptions& o, std::ostream& log, const FrameDone& done) {
+  auto one = [&](const RenderOptions& frame, std::set<std::string>* warned) -> std::optional<Failure> {
+    auto rendered = RenderFrame(frame, log, warned);
+    if (auto* failed = std::get_if<Failure>(&rendered)) return *failed;
+    return done ? done(std::get<RenderReport>(rendered)) : std::nullopt;
+  };
+  const std::filesystem::path file(o.file);
+  const bool rib = file.extension() == ".rib" || (file.extension() == ".gz" && file.stem().extension() == ".rib");
+  std::vector<int> frames;
+  if (rib && o.camera.frame < 0)
+    for (const int n : RibFrames(o.file))
+      if (std::find(frames.begin(), frames.end(), n) == frames.end()) frames.push_back(n);
+  if (frames.size() <= 1) return one(o, nullptr);
+  if (!o.output.empty()) {
+    log << "patchscan: note: " << o.file << " has " << frames.size() << " frames; -o writes the first (give --frame N "
+        << "for another, or leave out -o to render every frame to its Display)\n";
+    return one(o, nullptr);
+  }
+  std::set<std::string> warned;
+  for (const int n : frames) {
+    RenderOptions frame = o;
+    frame.camera.frame = n;
+    if (auto failed = one(frame, &warned)) return failed;
+  }
+  return std::nullopt;
+}
+
+}  // namespace patchscan::render

@@ -1,0 +1,89 @@
+#include "render/report.h"
+
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <ostream>
+#include <sstream>
+
+namespace patchscan::render {
+namespace {
+
+// The counter groups a mode runs, in the table's order.
+bool Runs(RenderMode mode, CounterGroup g) {
+  switch (g) {
+    case CounterGroup::BackEnd: return true;
+    case CounterGroup::Theta:
+    case CounterGroup::Slabs: return mode == RenderMode::Theta;
+    default: return Direct(mode);
+  }
+}
+
+}  // namespace
+
+long PeakResidentKiB() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss;
+}
+
+void PrintReport(const RenderReport& r, std::ostream& out) {
+  char line[256];
+  for (std::size_t g = 0; g < kCounterGroupTitles.size(); ++g) {
+    const auto group = static_cast<CounterGroup>(g);
+    if (!Runs(r.mode, group)) continue;
+    out << kCounterGroupTitles[g] << ":\n";
+    for (const CounterInfo& c : kCounterTable) {
+      if (c.group != group) continue;
+      std::snprintf(line, sizeof line, "  %-36s %12lld %-12s %.*s\n", std::string(c.key).c_str(),
+                    static_cast<long long>(r.counters[c.counter]), std::string(c.unit).c_str(),
+                    static_cast<int>(c.description.size()), c.description.data());
+      out << line;
+    }
+    for (const CounterRatio& q : kCounterRatios) {
+      if (q.group != group) continue;
+      std::snprintf(line, sizeof line, "  %-36s %12.3f %-12s %.*s\n", std::string(q.key).c_str(), r.counters.Ratio(q),
+                    "", static_cast<int>(q.description.size()), q.description.data());
+      out << line;
+    }
+  }
+  if (!r.workerSeconds.empty()) {
+    out << "workers: " << r.workerSeconds.size() << ", seconds scanning each:";
+    for (double t : r.workerSeconds) out << ' ' << t;
+    out << "; compositor " << r.compositeSeconds << " s (" << (r.render > 0 ? 100.0 * r.compositeSeconds / r.render : 0.0)
+        << " % of the render)\n";
+  }
+  for (const ProcessReport& p : r.processes)
+    out << "process " << p.rank << ": scanning " << p.seconds << " s, sent " << p.bytesSent << " bytes, received "
+        << p.bytesReceived << " bytes, peak memory " << p.peakKiB << " KiB\n";
+  out << "time: load " << r.load << " s, " << (Direct(r.mode) ? "set up " : "tessellate ") << r.setUp
+      << " s, render " << r.render << " s (of which writing the image " << r.output << " s)\npeak memory: "
+      << r.peakKiB << " KiB\ntexture: " << r.texture << "\nimage library (OpenImageIO): "
+      << (r.imageLibrary ? "loaded" : "not loaded") << '\n';
+}
+
+std::string ReportJson(const RenderReport& r) {
+  std::ostringstream js;
+  js << "{\"mode\": \"" << ModeName(r.mode) << '"';
+  for (const CounterInfo& c : kCounterTable) js << ", \"" << c.key << "\": " << r.counters[c.counter];
+  for (const CounterRatio& q : kCounterRatios) js << ", \"" << q.key << "\": " << r.counters.Ratio(q);
+  js << ", \"seconds_load\": " << r.load << ", \"seconds_tessellate\": " << r.setUp << ", \"seconds_render\": "
+     << r.render << ", \"seconds_output\": " << r.output << ", \"seconds_workers\": [";
+  for (std::size_t k = 0; k < r.workerSeconds.size(); ++k) js << (k ? ", " : "") << r.workerSeconds[k];
+  js << "], \"seconds_composite\": " << r.compositeSeconds << ", \"peak_rss_kib\": " << r.peakKiB
+     << ", \"image_library_loaded\": " << (r.imageLibrary ? "true" : "false");
+  if (!r.processes.empty()) {
+    js << ", \"processes\": [";
+    for (std::size_t k = 0; k < r.processes.size(); ++k) {
+      const ProcessReport& p = r.processes[k];
+      js << (k ? ", " : "") << "{\"rank\": " << p.rank << ", \"seconds_scanning\": " << p.seconds
+         << ", \"bytes_sent\": " << p.bytesSent << ", \"bytes_received\": " << p.bytesReceived
+         << ", \"peak_rss_kib\": " << p.peakKiB << '}';
+    }
+    js << ']';
+  }
+  js << "}\n";
+  return js.str();
+}
+
+}  // namespace patchscan::render

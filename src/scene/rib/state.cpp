@@ -1,0 +1,284 @@
+// The RIB requests of the camera and image, the transformations and the appearance.
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "patch/camera.h"
+#include "scene/rib/parser.h"
+#include "scene/text_file.h"
+
+namespace patchscan::rib {
+
+bool RibParser::Format(const Request& r) {
+  if (!Numbers(r, 3)) return false;
+  const double w = num_[0], h = num_[1];
+  if (!(w >= 1 && h >= 1 && w <= kMaxImageSide && h <= kMaxImageSide && w == std::floor(w) && h == std::floor(h)))
+    return Fail(r.line, "Format: the image size must be whole numbers from 1 to " + std::to_string(kMaxImageSide));
+  if (!(num_[2] > 0)) return Fail(r.line, "Format: the pixel aspect ratio must be positive");
+  if (num_[2] != 1.0) Warn(r.line, "pixelaspect", "Format: pixel aspect ratios other than 1 are not supported: square pixels");
+  scene_.image.size = std::make_pair(static_cast<int>(w), static_cast<int>(h));
+  return true;
+}
+
+bool RibParser::Projection(const Request& r) {
+  std::string name;
+  std::vector<Param> params;
+  if (!NameAndParams(r, &name, &params)) return false;
+  if (name != "perspective" && name != "orthographic")
+    return Fail(r.line, "Projection: unknown projection " + Shown(name) + " (known: \"perspective\", \"orthographic\")");
+  scene_.image.orthographic = name == "orthographic";
+  double& fov = scene_.image.fovDeg;
+  fov = kRibDefaultFovDeg;
+  for (const Param& p : params) {
+    if (p.name == "fov" && !scene_.image.orthographic) {
+      if (!ParamNumbers(r, p, 1, &fov)) return false;
+      if (!(fov >= kMinFovDeg && fov <= kMaxFovDeg))
+        return Fail(p.value->line, "Projection: fov must be from " + std::to_string(kMinFovDeg) + " to " + std::to_string(kMaxFovDeg) + " degrees");
+    } else {
+      IgnoreParam(r, p);
+    }
+  }
+  // The projection resets the camera transformation (RenderMan Interface 3.2: it
+  // defines camera space).
+  attr_.transform = Mat4::Identity();
+  return true;
+}
+
+bool RibParser::ScreenWindow(const Request& r) {
+  if (!Numbers(r, 4)) return false;
+  if (num_[0] == num_[1] || num_[2] == num_[3]) return Fail(r.line, "ScreenWindow: the window is empty");
+  scene_.image.screenWindow = Vec4(num_[0], num_[1], num_[2], num_[3]);
+  return true;
+}
+
+bool RibParser::CropWindow(const Request& r) {
+  if (!Numbers(r, 4)) return false;
+  const double* w = num_.data();
+  if (!(0.0 <= w[0] && w[0] < w[1] && w[1] <= 1.0 && 0.0 <= w[2] && w[2] < w[3] && w[3] <= 1.0))
+    return Fail(r.line, "CropWindow: expected 0 <= xmin < xmax <= 1 and 0 <= ymin < ymax <= 1");
+  scene_.image.cropWindow = Vec4(w[0], w[1], w[2], w[3]);
+  return true;
+}
+
+bool RibParser::Clipping(const Request& r) {
+  if (!Numbers(r, 2)) return false;
+  if (!(num_[0] > 0 && num_[1] > num_[0])) return Fail(r.line, "Clipping: expected 0 < near < far");
+  scene_.image.hither = num_[0];
+  return true;
+}
+
+bool RibParser::PixelSamples(const Request& r) {
+  if (!Numbers(r, 2)) return false;
+  if (!(num_[0] >= 1 && num_[1] >= 1)) return Fail(r.line, "PixelSamples: expected at least 1 sample each way");
+  const double side = std::round(std::sqrt(num_[0] * num_[1]));
+  if (num_[0] != num_[1] || side > 8)
+    Warn(r.line, "PixelSamples", "PixelSamples: a square grid of 1 to 8 samples a side is used");
+  scene_.image.pixelSamples = static_cast<int>(std::clamp(side, 1.0, 8.0));
+  return true;
+}
+
+bool RibParser::Display(const Request& r) {
+  std::string name, type;
+  if (!StringArg(r, 0, &name) || !StringArg(r, 1, &type)) return false;
+  // After the mode, the display driver's parameters: "compression" (as RenderMan's tiff and
+  // openexr drivers take it; raster/image_writer.h lists each format's) is kept.
+  std::string compression;
+  if (r.args.size() > 3) {
+    std::vector<Param> params;
+    if (!Params(r, 3, &params)) return false;
+    for (const Param& p : params) {
+      if (p.name == "compression") {
+        if (!ParamString(r, p, &compression)) return false;
+      } else {
+        IgnoreParam(r, p);
+      }
+    }
+  }
+  // A name starting with '+' adds a further display: only the first is written.
+  if (type != "framebuffer" && !name.empty() && name[0] != '+') {
+    scene_.image.displayName = name;
+    scene_.image.displayType = type;
+    scene_.image.displayCompression = compression;
+    scene_.image.displayLine = r.line;
+  }
+  return true;
+}
+
+bool RibParser::SetTransform(const Request& r, const Mat4& m) {
+  attr_.transform = m;
+  return CheckTransform(r);
+}
+
+bool RibParser::Concat(const Request& r, const Mat4& m) {
+  attr_.transform = attr_.transform * m;
+  return CheckTransform(r);
+}
+
+bool RibParser::CheckTransform(const Request& r) {
+  if (!attr_.transform.allFinite()) return Fail(r.line, r.name + ": the transformation is no longer finite");
+  return true;
+}
+
+bool RibParser::sawWorldOpen() const {
+  for (const Block& b : blocks_)
+    if (b.kind == Block::Kind::World) return true;
+  return false;
+}
+
+bool RibParser::Rotate(const Request& r) {
+  if (!Numbers(r, 4)) return false;
+  const Vec3 axis(num_[1], num_[2], num_[3]);
+  if (axis.norm() == 0.0) return Fail(r.line, "Rotate: the axis is zero");
+  Mat4 m = Mat4::Identity();
+  m.block<3, 3>(0, 0) = Eigen::AngleAxisd(num_[0] * kRadPerDeg, axis.normalized()).toRotationMatrix();
+  return Concat(r, m);
+}
+
+bool RibParser::Orientation(const Request& r) {
+  std::string o;
+  if (!StringArg(r, 0, &o)) return false;
+  if (o == "outside" || o == "lh") {
+    attr_.insideOrientation = false;
+  } else if (o == "inside" || o == "rh") {
+    attr_.insideOrientation = true;
+  } else {
+    return Fail(r.line, "Orientation: expected \"outside\", \"inside\", \"lh\" or \"rh\", found " + Shown(o));
+  }
+  return true;
+}
+
+bool RibParser::Sides(const Request& r) {
+  if (!Numbers(r, 1)) return false;
+  if (num_[0] != 1 && num_[0] != 2) return Fail(r.line, "Sides: expected 1 or 2");
+  attr_.appearance.twoSided = num_[0] == 2;
+  return true;
+}
+
+bool RibParser::SurfaceShader(const Request& r) {
+  std::string name;
+  std::vector<Param> params;
+  if (!NameAndParams(r, &name, &params)) return false;
+  Appearance& a = attr_.appearance;
+  using S = Appearance::Shader;
+  // The standard shaders' defaults (RenderMan Interface 3.2, appendix A).
+  if (name == "constant") {
+    a.shader = S::Constant;
+  } else if (name == "matte") {
+    a.shader = S::Matte;
+    a.ka = 1.0;
+    a.kd = 1.0;
+  } else if (name == "metal") {
+    a.shader = S::Metal;
+    a.ka = 1.0;
+    a.ks = 1.0;
+    a.roughness = 0.1;
+  } else if (name == "plastic" || name == "paintedplastic") {
+    a.shader = name == "plastic" ? S::Plastic : S::PaintedPlastic;
+    a.ka = 1.0;
+    a.kd = 0.5;
+    a.ks = 0.5;
+    a.roughness = 0.1;
+    a.specularColour = Vec3(1, 1, 1);
+  } else {
+    Warn(r.line, "shader " + name, "Surface: unknown shader " + Shown(name) + ": the default material is used");
+    a.shader = S::Default;
+    return true;
+  }
+  a.textureName.clear();
+  for (const Param& p : params) {
+    bool ok = true;
+    if (p.name == "Ka" && a.shader != S::Constant) ok = ParamNumbers(r, p, 1, &a.ka);
+    else if (p.name == "Kd" && a.shader != S::Constant && a.shader != S::Metal) ok = ParamNumbers(r, p, 1, &a.kd);
+    else if (p.name == "Ks" && (a.shader == S::Metal || a.shader == S::Plastic || a.shader == S::PaintedPlastic)) ok = ParamNumbers(r, p, 1, &a.ks);
+    else if (p.name == "roughness" && (a.shader == S::Metal || a.shader == S::Plastic || a.shader == S::PaintedPlastic)) {
+      ok = ParamNumbers(r, p, 1, &a.roughness);
+      if (ok && !(a.roughness > 0)) return Fail(p.value->line, "Surface: roughness must be positive");
+    } else if (p.name == "specularcolor" && (a.shader == S::Plastic || a.shader == S::PaintedPlastic)) {
+      ok = ParamVec3(r, p, &a.specularColour);
+    } else if (p.name == "texturename" && a.shader == S::PaintedPlastic) {
+      ok = ParamString(r, p, &a.textureName);
+      if (ok && !a.textureName.empty()) {
+        std::filesystem::path path(a.textureName);
+        if (path.is_relative()) a.textureName = (std::filesystem::path(file_).parent_path() / path).string();
+      }
+    } else {
+      IgnoreParam(r, p);
+    }
+    if (!ok) return false;
+  }
+  return true;
+}
+
+bool RibParser::LightSource(const Request& r) {
+  std::string name;
+  if (!StringArg(r, 0, &name)) return false;
+  if (r.args.size() < 2) return Fail(r.line, "LightSource expects a shader name and a light handle");
+  std::vector<Param> params;
+  if (!Params(r, 2, &params)) return false;
+  SceneLight l;
+  l.line = r.line;
+  l.file = file_;
+  using K = SceneLight::Kind;
+  // The standard lights, and the shadowing ones of RenderMan's light library.
+  const bool shadowing = name == "shadowspot" || name == "shadowdistant" || name == "shadowpoint";
+  if (name == "ambientlight") l.kind = K::Ambient;
+  else if (name == "distantlight" || name == "shadowdistant") l.kind = K::Distant;
+  else if (name == "pointlight" || name == "shadowpoint") l.kind = K::Point;
+  else if (name == "spotlight" || name == "shadowspot") l.kind = K::Spot;
+  else {
+    Warn(r.line, "light " + name, "LightSource: unknown light shader " + Shown(name) + ": skipped");
+    return true;
+  }
+  double intensity = 1.0;
+  Vec3 colour(1, 1, 1);
+  l.coneAngle = kSpotConeDeg * kRadPerDeg;
+  l.coneDelta = kSpotDeltaDeg * kRadPerDeg;
+  for (const Param& p : params) {
+    bool ok = true;
+    if (p.name == "intensity") ok = ParamNumbers(r, p, 1, &intensity);
+    else if (p.name == "lightcolor") ok = ParamVec3(r, p, &colour);
+    else if (p.name == "from" && l.kind != K::Ambient) ok = ParamVec3(r, p, &l.from);
+    else if (p.name == "to" && (l.kind == K::Distant || l.kind == K::Spot)) ok = ParamVec3(r, p, &l.to);
+    else if (p.name == "coneangle" && l.kind == K::Spot) ok = ParamNumbers(r, p, 1, &l.coneAngle);
+    else if (p.name == "conedeltaangle" && l.kind == K::Spot) ok = ParamNumbers(r, p, 1, &l.coneDelta);
+    else if (p.name == "beamdistribution" && l.kind == K::Spot) ok = ParamNumbers(r, p, 1, &l.beamDistribution);
+    else if (shadowing && (p.name == "shadowname" || (name == "shadowpoint" && p.name.size() == 4 && p.name[0] == 's' &&
+                                                       p.name[1] == 'f'))) {
+      // shadowpoint: sfpx sfnx sfpy sfny sfpz sfnz, the six faces of a cube about it.
+      std::string map;
+      ok = ParamString(r, p, &map);
+      if (ok && !map.empty()) l.shadowNames.push_back(map);
+    } else if (shadowing && p.name == "bias") ok = ParamNumbers(r, p, 1, &l.shadowBias);
+    else if (shadowing && p.name == "blur") ok = ParamNumbers(r, p, 1, &l.shadowBlur);
+    else if (shadowing && p.name == "samples") {
+      double samples = 16;
+      ok = ParamNumbers(r, p, 1, &samples);
+      // Total samples, as the shaders take them: a square grid of about as many.
+      l.shadowSamples = std::clamp(static_cast<int>(std::lround(std::sqrt(std::max(samples, 1.0)))), 1, 16);
+    } else IgnoreParam(r, p);
+    if (!ok) return false;
+  }
+  if ((l.kind == K::Distant || l.kind == K::Spot) && l.from == l.to)
+    return Fail(r.line, "LightSource: \"from\" and \"to\" are the same point");
+  l.colour = intensity * colour;
+  // From the current space into world space (camera space before WorldBegin: moved to
+  // world space there).
+  l.from = (attr_.transform * l.from.homogeneous()).head<3>();
+  l.to = (attr_.transform * l.to.homogeneous()).head<3>();
+  if (!(l.shadowBias >= 0.0) || !(l.shadowBlur >= 0.0) || !std::isfinite(l.shadowBias) || !std::isfinite(l.shadowBlur))
+    return Fail(r.line, "LightSource: \"bias\" and \"blur\" are not negative");
+  scene_.lights.push_back(l);
+  return true;
+}
+
+bool RibParser::MakeShadow(const Request& r) {
+  // MakeShadow picturename texturename: run before the frame renders (a depth map of an
+  // earlier frame becomes a shadow texture).
+  std::string in, out;
+  if (!StringArg(r, 0, &in) || !StringArg(r, 1, &out)) return false;
+  scene_.makeShadows.push_back({in, out, file_, r.line});
+  return true;
+}
+
+}  // namespace patchscan::rib
