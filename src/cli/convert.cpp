@@ -16,8 +16,8 @@ CLI::App* AddConvertCommand(CLI::App* app, ConvertOptions* o) {
       "image: Format, PixelSamples, Projection, Clipping, the world-to-camera Transform, the "
       "scene's lights, then each surface with its appearance (Color, Opacity, Sides, "
       "ReverseOrientation, Surface shader and parameters) as a Patch (bicubic patches in Bézier "
-      "form) or its quadric. Subdivision meshes are not written yet. The file is written to a "
-      "temporary name and renamed into place.");
+      "form), a NuPatch, its quadric or a SubdivisionMesh, and the polygons as PointsPolygons. "
+      "The file is written to a temporary name and renamed into place.");
   cmd->add_option("FILE", o->file, "scene file: .bpt, .rib or .obj")->required();
   cmd->add_option("-o,--output", o->output, "the RIB file to write")->required();
   cmd->add_option("--aa", o->aa, "PixelSamples to write, as the side of the grid (default: 3)")

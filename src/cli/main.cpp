@@ -3,11 +3,8 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
-#include "cli/compare.h"
-#include "cli/convert.h"
+#include "cli/app.h"
 #include "cli/exit_codes.h"
-#include "cli/info.h"
-#include "cli/render.h"
 
 #ifndef PATCHSCAN_VERSION
 #error "PATCHSCAN_VERSION must be defined by the build"
@@ -15,29 +12,17 @@
 
 int main(int argc, char** argv) {
   using namespace patchscan::cli;
-  CLI::App app(
-      "patchscan renders parametric surfaces (bicubic patches in any basis, quadrics, NURBS, "
-      "subdivision surfaces) "
-      "directly, with Blinn's scan-line algorithm, and compares them with tessellated "
-      "renders through the same back end.",
-      "patchscan");
-  app.set_version_flag("--version", std::string("patchscan ") + PATCHSCAN_VERSION);
-  app.require_subcommand(1);
-  app.footer(
-      "Exit codes: 0 success, 1 unreadable or malformed input file, 2 bad command line,\n"
-      "3 the output could not be written, 70 an internal failure (memory exhausted), 130\n"
-      "interrupted (Ctrl-C or SIGTERM: no output is left behind); 'compare' has its own: see\n"
-      "its help.\n"
-      "Run 'patchscan COMMAND --help' for one command's options.");
-
-  InfoOptions info;
-  CLI::App* infoCmd = AddInfoCommand(&app, &info);
-  RenderCommand render;
-  CLI::App* renderCmd = AddRenderCommand(&app, &render);
-  CompareOptions compare;
-  CLI::App* compareCmd = AddCompareCommand(&app, &compare);
-  ConvertOptions convert;
-  CLI::App* convertCmd = AddConvertCommand(&app, &convert);
+  Commands commands;
+  const std::unique_ptr<CLI::App> made = MakeApp(&commands, PATCHSCAN_VERSION);
+  CLI::App& app = *made;
+  CLI::App* infoCmd = commands.infoCmd;
+  CLI::App* renderCmd = commands.renderCmd;
+  CLI::App* compareCmd = commands.compareCmd;
+  CLI::App* convertCmd = commands.convertCmd;
+  InfoOptions& info = commands.info;
+  RenderCommand& render = commands.render;
+  CompareOptions& compare = commands.compare;
+  ConvertOptions& convert = commands.convert;
 
   try {
     app.parse(argc, argv);

@@ -59,7 +59,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                 "exact mode: start each tracker's Newton iteration from its last position "
                 "instead of extrapolating from its last two (to measure what extrapolation saves)");
   AddChoiceOption(cmd, "--overlay", &o->overlay, ChoiceNames<render::Overlay>{{"none", render::Overlay::None}, {"trackers", render::Overlay::Trackers}},
-                  "exact mode: trackers = draw what the scan did over the image: each tracker's "
+                  "exact and theta modes: trackers = draw what the scan did over the image: each tracker's "
                   "path as dots (boundary-edge trackers blue, silhouette trackers red) and each "
                   "event as a ring (maximum passed yellow, saddle magenta, fold green, "
                   "silhouette tracker born pink, tracker died black, crossing repaired by the "
