@@ -5,6 +5,7 @@
 #include <sstream>
 #include <ostream>
 
+#include "cli/checks.h"
 #include "raster/image_compare.h"
 #include "raster/image_writer.h"
 
@@ -28,11 +29,11 @@ CLI::App* AddCompareCommand(CLI::App* app, CompareOptions* o) {
   cmd->add_option("--diff", o->diff,
                   "write |A - B| of the colour, times --diff-scale, to this image (alpha 1)");
   cmd->add_option("--diff-scale", o->diffScale, "scale of the difference image")
-      ->check(CLI::PositiveNumber)
+      ->check(Positive())
       ->capture_default_str();
   cmd->add_option("--json", o->json, "also write the measures as JSON to this file");
   auto threshold = [&](const char* name, double* value, const char* what) {
-    cmd->add_option(name, *value, what)->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option(name, *value, what)->check(NonNegative())->capture_default_str();
   };
   threshold("--warn-silhouette", &o->warn.silhouettePx, "warn above this maximum coverage-edge distance, pixels");
   threshold("--fail-silhouette", &o->fail.silhouettePx, "fail above this maximum coverage-edge distance, pixels");

@@ -2,6 +2,7 @@
 
 #include <ostream>
 
+#include "cli/checks.h"
 #include "cli/exit_codes.h"
 #include "cli/file_output.h"
 #include "render/load.h"
@@ -21,7 +22,7 @@ CLI::App* AddConvertCommand(CLI::App* app, ConvertOptions* o) {
   cmd->add_option("FILE", o->file, "scene file: .bpt, .rib or .obj")->required();
   cmd->add_option("-o,--output", o->output, "the RIB file to write")->required();
   cmd->add_option("--aa", o->aa, "PixelSamples to write, as the side of the grid (default: 3)")
-      ->check(CLI::Range(1, 8));
+      ->check(WholeNumber(1, 8));
   cmd->add_option("--display", o->display,
                   "the image file name to write in a Display request (default: none)");
   AddCameraOptions(cmd, &o->camera);

@@ -39,9 +39,23 @@ int main(int argc, char** argv) {
     std::cout << app.version() << '\n';
     return kExitOk;
   } catch (const CLI::ParseError& e) {
-    std::cerr << "patchscan: " << e.what() << "\nRun 'patchscan --help' for usage.\n";
+    const CLI::App* command = infoCmd->parsed()      ? infoCmd
+                              : renderCmd->parsed()  ? renderCmd
+                              : compareCmd->parsed() ? compareCmd
+                              : convertCmd->parsed() ? convertCmd
+                                                     : nullptr;
+    if (!command && argc > 1 && argv[1][0] != '-') {
+      // CLI11 says only that a command is required: name the word it did not know.
+      std::string known;
+      for (const CLI::App* c : app.get_subcommands({})) known += (known.empty() ? "" : ", ") + c->get_name();
+      std::cerr << "patchscan: unknown command '" << argv[1] << "' (the commands: " << known
+                << ")\nRun 'patchscan --help' for usage.\n";
+      return kExitUsage;
+    }
+    std::cerr << "patchscan: " << e.what() << "\nRun 'patchscan " << (command ? command->get_name() + " " : "")
+              << "--help' for usage.\n";
     // compare's codes follow idiff, where 2 means the images differ.
-    return compareCmd->parsed() ? kCompareFileError : kExitUsage;
+    return command == compareCmd ? kCompareFileError : kExitUsage;
   }
 
   // A failure no command foresaw (memory exhausted, in a worker thread or not): the stack

@@ -5,6 +5,7 @@
 #include <ostream>
 
 #include "cli/camera_options.h"
+#include "cli/checks.h"
 #include "cli/exit_codes.h"
 #include "cli/file_output.h"
 #include "raster/image_writer.h"
@@ -40,7 +41,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                   "pixel of its extent on the screen, or whose chains come to hold more vertices "
                   "per sample than exact samples cost, takes the exact scan instead (cheaper there; "
                   "--stats: theta_exact_surfaces)")
-      ->check(CLI::Range(1, 4096))
+      ->check(WholeNumber(1, 4096))
       ->capture_default_str();
   cmd->add_option("--y-step", o->yStep,
                   "theta mode: 0 (the default), or a step of less than two sample rows: every "
@@ -53,7 +54,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                   "sampled instead, its ends on a boundary placed where a slab across it has its "
                   "edge. Silhouettes between the lines are chords: error about h^2 / (8 R) "
                   "pixels for step h and a silhouette curving with radius R pixels")
-      ->check(CLI::Range(0.0, 64.0))
+      ->check(Number(0.0, 64.0))
       ->capture_default_str();
   cmd->add_flag("--no-extrapolate", o->noExtrapolate,
                 "exact mode: start each tracker's Newton iteration from its last position "
@@ -68,22 +69,22 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                                     "tess mode (the default tessellation): rates chosen per surface from the "
                                     "screen so that no triangle lies more than about this many pixels from "
                                     "the surface (chord error; equal rates on shared edges)")
-                         ->check(CLI::Range(0.01, 1e6))
+                         ->check(Number(0.01, 1e6))
                          ->capture_default_str();
   auto* tessRate = cmd->add_option("--tess-rate", o->tessRate,
                                    "tess mode: uniform tessellation instead, this many segments per patch edge")
-                       ->check(CLI::Range(1, kMaxTessRate));
+                       ->check(WholeNumber(1, kMaxTessRate));
   auto* tessPixels = cmd->add_option("--tess-pixels", o->tessPixels,
                                      "tess mode: screen-adaptive tessellation instead, per-edge rates making "
                                      "edges about this many pixels long (equal on shared edges)")
-                         ->check(CLI::Range(0.01, 1e6));
+                         ->check(Number(0.01, 1e6));
   tessError->excludes(tessRate)->excludes(tessPixels);
   tessRate->excludes(tessPixels);
   cmd->add_option("--aa", o->aa,
                   "supersampling: an l x l grid of samples per pixel whose edge samples are "
                   "shared with the neighbours (1: one sample at the pixel centre; default: a RIB "
                   "scene's PixelSamples, else 3)")
-      ->check(CLI::Range(1, raster::kMaxAa));
+      ->check(WholeNumber(1, raster::kMaxAa));
   AddChoiceOption(cmd, "--shading", &o->shading,
                   ChoiceNames<raster::ShadingMode>{{"flat", raster::ShadingMode::Flat},
                                                    {"gouraud", raster::ShadingMode::Gouraud},
@@ -99,7 +100,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
   cmd->add_option("--opacity", o->opacity,
                   "opacity of every surface; below 1, linear transparency: each sample blends "
                   "its 4 nearest surfaces front to back")
-      ->check(CLI::Range(1e-3, 1.0))
+      ->check(Number(1e-3, 1.0))
       ->capture_default_str();
   cmd->add_flag("--hidden-line", o->hiddenLine,
                 "hidden-line mode: visible surfaces in white with their triangle edges in black, "
@@ -121,7 +122,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                   "them and each scans its share row by row (Molnar 1990's object partition); their "
                   "rows are composited by depth in a fixed order, so the image is the same for any "
                   "number. 1: one thread. --overlay uses one worker")
-      ->check(CLI::Range(1, 1024));
+      ->check(WholeNumber(1, 1024));
   cmd->add_flag("--stats", command->stats, "print counts, times and peak memory to stderr");
   auto* progress = cmd->add_flag("--progress", command->progress,
                                  "show progress on stderr (rows finished, elapsed time, time left) even when "

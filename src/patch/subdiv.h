@@ -128,8 +128,9 @@ class SubdivFace {
   // The cage the face belongs to, as given (one copy shared by all its faces).
   const SubdivMesh& Mesh() const;
 
-  // Holds the base face prepared (Hold) until as many Release calls: the last frees it. A
-  // face evaluated without a hold stays prepared until a hold on it ends. A face must not be
+  // Holds the base face prepared (Hold) until as many Release calls: the last frees it; a
+  // Release without a Hold breaks the contract (PATCHSCAN_DCHECK; a release build ignores
+  // it). A face evaluated without a hold stays prepared until a hold on it ends. A face must not be
   // evaluated by one thread while another releases its last hold.
   // fit: the holder evaluates the face many times (a scan: thousands of times), so the
   // bicubic and Gregory pieces Evaluate takes are fitted first (~25 evaluations of a

@@ -14,33 +14,9 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli/run_program.h"
+
 namespace {
-
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-std::string Slurp(const std::filesystem::path& p) {
-  std::ifstream f(p);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-// Runs the program with `args` (shell words), capturing stdout, stderr and the exit code.
-Result Patchscan(const std::string& args) {
-  const auto dir = std::filesystem::temp_directory_path();
-  const auto out = dir / ("patchscan_cli_out_" + std::to_string(::getpid()));
-  const auto err = dir / ("patchscan_cli_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(PATCHSCAN_BINARY) + " " + args + " >" + out.string() +
-                          " 2>" + err.string() + " </dev/null";
-  const int status = std::system(cmd.c_str());
-  Result r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
-  std::filesystem::remove(out);
-  std::filesystem::remove(err);
-  return r;
-}
 
 const std::string kTeapot = PATCHSCAN_SURFACES_DIR "/teapot.bpt";
 

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <stdexcept>
 
+#include "core/check.h"
 #include "patch/basis.h"
 #include "patch/bicubic.h"
 #include "patch/cages.h"
@@ -472,9 +473,9 @@ TEST(Subdiv, FacesArePreparedOnDemandAndFreedWhenTheirLastHoldEnds) {
   faces[9].Release();
   EXPECT_EQ(faces[0].PreparedNow(), 1);
   EXPECT_EQ(faces[0].Preparations(), 2);
-  // The unheld face is freed when a hold on it ends; a release without a hold does nothing.
+  // The unheld face is freed when a hold on it ends. (A release without a hold breaks the
+  // contract: SubdivDeathTest below.)
   faces[0].Hold();
-  faces[0].Release();
   faces[0].Release();
   EXPECT_EQ(faces[0].PreparedNow(), 0);
   EXPECT_EQ(faces[0].PeakPrepared(), 2);
@@ -485,6 +486,14 @@ TEST(Subdiv, FacesArePreparedOnDemandAndFreedWhenTheirLastHoldEnds) {
   SubdivMesh copy = test::Grid(8, 1);
   const auto fresh = PrepareSubdivFaces(copy);
   EXPECT_LT((again.p - At(fresh[9], 0.25, 0.5).p).norm(), 1e-15);
+}
+
+TEST(SubdivDeathTest, AReleaseWithoutAHoldBreaksTheContract) {
+  if (!PATCHSCAN_CHECKS_ON) GTEST_SKIP() << "checks are compiled out of this build";
+  const auto faces = PrepareSubdivFaces(test::Grid(2, 1));
+  faces[0].Hold();
+  faces[0].Release();
+  EXPECT_DEATH(faces[0].Release(), "released as many times as held");
 }
 
 // A cage with "st" of class `c` equal to each point's (x, y).
