@@ -23,7 +23,7 @@ class TriangleGeometry {
  public:
   TriangleGeometry(const TriangleMesh& mesh, const RenderSettings& s, const Lattice& lat,
                    int layers, Counters& stats)
-      : mesh_(mesh), s_(s), lat_(lat), store_(s, lat, layers, s.shading, stats) {
+      : mesh_(mesh), store_(s, lat, layers, s.shading, stats) {
     stats[Counter::Triangles] = static_cast<std::int64_t>(mesh.triangles.size());
     ySorted_.reserve(mesh.triangles.size());
     for (std::uint32_t k = 0; k < mesh.triangles.size(); ++k) {
@@ -86,8 +86,6 @@ class TriangleGeometry {
     std::uint32_t index;
   };
   const TriangleMesh& mesh_;
-  const RenderSettings& s_;
-  const Lattice& lat_;
   TriangleStore store_;
   std::vector<YEntry> ySorted_;
   size_t nextY_ = 0;
