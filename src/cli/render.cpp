@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <iomanip>
 #include <ostream>
+#include <sstream>
 
 #include "cli/camera_options.h"
 #include "cli/checks.h"
@@ -138,6 +140,13 @@ int RunRender(const RenderCommand& c, std::ostream& err) {
   render::RenderOptions o = c.options;
   o.progress = !c.quiet && (c.progress || isatty(STDERR_FILENO) != 0);
   const auto failed = render::RenderFile(o, err, [&](const render::RenderReport& report) -> std::optional<render::Failure> {
+    // One line per image written, as a user of pbrt or POV-Ray expects to see it.
+    if (!c.quiet) {
+      std::ostringstream seconds;
+      seconds << std::setprecision(3) << report.load + report.setUp + report.render;
+      err << "patchscan: wrote " << report.image << " (" << report.width << "x" << report.height << ", "
+          << (report.depthMap ? "depth map" : render::ModeName(report.mode)) << ", " << seconds.str() << " s)\n";
+    }
     if (c.stats) render::PrintReport(report, err);
     if (c.statsJson.empty()) return std::nullopt;
     if (const auto why = WriteFileWhole(c.statsJson, render::ReportJson(report)))

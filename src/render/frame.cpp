@@ -204,6 +204,10 @@ Result<RenderReport> RenderFrame(const RenderOptions& o, std::ostream& log, std:
   // Step 5: what it took.
   RenderReport report;
   report.mode = o.mode;
+  report.image = output;
+  report.width = outWidth;
+  report.height = outHeight;
+  report.depthMap = depthMap;
   report.counters = *counted;
   if (scan) {
     report.counters.Merge(scan->Stats());

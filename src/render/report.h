@@ -24,6 +24,11 @@ struct ProcessReport {
 
 struct RenderReport {
   RenderMode mode = RenderMode::Exact;
+  // The image written: its file, its size in pixels (the crop window's, with a crop), and
+  // whether it is a depth map (a "zfile" or "shadow" Display) rather than a picture.
+  std::string image;
+  int width = 0, height = 0;
+  bool depthMap = false;
   Counters counters;  // the front end's and the back end's
   // Seconds: reading the scene, setting up (the scan, or tessellation), rendering (with
   // the output), of which encoding and writing the image.

@@ -2,6 +2,9 @@
 // should have been, and the help to read next.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
+#include <cstdlib>
 #include <string>
 
 #include "cli/run_program.h"
@@ -46,6 +49,24 @@ TEST(Usage, AnErrorPointsToItsCommandsHelp) {
     const Result r = Patchscan(command + " --no-such-option");
     EXPECT_NE(r.err.find("Run 'patchscan " + command + " --help' for usage."), std::string::npos) << r.err;
   }
+}
+
+TEST(Usage, EachImageWrittenIsOneLineUnlessQuiet) {
+  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_usage_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::filesystem::copy_file(PATCHSCAN_SURFACES_DIR "/shadows.rib", dir / "shadows.rib");
+  // Two frames, each to its Display beside the scene: the light's depth map, then the
+  // picture that reads it.
+  const std::string cd = "cd " + dir.string() + " && " + PATCHSCAN_BINARY + " render shadows.rib --size 64x48";
+  ASSERT_EQ(std::system((cd + " 2>err.txt").c_str()), 0) << Slurp(dir / "err.txt");
+  const std::string err = Slurp(dir / "err.txt");
+  EXPECT_NE(err.find("patchscan: wrote spot.z (64x48, depth map, "), std::string::npos) << err;
+  EXPECT_NE(err.find("patchscan: wrote lit.png (64x48, exact, "), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 2) << err;
+  const Result r = Patchscan("render " + kTeapot + " -o " + (dir / "t.png").string() + " --size 32x24 --mode tess --quiet");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
