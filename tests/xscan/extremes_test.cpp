@@ -15,6 +15,7 @@
 
 #include "patch/tessellate.h"
 #include "raster/scanline_renderer.h"
+#include "render/load.h"
 #include "xscan/agreement.h"
 #include "xscan/exact_scan.h"
 #include "tracker/maxima.h"
@@ -252,15 +253,8 @@ class CheckingSink final : public raster::RowSink {
   std::vector<float> alpha_;
 };
 
-raster::RenderSettings Settings(const Camera& camera, int aa) {
-  raster::RenderSettings s;
-  s.width = camera.width;
-  s.height = camera.height;
-  s.aa = aa;
-  s.hither = camera.hither;
-  s.eye = camera.eye;
-  return s;
-}
+// The back end's settings as every render makes them (render::SettingsFor).
+raster::RenderSettings Settings(const Camera& camera, int aa) { return render::SettingsFor(camera, aa); }
 
 // Renders in a direct mode (thetaSteps 0: exact); the alpha of every pixel. Walks that
 // give up are failures unless the case explains them.
