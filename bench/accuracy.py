@@ -21,7 +21,7 @@ import time
 
 import make_cage
 import povray
-from common import camera_args, framed_camera, run
+from common import camera_args, framed_camera, provenance, run
 
 SCENES = [  # name, file, extra camera options
     ("teapot", "surfaces/teapot.bpt", []),
@@ -134,8 +134,8 @@ def joint_table(sub):
     return lines
 
 
-def write_report(rows, path, size, povray_line):
-    lines = [f"# Speed and accuracy at {size}", "",
+def write_report(rows, path, size, povray_line, binary="build/patchscan"):
+    lines = [f"# Speed and accuracy at {size}", "", provenance(binary), "",
              "Every error is measured against the exact render of the same scene, camera and "
              "supersampling (`patchscan compare`). Silhouette: distance between the alpha = 1/2 "
              "coverage contours (max and 99th percentile, pixels); depth: relative, and normal "
@@ -303,7 +303,7 @@ def main():
     args = ap.parse_args()
     if args.report_only:
         rows = read_csv(os.path.join(args.out, "accuracy.csv"))
-        write_report(rows, os.path.join(args.out, "report.md"), args.size, None)
+        write_report(rows, os.path.join(args.out, "report.md"), args.size, None, args.binary)
         plot(rows, None, os.path.join(args.out, "accuracy.png"))
         return
     os.makedirs(args.out, exist_ok=True)
@@ -391,7 +391,7 @@ def main():
                 "threshold 0); its time is the process's wall time, parsing included. Its colour is not "
                 "comparable (its own lights and material): only its coverage edges are measured."
                 if args.povray_steps > 0 else None)
-    write_report(rows, os.path.join(args.out, "report.md"), args.size, pov_note)
+    write_report(rows, os.path.join(args.out, "report.md"), args.size, pov_note, args.binary)
     plot(rows, csv_path, os.path.join(args.out, "accuracy.png"))
     shutil.rmtree(work)
     print(f"accuracy: wrote {csv_path}, report.md and accuracy.png in {args.out}", file=sys.stderr)

@@ -1,7 +1,11 @@
 """Helpers shared by the bench scripts."""
+import datetime
 import os
+import platform
 import subprocess
 import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
 
 
 def framed_camera(binary, scene, extra, size):
@@ -27,9 +31,42 @@ def run(cmd):
     return r.returncode, r.stdout, r.stderr
 
 
-def publish(out_dir, name, lines):
-    """Writes a report's lines as out_dir/name (a Markdown file) and prints them."""
-    text = "\n".join(lines) + "\n"
+def machine():
+    """The machine a run measures: its processor, cores and memory, and the system."""
+    model = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as f:
+            model = next((l.split(":", 1)[1].strip() for l in f if l.startswith("model name")), model)
+    except OSError:
+        pass
+    mem = ""
+    try:
+        with open("/proc/meminfo") as f:
+            kib = next(int(l.split()[1]) for l in f if l.startswith("MemTotal:"))
+        mem = f", {kib / 2 ** 20:.0f} GiB"
+    except (OSError, StopIteration):
+        pass
+    return f"{model}, {os.cpu_count()} cores{mem}, {platform.system()} {platform.release()}"
+
+
+def provenance(binary="build/patchscan"):
+    """One line for the top of a page: when it was measured, on what commit and machine."""
+    root = os.path.dirname(HERE)
+    code, commit, _ = run(["git", "-C", root, "rev-parse", "--short=7", "HEAD"])
+    commit = commit.strip() if code == 0 else "unknown"
+    code, changes, _ = run(["git", "-C", root, "status", "--porcelain", "--untracked-files=no"])
+    if code == 0 and changes.strip():
+        commit += " with changes not yet committed"
+    code, version, _ = run([binary, "--version"])
+    version = version.strip() if code == 0 else "patchscan"
+    date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    return f"Measured {date} by `{version}`, commit {commit}, on {machine()}."
+
+
+def publish(out_dir, name, lines, title, binary="build/patchscan"):
+    """Writes a report's lines as out_dir/name (a Markdown page under `title`, with the run's
+    date, commit and machine) and prints them."""
+    text = "\n".join([f"# {title}", "", provenance(binary), ""] + lines) + "\n"
     with open(os.path.join(out_dir, name), "w") as f:
         f.write(text)
     print(text, end="")

@@ -59,7 +59,7 @@ def main():
              "| format | compression | bytes | seconds writing | seconds rest | writing / rest |", "|---|---|---|---|---|---|"]
     for (ext, compression), (out_s, rest_s, size) in best.items():
         lines.append(f"| .{ext} | {compression or 'default'} | {size:,} | {out_s:.3f} | {rest_s:.3f} | {out_s / rest_s:.2f} |")
-    publish(args.out, "encode.md", lines)
+    publish(args.out, "encode.md", lines, "Image formats and compressions", args.binary)
 
 
 if __name__ == "__main__":

@@ -102,7 +102,7 @@ def main():
     for name, _ in builds:
         e, t = newton[(name, "exact")], newton[(name, "theta")]
         lines.append(f"| {name} | {e[0]:.3f} | {e[1]:.3f} | {t[0]:.3f} |")
-    publish(args.out, "phases.md", lines)
+    publish(args.out, "phases.md", lines, "Where the time of a render goes", args.binary)
 
 
 if __name__ == "__main__":

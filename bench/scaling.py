@@ -17,7 +17,7 @@ import subprocess
 import sys
 
 import povray
-from common import camera_args, framed_camera
+from common import camera_args, framed_camera, provenance
 
 MODES = [("theta 16", ["--mode", "theta", "--theta-steps", "16"]),
          ("tess rate 8", ["--mode", "tess", "--tess-rate", "8"])]
@@ -124,7 +124,7 @@ def main():
         w.writeheader()
         for r in rows:
             w.writerow({k: (f"{v:.4g}" if isinstance(v, float) else v) for k, v in r.items()})
-    lines = ["# Growth with image and scene size", "",
+    lines = ["# Growth with image and scene size", "", provenance(args.binary), "",
              f"Baseline (a 1×1 render of the teapot): {baseline:.1f} MiB peak resident.", "",
              "| sweep | image side or teapots | mode | seconds | peak MiB | above baseline MiB |", "|---|---|---|---|---|---|"]
     for r in rows:

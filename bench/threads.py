@@ -12,7 +12,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(__file__))
-from common import camera_args, framed_camera, run  # noqa: E402
+from common import camera_args, framed_camera, provenance, run  # noqa: E402
 import povray  # noqa: E402
 
 CASES = [
@@ -101,7 +101,7 @@ def main():
             f.write(f"{r['case']},{r['threads']},{r['seconds_render']:.4f},{r['seconds_wall']:.4f},"
                     f"{r['speedup_render']:.3f},{r['speedup_wall']:.3f}\n")
     with open(os.path.join(args.out, "threads.md"), "w") as f:
-        f.write(f"# render --threads N against --threads 1\n\n`bench/threads --repeat {args.repeat}` on "
+        f.write(f"# render --threads N against --threads 1\n\n{provenance(args.binary)}\n\n`bench/threads --repeat {args.repeat}` on "
                 f"{os.cpu_count()} cores: the fastest of the repeats, interleaved; render = seconds_render of "
                 "--stats-json (scanning, shading and writing the PNG).\n\n")
         f.write("| case | threads | render s | process s | speed-up (render) | speed-up (process) |\n|---|---|---|---|---|---|\n")

@@ -31,7 +31,10 @@ struct Commands {
 inline constexpr const char* kSummary = "render parametric surfaces directly, with Blinn's scan-line algorithm";
 
 // The whole command line, writing into *commands (which must outlive it). `version`: what
-// --version prints after "patchscan ".
-std::unique_ptr<CLI::App> MakeApp(Commands* commands, const std::string& version);
+// --version prints after "patchscan "; `width`: the columns --help is wrapped to.
+std::unique_ptr<CLI::App> MakeApp(Commands* commands, const std::string& version, int width = 80);
+
+// patchscan-mpi's command line: the render command alone, writing into *command.
+std::unique_ptr<CLI::App> MakeMpiApp(RenderCommand* command, const std::string& version, int width = 80);
 
 }  // namespace patchscan::cli

@@ -34,7 +34,7 @@ inline CLI::Validator WholeNumber(long lo, long hi) {
         if (std::isfinite(v) && v == std::floor(v) && v >= static_cast<double>(lo) && v <= static_cast<double>(hi)) return {};
         return "expected a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) + ", found '" + text + "'";
       },
-      "[" + std::to_string(lo) + " - " + std::to_string(hi) + "]");
+      std::to_string(lo) + " to " + std::to_string(hi));
 }
 
 // A number from lo to hi.
@@ -45,7 +45,7 @@ inline CLI::Validator Number(double lo, double hi) {
         if (v >= lo && v <= hi) return {};
         return "expected a number from " + detail::Shown(lo) + " to " + detail::Shown(hi) + ", found '" + text + "'";
       },
-      "[" + detail::Shown(lo) + " - " + detail::Shown(hi) + "]");
+      detail::Shown(lo) + " to " + detail::Shown(hi));
 }
 
 // A number of 0 or more (a threshold), or more than 0 (a scale).
@@ -55,7 +55,7 @@ inline CLI::Validator NonNegative() {
         const double v = detail::Parsed(text);
         return v >= 0.0 && std::isfinite(v) ? std::string() : "expected a number of 0 or more, found '" + text + "'";
       },
-      ">= 0");
+      "0 or more");
 }
 inline CLI::Validator Positive() {
   return CLI::Validator(
@@ -63,7 +63,7 @@ inline CLI::Validator Positive() {
         const double v = detail::Parsed(text);
         return v > 0.0 && std::isfinite(v) ? std::string() : "expected a number above 0, found '" + text + "'";
       },
-      "> 0");
+      "above 0");
 }
 
 }  // namespace patchscan::cli

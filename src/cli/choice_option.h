@@ -26,7 +26,11 @@ template <class E>
 CLI::Option* AddChoiceOption(CLI::App* cmd, const std::string& flag, E* value, ChoiceNames<E> names,
                              const std::string& help) {
   std::vector<std::string> words;
-  for (const auto& n : names) words.push_back(n.first);
+  std::string placeholder;  // "exact|theta|tess"
+  for (const auto& n : names) {
+    words.push_back(n.first);
+    placeholder += (placeholder.empty() ? "" : "|") + n.first;
+  }
   const std::string shown = NameOf(names, *value);
   return cmd
       ->add_option_function<std::string>(
@@ -37,6 +41,7 @@ CLI::Option* AddChoiceOption(CLI::App* cmd, const std::string& flag, E* value, C
           },
           help)
       ->check(CLI::IsMember(words))
+      ->type_name(placeholder)
       ->default_str(shown);
 }
 

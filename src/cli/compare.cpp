@@ -23,17 +23,22 @@ CLI::App* AddCompareCommand(CLI::App* app, CompareOptions* o) {
       "Measures an "
       "image cannot give (no alpha, no Z) are reported as not measured. Exit codes: 0 every "
       "measure within its warning threshold, 1 a warning, 2 a failure, 3 the images differ "
-      "in size, 4 an image could not be read or written, or a bad command line.");
-  cmd->add_option("A", o->a, "the image to measure")->required();
-  cmd->add_option("B", o->b, "the reference image")->required();
+      "in size, 4 an image could not be read or written, 64 a bad command line (as for every command).");
+  cmd->add_option("A", o->a, "the image to measure")->type_name("IMAGE")->required();
+  cmd->add_option("B", o->b, "the reference image")->type_name("IMAGE")->required();
   cmd->add_option("--diff", o->diff,
-                  "write |A - B| of the colour, times --diff-scale, to this image (alpha 1)");
+                  "write |A - B| of the colour, times --diff-scale, to this image (alpha 1)")
+      ->type_name("IMAGE");
   cmd->add_option("--diff-scale", o->diffScale, "scale of the difference image")
+      ->type_name("K")
       ->check(Positive())
       ->capture_default_str();
-  cmd->add_option("--json", o->json, "also write the measures as JSON to this file");
+  cmd->add_option("--json", o->json, "also write the measures as JSON to this file")->type_name("FILE");
   auto threshold = [&](const char* name, double* value, const char* what) {
-    cmd->add_option(name, *value, what)->check(NonNegative())->capture_default_str();
+    // The unit of the measure: pixels, degrees, or a plain number.
+    const std::string n = name;
+    const char* unit = n.find("silhouette") != std::string::npos ? "PX" : n.find("normal") != std::string::npos ? "DEG" : "X";
+    cmd->add_option(name, *value, what)->type_name(unit)->check(NonNegative())->capture_default_str();
   };
   threshold("--warn-silhouette", &o->warn.silhouettePx, "warn above this maximum coverage-edge distance, pixels");
   threshold("--fail-silhouette", &o->fail.silhouettePx, "fail above this maximum coverage-edge distance, pixels");

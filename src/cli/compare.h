@@ -12,7 +12,8 @@ constexpr int kCompareOk = 0;           // every measure within its warning thre
 constexpr int kCompareWarning = 1;      // some measure above its warning threshold only
 constexpr int kCompareFailure = 2;      // some measure above its failure threshold
 constexpr int kCompareDifferentSize = 3;
-constexpr int kCompareFileError = 4;    // an image could not be read or written; bad command line
+constexpr int kCompareFileError = 4;    // an image could not be read or written
+// A bad command line: kExitUsage (cli/exit_codes.h), as for every command.
 
 // A measure is checked against a threshold only when it was measured.
 struct CompareThresholds {

@@ -19,12 +19,14 @@ CLI::App* AddConvertCommand(CLI::App* app, ConvertOptions* o) {
       "ReverseOrientation, Surface shader and parameters) as a Patch (bicubic patches in Bézier "
       "form), a NuPatch, its quadric or a SubdivisionMesh, and the polygons as PointsPolygons. "
       "The file is written to a temporary name and renamed into place.");
-  cmd->add_option("FILE", o->file, "scene file: .bpt, .rib or .obj")->required();
-  cmd->add_option("-o,--output", o->output, "the RIB file to write")->required();
+  cmd->add_option("FILE", o->file, "scene file: .bpt, .rib or .obj")->type_name("FILE")->required();
+  cmd->add_option("-o,--output", o->output, "the RIB file to write")->type_name("RIB")->required();
   cmd->add_option("--aa", o->aa, "PixelSamples to write, as the side of the grid (default: 3)")
+      ->type_name("N")
       ->check(WholeNumber(1, 8));
   cmd->add_option("--display", o->display,
-                  "the image file name to write in a Display request (default: none)");
+                  "the image file name to write in a Display request (default: none)")
+      ->type_name("IMAGE");
   AddCameraOptions(cmd, &o->camera);
   return cmd;
 }

@@ -11,6 +11,7 @@ namespace patchscan::cli {
 
 struct InfoOptions {
   std::string file;
+  bool json = false;  // one JSON object instead of text
   render::CameraOptions camera;
 };
 

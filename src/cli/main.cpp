@@ -5,15 +5,14 @@
 
 #include "cli/app.h"
 #include "cli/exit_codes.h"
+#include "cli/help.h"
+#include "patchscan_version.h"
 
-#ifndef PATCHSCAN_VERSION
-#error "PATCHSCAN_VERSION must be defined by the build"
-#endif
 
 int main(int argc, char** argv) {
   using namespace patchscan::cli;
   Commands commands;
-  const std::unique_ptr<CLI::App> made = MakeApp(&commands, PATCHSCAN_VERSION);
+  const std::unique_ptr<CLI::App> made = MakeApp(&commands, PATCHSCAN_VERSION, TerminalWidth());
   CLI::App& app = *made;
   CLI::App* infoCmd = commands.infoCmd;
   CLI::App* renderCmd = commands.renderCmd;
@@ -27,13 +26,13 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp&) {
-    // Top-level --help documents every command and option; a command's --help, its own.
+    // Top-level --help lists the commands; a command's --help gives its options.
     const CLI::App* shown = infoCmd->parsed()      ? infoCmd
                             : renderCmd->parsed()  ? renderCmd
                             : compareCmd->parsed() ? compareCmd
                             : convertCmd->parsed() ? convertCmd
                                                    : &app;
-    std::cout << (shown == &app ? app.help("", CLI::AppFormatMode::All) : shown->help());
+    std::cout << shown->help();
     return kExitOk;
   } catch (const CLI::CallForVersion&) {
     std::cout << app.version() << '\n';
@@ -54,8 +53,7 @@ int main(int argc, char** argv) {
     }
     std::cerr << "patchscan: " << e.what() << "\nRun 'patchscan " << (command ? command->get_name() + " " : "")
               << "--help' for usage.\n";
-    // compare's codes follow idiff, where 2 means the images differ.
-    return command == compareCmd ? kCompareFileError : kExitUsage;
+    return kExitUsage;
   }
 
   // A failure no command foresaw (memory exhausted, in a worker thread or not): the stack

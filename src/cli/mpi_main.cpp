@@ -9,13 +9,12 @@
 #include <iostream>
 #include <thread>
 
+#include "cli/app.h"
 #include "cli/exit_codes.h"
-#include "cli/render.h"
+#include "cli/help.h"
 #include "mpi/shared_scan.h"
+#include "patchscan_version.h"
 
-#ifndef PATCHSCAN_VERSION
-#error "PATCHSCAN_VERSION must be defined by the build"
-#endif
 
 int main(int argc, char** argv) {
   using namespace patchscan;
@@ -26,33 +25,22 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   MPI_Comm_size(MPI_COMM_WORLD, &size);
 
-  CLI::App app(
-      "patchscan-mpi renders a scene across MPI processes (mpirun -n N patchscan-mpi render FILE ...): the "
-      "scene's surfaces are dealt out to the processes, each scans its share row by row on its own --threads "
-      "(default: the node's cores shared among its processes), "
-      "and process 0 merges their rows by depth in the scan order of all surfaces (Molnar 1990's object "
-      "partition and z-composition) and writes the image: the same image as 'patchscan render', bit for bit, "
-      "for any number of processes. Tess mode renders on process 0 alone.",
-      "patchscan-mpi");
-  app.set_version_flag("--version", std::string("patchscan-mpi ") + PATCHSCAN_VERSION);
-  app.require_subcommand(1);
-  app.footer(
-      "Exit codes, the same on every process: those of 'patchscan render' (0 success, 1 unreadable input, 2 bad\n"
-      "command line, 3 unwritable output, 70 an internal failure or a failed process, 130 interrupted).");
   cli::RenderCommand command;
   render::RenderOptions& options = command.options;
-  CLI::App* renderCmd = cli::AddRenderCommand(&app, &command);
+  const std::unique_ptr<CLI::App> made = cli::MakeMpiApp(&command, PATCHSCAN_VERSION, cli::TerminalWidth());
+  CLI::App& app = *made;
+  CLI::App* renderCmd = app.get_subcommand("render");
   int code = cli::kExitOk;
   bool parsed = false;
   try {
     app.parse(argc, argv);
     parsed = true;
   } catch (const CLI::CallForHelp&) {
-    if (rank == 0) std::cout << (renderCmd->parsed() ? renderCmd->help() : app.help("", CLI::AppFormatMode::All));
+    if (rank == 0) std::cout << (renderCmd->parsed() ? renderCmd->help() : app.help());
   } catch (const CLI::CallForVersion&) {
     if (rank == 0) std::cout << app.version() << '\n';
   } catch (const CLI::ParseError& e) {
-    if (rank == 0) std::cerr << "patchscan-mpi: " << e.what() << "\nRun 'patchscan-mpi --help' for usage.\n";
+    if (rank == 0) std::cerr << "patchscan-mpi: " << e.what() << "\nRun 'patchscan-mpi render --help' for usage.\n";
     code = cli::kExitUsage;
   }
   if (parsed && options.overlay != render::Overlay::None && size > 1) {

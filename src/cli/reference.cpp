@@ -3,36 +3,13 @@
 #include <sstream>
 
 #include "cli/app.h"
+#include "cli/help.h"
 
 namespace patchscan::cli {
 namespace {
 
-// The commands in the order they were added, and the options a user sees (help and
-// version flags included; options in no group are hidden).
+// The commands in the order they were added.
 std::vector<const CLI::App*> CommandsOf(const CLI::App& app) { return app.get_subcommands({}); }
-std::vector<const CLI::Option*> OptionsOf(const CLI::App& cmd) {
-  return cmd.get_options([](const CLI::Option* o) { return !o->get_group().empty(); });
-}
-
-// How an option is written on the command line: "-o, --output IMAGE", "FILE".
-std::string Spelling(const CLI::Option& o) {
-  if (!o.nonpositional()) return o.get_name(true);
-  std::string s;
-  for (const std::string& n : o.get_snames()) s += (s.empty() ? "-" : ", -") + n;
-  for (const std::string& n : o.get_lnames()) s += (s.empty() ? "--" : ", --") + n;
-  if (o.get_expected_min() > 0) {
-    const std::string type = o.get_type_name();
-    s += " " + (type.empty() ? std::string("VALUE") : type);
-  }
-  return s;
-}
-
-std::string Usage(const CLI::App& cmd) {
-  std::string s = "patchscan " + cmd.get_name();
-  for (const CLI::Option* o : OptionsOf(cmd))
-    if (!o->nonpositional()) s += o->get_required() ? " " + o->get_name(true) : " [" + o->get_name(true) + "]";
-  return s + " [options]";
-}
 
 // roff: a backslash printed as \e, a line starting with . or ' guarded, a hyphen in an
 // option's name as \- (a minus sign, which a reader can copy and type).
@@ -62,7 +39,7 @@ std::string Cell(const std::string& text) {
 
 }  // namespace
 
-std::string ManPage(const CLI::App& app, const std::string& version) {
+std::string ManPage(const CLI::App& app, const CLI::App& mpi, const std::string& version) {
   std::ostringstream m;
   m << ".TH PATCHSCAN 1 \"\" \"patchscan " << Roff(version) << "\" \"User Commands\"\n"
     << ".SH NAME\npatchscan \\- " << Roff(kSummary) << "\n"
@@ -72,19 +49,22 @@ std::string ManPage(const CLI::App& app, const std::string& version) {
     << ".SH DESCRIPTION\n" << Roff(app.get_description()) << "\n";
   for (const CLI::App* cmd : CommandsOf(app)) {
     m << ".SH \"" << RoffName("patchscan " + cmd->get_name()) << "\"\n" << Roff(cmd->get_description()) << "\n";
-    for (const CLI::Option* o : OptionsOf(*cmd)) {
-      m << ".TP\n.B " << RoffName(Spelling(*o)) << "\n" << Roff(o->get_description());
-      if (!o->get_default_str().empty()) m << " (default: " << Roff(o->get_default_str()) << ")";
-      m << "\n";
+    for (const CLI::Option* o : VisibleOptions(*cmd)) {
+      m << ".TP\n.B " << RoffName(Spelling(*o)) << "\n" << Roff(Meaning(*o)) << "\n";
     }
   }
+  // patchscan-mpi: its render command takes the options of patchscan's (the test
+  // Reference.MpiTakesTheRenderOptions holds it to that).
+  for (const CLI::App* cmd : CommandsOf(mpi))
+    m << ".SH \"" << RoffName(Usage(*cmd)) << "\"\n" << Roff(mpi.get_description()) << "\n.PP\n"
+      << Roff(mpi.get_footer()) << "\n";
   m << ".SH \"EXIT STATUS\"\n" << Roff(app.get_footer()) << "\n"
     << ".SH \"SEE ALSO\"\n"
     << "The documentation in docs/ of the source distribution: docs/index.md.\n";
   return m.str();
 }
 
-std::string MarkdownReference(const CLI::App& app) {
+std::string MarkdownReference(const CLI::App& app, const CLI::App& mpi) {
   std::ostringstream m;
   m << "# Command-line reference\n\n"
     << "Generated from the program's own option definitions (`patchscan-reference`, at build\n"
@@ -94,12 +74,14 @@ std::string MarkdownReference(const CLI::App& app) {
     m << "## patchscan " << cmd->get_name() << "\n\n"
       << "```\n" << Usage(*cmd) << "\n```\n\n"
       << cmd->get_description() << "\n\n"
-      << "| option | default | meaning |\n|---|---|---|\n";
-    for (const CLI::Option* o : OptionsOf(*cmd))
-      m << "| `" << Cell(Spelling(*o)) << "` | " << (o->get_default_str().empty() ? "" : "`" + Cell(o->get_default_str()) + "`")
-        << " | " << Cell(o->get_description()) << " |\n";
+      << "| option | meaning |\n|---|---|\n";
+    for (const CLI::Option* o : VisibleOptions(*cmd))
+      m << "| `" << Cell(Spelling(*o)) << "` | " << Cell(Meaning(*o)) << " |\n";
     m << "\n";
   }
+  for (const CLI::App* cmd : CommandsOf(mpi))
+    m << "## patchscan-mpi " << cmd->get_name() << "\n\n```\n" << Usage(*cmd) << "\n```\n\n" << mpi.get_description()
+      << "\n\n" << mpi.get_footer() << "\n\n";
   m << "## Exit codes\n\n" << app.get_footer() << "\n";
   return m.str();
 }
@@ -107,7 +89,7 @@ std::string MarkdownReference(const CLI::App& app) {
 std::vector<std::string> OptionNames(const CLI::App& app) {
   std::vector<std::string> names;
   for (const CLI::App* cmd : CommandsOf(app))
-    for (const CLI::Option* o : OptionsOf(*cmd)) {
+    for (const CLI::Option* o : VisibleOptions(*cmd)) {
       if (!o->nonpositional()) names.push_back(cmd->get_name() + " " + o->get_name(true));
       for (const std::string& n : o->get_lnames()) names.push_back(cmd->get_name() + " --" + n);
       for (const std::string& n : o->get_snames()) names.push_back(cmd->get_name() + " -" + n);

@@ -10,11 +10,12 @@
 
 namespace patchscan::cli {
 
-// The man page of the whole program: every command, every option with its default.
-std::string ManPage(const CLI::App& app, const std::string& version);
+// The man page of the whole program (`app`, cli::MakeApp) and of patchscan-mpi (`mpi`,
+// cli::MakeMpiApp): every command, every option with its default.
+std::string ManPage(const CLI::App& app, const CLI::App& mpi, const std::string& version);
 
 // The same as Markdown: a section per command, a table of its options.
-std::string MarkdownReference(const CLI::App& app);
+std::string MarkdownReference(const CLI::App& app, const CLI::App& mpi);
 
 // Every option a user can give, as "command --long-name" (or "command NAME" for a
 // positional argument): what a reference must mention.

@@ -6,10 +6,8 @@
 
 #include "cli/app.h"
 #include "cli/reference.h"
+#include "patchscan_version.h"
 
-#ifndef PATCHSCAN_VERSION
-#error "PATCHSCAN_VERSION must be defined by the build"
-#endif
 
 int main(int argc, char** argv) {
   if (argc != 3) {
@@ -19,9 +17,11 @@ int main(int argc, char** argv) {
   using namespace patchscan::cli;
   Commands commands;
   const auto app = MakeApp(&commands, PATCHSCAN_VERSION);
+  RenderCommand mpiCommand;
+  const auto mpi = MakeMpiApp(&mpiCommand, PATCHSCAN_VERSION);
   std::ofstream man(argv[1]), markdown(argv[2]);
-  man << ManPage(*app, PATCHSCAN_VERSION);
-  markdown << MarkdownReference(*app);
+  man << ManPage(*app, *mpi, PATCHSCAN_VERSION);
+  markdown << MarkdownReference(*app, *mpi);
   if (!man.flush() || !markdown.flush()) {
     std::cerr << "patchscan-reference: cannot write " << argv[1] << " or " << argv[2] << "\n";
     return 1;

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <iomanip>
 #include <ostream>
 #include <sstream>
@@ -26,9 +27,14 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
       "sRGB-encoded colour (PNG with straight alpha); 16-bit TIFF and half-float EXR the linear, "
       "premultiplied values. The image is written to a temporary file and renamed into place, "
       "so a failed render leaves no file.");
-  cmd->add_option("FILE", o->file, "scene file: .bpt (Bézier patches), .rib (RenderMan scene) or .obj (a subdivision cage)")->required();
+  cmd->add_option("FILE", o->file, "scene file: .bpt (Bézier patches), .rib (RenderMan scene) or .obj (a subdivision cage)")
+      ->type_name("FILE")
+      ->required();
   cmd->add_option("-o,--output", o->output,
-                  "output image file (default: a RIB scene's Display file name; required otherwise)");
+                  "output image file (default: the scene's Display, else FILE's name with .png in the current "
+                  "directory). Of a RIB file of several frames, -o takes the place of the last frame's Display "
+                  "that writes a picture; the others (shadow passes) still write theirs")
+      ->type_name("IMAGE");
   AddChoiceOption(cmd, "--mode", &o->mode, kRenderModeNames,
                   "how surfaces become samples: exact = Blinn's scan-line algorithm, every "
                   "visible sample's (u,v) found by Newton iteration (shading always uses the "
@@ -43,6 +49,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                   "pixel of its extent on the screen, or whose chains come to hold more vertices "
                   "per sample than exact samples cost, takes the exact scan instead (cheaper there; "
                   "--stats: theta_exact_surfaces)")
+      ->type_name("N")
       ->check(WholeNumber(1, 4096))
       ->capture_default_str();
   cmd->add_option("--y-step", o->yStep,
@@ -56,6 +63,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                   "sampled instead, its ends on a boundary placed where a slab across it has its "
                   "edge. Silhouettes between the lines are chords: error about h^2 / (8 R) "
                   "pixels for step h and a silhouette curving with radius R pixels")
+      ->type_name("PX")
       ->check(Number(0.0, 64.0))
       ->capture_default_str();
   cmd->add_flag("--no-extrapolate", o->noExtrapolate,
@@ -71,14 +79,17 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                                     "tess mode (the default tessellation): rates chosen per surface from the "
                                     "screen so that no triangle lies more than about this many pixels from "
                                     "the surface (chord error; equal rates on shared edges)")
+                         ->type_name("PX")
                          ->check(Number(0.01, 1e6))
                          ->capture_default_str();
   auto* tessRate = cmd->add_option("--tess-rate", o->tessRate,
                                    "tess mode: uniform tessellation instead, this many segments per patch edge")
+                       ->type_name("N")
                        ->check(WholeNumber(1, kMaxTessRate));
   auto* tessPixels = cmd->add_option("--tess-pixels", o->tessPixels,
                                      "tess mode: screen-adaptive tessellation instead, per-edge rates making "
                                      "edges about this many pixels long (equal on shared edges)")
+                         ->type_name("PX")
                          ->check(Number(0.01, 1e6));
   tessError->excludes(tessRate)->excludes(tessPixels);
   tessRate->excludes(tessPixels);
@@ -86,6 +97,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                   "supersampling: an l x l grid of samples per pixel whose edge samples are "
                   "shared with the neighbours (1: one sample at the pixel centre; default: a RIB "
                   "scene's PixelSamples, else 3)")
+      ->type_name("N")
       ->check(WholeNumber(1, raster::kMaxAa));
   AddChoiceOption(cmd, "--shading", &o->shading,
                   ChoiceNames<raster::ShadingMode>{{"flat", raster::ShadingMode::Flat},
@@ -96,12 +108,14 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                   "none; checker, a procedural 8x8 uv checker; or an image file read through "
                   "OpenImageIO's TextureSystem (mipmapped, opened only when a visible sample "
                   "needs it; 'maketx' makes mipmapped files)")
+      ->type_name("none|checker|FILE")
       ->capture_default_str();
   cmd->add_flag("--cull-backfaces", o->cullBackFaces,
                 "drop triangles facing away from the eye (default: two-sided)");
   cmd->add_option("--opacity", o->opacity,
                   "opacity of every surface; below 1, linear transparency: each sample blends "
                   "its 4 nearest surfaces front to back")
+      ->type_name("ALPHA")
       ->check(Number(1e-3, 1.0))
       ->capture_default_str();
   cmd->add_flag("--hidden-line", o->hiddenLine,
@@ -110,34 +124,100 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
   cmd->add_flag("--aov", o->aov,
                 "also write the channels Z (eye distance), N.x N.y N.z (world normal), u v and id "
                 "(surface index) of the surface covering most of each pixel; .exr only");
-  cmd->add_option("--compression", o->compression, raster::ImageWriter::kCompressionHelp);
+  cmd->add_option("--compression", o->compression, raster::ImageWriter::kCompressionHelp)->type_name("METHOD[:LEVEL]");
   cmd->add_option("--crop", o->crop,
                   "render a window of the image: XMIN,XMAX,YMIN,YMAX as fractions of the width and "
                   "height from the top left (RenderMan's CropWindow, which a RIB scene may give); "
                   "the pixels whose centres lie in it, the same as the full render's there, in an "
-                  "image of the window's size (EXR and TIFF record where it lies in the frame)");
+                  "image of the window's size (EXR and TIFF record where it lies in the frame)")
+      ->type_name("X0,X1,Y0,Y1");
   cmd->add_option("--seed", o->seed,
                   "seed of the stochastic extra shading calls (same seed, same image)")
+      ->type_name("N")
       ->capture_default_str();
   cmd->add_option("--threads", o->threads,
                   "worker threads (default: one per core). The scene's surfaces are dealt out to "
                   "them and each scans its share row by row (Molnar 1990's object partition); their "
                   "rows are composited by depth in a fixed order, so the image is the same for any "
                   "number. 1: one thread. --overlay uses one worker")
+      ->type_name("N")
       ->check(WholeNumber(1, 1024));
   cmd->add_flag("--stats", command->stats, "print counts, times and peak memory to stderr");
   auto* progress = cmd->add_flag("--progress", command->progress,
                                  "show progress on stderr (rows finished, elapsed time, time left) even when "
                                  "stderr is not a terminal (default: only on a terminal)");
   cmd->add_flag("--quiet", command->quiet, "no progress line (errors and warnings are still printed)")->excludes(progress);
-  cmd->add_option("--stats-json", command->statsJson, "write counts and times as JSON to this file");
+  cmd->add_option("--stats-json", command->statsJson, "write counts and times as JSON to this file")->type_name("FILE");
   AddCameraOptions(cmd, &o->camera);
+  cmd->add_option_function<std::string>(
+         "--frames", [o](const std::string& text) { o->frames = ParseFrames(text); },
+         "RIB scenes: render frames A to B (by their FrameBegin numbers) in order, or frame A alone; the "
+         "frames before A are not run, so a shadow map they would write must exist already (default: "
+         "every frame)")
+      ->type_name("A-B")
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            return ParseFrames(text) ? std::string() : "expected A-B or A, whole numbers, A <= B, found '" + text + "'";
+          },
+          ""))
+      ->excludes(cmd->get_option("--frame"));
+  command->app = cmd;
   return cmd;
+}
+
+std::optional<render::FrameRange> ParseFrames(const std::string& text) {
+  const std::size_t dash = text.find('-', 1);
+  const std::string first = text.substr(0, dash), last = dash == std::string::npos ? first : text.substr(dash + 1);
+  auto whole = [](const std::string& t, int* n) {
+    if (t.empty() || t.size() > 10 || t.find_first_not_of("0123456789") != std::string::npos) return false;
+    *n = std::stoi(t);
+    return true;
+  };
+  render::FrameRange r;
+  if (!whole(first, &r.first) || !whole(last, &r.last) || r.first > r.last) return std::nullopt;
+  return r;
+}
+
+namespace {
+
+// The options only some modes use: the modes, and how the option returns to its default
+// when the chosen mode would ignore it. One rule for all: such an option warns and is
+// dropped (pbrt and oiiotool warn of options that do nothing, too).
+struct ModalOption {
+  const char* name;
+  std::vector<render::RenderMode> modes;
+  void (*reset)(render::RenderOptions*);
+};
+using M = render::RenderMode;
+const ModalOption kModalOptions[] = {
+    {"--theta-steps", {M::Theta}, [](render::RenderOptions* o) { o->thetaSteps = render::RenderOptions{}.thetaSteps; }},
+    {"--y-step", {M::Theta}, [](render::RenderOptions* o) { o->yStep = 0.0; }},
+    {"--no-extrapolate", {M::Exact, M::Theta}, [](render::RenderOptions* o) { o->noExtrapolate = false; }},
+    {"--overlay", {M::Exact, M::Theta}, [](render::RenderOptions* o) { o->overlay = render::Overlay::None; }},
+    {"--tess-error", {M::Tess}, [](render::RenderOptions* o) { o->tessError = kDefaultChordErrorPx; }},
+    {"--tess-rate", {M::Tess}, [](render::RenderOptions* o) { o->tessRate = 0; }},
+    {"--tess-pixels", {M::Tess}, [](render::RenderOptions* o) { o->tessPixels = 0.0; }},
+    {"--shading", {M::Tess}, [](render::RenderOptions* o) { o->shading = raster::ShadingMode::Phong; }},
+    {"--hidden-line", {M::Tess}, [](render::RenderOptions* o) { o->hiddenLine = false; }},
+};
+
+}  // namespace
+
+void DropIgnoredOptions(const CLI::App& cmd, render::RenderOptions* o, std::ostream& err) {
+  for (const ModalOption& m : kModalOptions) {
+    if (cmd.count(m.name) == 0 || std::find(m.modes.begin(), m.modes.end(), o->mode) != m.modes.end()) continue;
+    std::string modes;
+    for (const M mode : m.modes) modes += std::string(modes.empty() ? "" : " or ") + render::ModeName(mode);
+    err << "patchscan: warning: " << m.name << " is for --mode " << modes << "; --mode " << render::ModeName(o->mode)
+        << " ignores it\n";
+    m.reset(o);
+  }
 }
 
 int RunRender(const RenderCommand& c, std::ostream& err) {
   render::CatchInterrupts();
   render::RenderOptions o = c.options;
+  if (c.app) DropIgnoredOptions(*c.app, &o, err);
   o.progress = !c.quiet && (c.progress || isatty(STDERR_FILENO) != 0);
   const auto failed = render::RenderFile(o, err, [&](const render::RenderReport& report) -> std::optional<render::Failure> {
     // One line per image written, as a user of pbrt or POV-Ray expects to see it.

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <iosfwd>
+#include <optional>
 #include <string>
 
 #include "cli/choice_option.h"
@@ -22,9 +23,18 @@ struct RenderCommand {
   // --quiet never.
   bool progress = false, quiet = false;
   std::string statsJson;
+  // The command as parsed (set by AddRenderCommand): which options were given.
+  const CLI::App* app = nullptr;
 };
 
 CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command);
+
+// "A-B" or "A" (whole numbers, A <= B): --frames.
+std::optional<render::FrameRange> ParseFrames(const std::string& text);
+
+// Options given that the chosen mode ignores (--tess-rate in exact mode, --theta-steps in
+// tess): a warning each on `err`, and the option back at its default.
+void DropIgnoredOptions(const CLI::App& cmd, render::RenderOptions* o, std::ostream& err);
 
 // Renders; messages to `err`; returns the exit code. The image (and the --stats-json
 // file) is written whole or not at all.

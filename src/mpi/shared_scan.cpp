@@ -1,7 +1,5 @@
 #include "mpi/shared_scan.h"
 
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -18,6 +16,7 @@
 #include "render/back_end.h"
 #include "render/interrupt.h"
 #include "render/load.h"
+#include "render/report.h"
 #include "raster/triangle_setup.h"
 #include "xscan/polygon_feed.h"
 
@@ -27,12 +26,6 @@ namespace {
 using Process = render::ProcessReport;
 
 double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-long PeakKiB() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return u.ru_maxrss;
-}
 
 // ---- one frame on one process ----
 
@@ -196,7 +189,7 @@ class Band final : public DirectScanSource, public render::SharedRows {
   Process Own() const {
     double seconds = 0.0;
     for (const double t : local_->Times().workerSeconds) seconds += t;
-    return {link_.Rank(), seconds, link_.sent, link_.received, PeakKiB()};
+    return {link_.Rank(), seconds, link_.sent, link_.received, render::PeakResidentKiB()};
   }
   std::vector<double> DoneMessage(const Counters& backEnd) const {
     Counters all = local_->Stats();

@@ -107,6 +107,8 @@ std::variant<Compression, std::string> ParseCompression(const std::string& ext, 
 
 std::optional<std::string> ImageWriter::CheckFormat(const std::string& path, bool aovs, const std::string& compression) {
   const std::string ext = LowerExtension(path);
+  if (ext.empty())
+    return path + ": no extension: the image's format follows it (.png .tif .tiff .jpg .jpeg .exr)";
   if (ext != ".png" && ext != ".jpg" && ext != ".jpeg" && ext != ".tif" && ext != ".tiff" && ext != ".exr")
     return path + ": unknown image format '" + ext + "' (known: .png .tif .tiff .jpg .jpeg .exr)";
   if (aovs && ext != ".exr") return path + ": AOV channels need an .exr output";

@@ -95,6 +95,19 @@ void WarnEmpty(const Scene& scene, std::ostream& log) {
         << " surfaces; is the camera looking at them?)\n";
 }
 
+// The image file: the options', else the scene's Display, else (POV-Ray's habit) the
+// scene file's name with .png in the current directory, which the log is told.
+std::string OutputFor(const RenderOptions& o, const Scene& scene, std::ostream& log) {
+  if (!o.output.empty()) return o.output;
+  if (!scene.image.displayName.empty()) return scene.image.displayName;
+  std::filesystem::path stem = std::filesystem::path(o.file).filename();
+  if (stem.extension() == ".gz") stem = stem.stem();
+  const std::string output = stem.stem().string() + ".png";
+  log << "patchscan: note: no -o" << (scene.image.cameraFromWorld ? " and no Display" : "") << ": writing " << output
+      << " in the current directory\n";
+  return output;
+}
+
 }  // namespace
 
 Result<RenderReport> RenderFrame(const RenderOptions& o, std::ostream& log, std::set<std::string>* warned) {
@@ -105,11 +118,8 @@ Result<RenderReport> RenderFrame(const RenderOptions& o, std::ostream& log, std:
   const Scene& scene = std::get<LoadedScene>(loaded).scene;
   const Camera& camera = std::get<LoadedScene>(loaded).view.camera;
   const auto tLoaded = Clock::now();
-  const std::string output = !o.output.empty() ? o.output : scene.image.displayName;
+  const std::string output = OutputFor(o, scene, log);
   const bool depthMap = WritesDepthMap(o, scene);
-  if (output.empty())
-    return BadOption(std::string("no output image: give -o IMAGE") +
-                     (scene.image.cameraFromWorld ? " (the scene has no Display file)" : ""));
   if (std::string why = ModeConflict(o); !why.empty()) return BadOption(std::move(why));
   const int aa = o.aa.value_or(scene.image.pixelSamples.value_or(kDefaultAa));
   std::optional<Vec4> cropNdc = scene.image.cropWindow;
@@ -235,20 +245,36 @@ std::optional<Failure> RenderFile(const RenderOptions& o, std::ostream& log, con
   };
   const std::filesystem::path file(o.file);
   const bool rib = file.extension() == ".rib" || (file.extension() == ".gz" && file.stem().extension() == ".rib");
-  std::vector<int> frames;
-  if (rib && o.camera.frame < 0)
-    for (const int n : RibFrames(o.file))
-      if (std::find(frames.begin(), frames.end(), n) == frames.end()) frames.push_back(n);
-  if (frames.size() <= 1) return one(o, nullptr);
-  if (!o.output.empty()) {
-    log << "patchscan: note: " << o.file << " has " << frames.size() << " frames; -o writes the first (give --frame N "
-        << "for another, or leave out -o to render every frame to its Display)\n";
-    return one(o, nullptr);
+  if (o.frames && !rib) return BadOption("--frames: " + o.file + " is not a RIB file (only RIB files have frames)");
+  if (!rib || o.camera.frame >= 0) return one(o, nullptr);
+  // Each frame once, in the file's order (a number given twice names the first).
+  std::vector<RibFrame> frames;
+  std::string numbers;
+  for (const RibFrame& f : RibFrames(o.file)) {
+    if (std::any_of(frames.begin(), frames.end(), [&](const RibFrame& g) { return g.number == f.number; })) continue;
+    numbers += (numbers.empty() ? "" : ", ") + std::to_string(f.number);
+    if (!o.frames || (f.number >= o.frames->first && f.number <= o.frames->last)) frames.push_back(f);
   }
+  if (o.frames && frames.empty())
+    return BadOption("--frames " + std::to_string(o.frames->first) + "-" + std::to_string(o.frames->last) + ": " +
+                     o.file + " has no such frame (its frames: " + (numbers.empty() ? "none" : numbers) + ")");
+  if (frames.empty()) return one(o, nullptr);
+  // Every frame in order (a shadow pass writes the map a later frame reads), each to its
+  // Display; -o takes the place of the last frame's that writes a picture.
+  auto picture = std::find_if(frames.rbegin(), frames.rend(), [](const RibFrame& f) { return !f.depthMap; });
+  if (!o.output.empty() && picture == frames.rend()) {
+    std::string chosen;
+    for (const RibFrame& f : frames) chosen += (chosen.empty() ? "" : ", ") + std::to_string(f.number);
+    return BadOption("-o " + o.output + ": frame" + (frames.size() == 1 ? " " : "s ") + chosen + " of " + o.file +
+                     " write" + (frames.size() == 1 ? "s" : "") +
+                     " a depth map, not a picture (leave out -o: a depth map goes to its Display)");
+  }
+  const int pictureFrame = picture == frames.rend() ? 0 : picture->number;
   std::set<std::string> warned;
-  for (const int n : frames) {
+  for (const RibFrame& f : frames) {
     RenderOptions frame = o;
-    frame.camera.frame = n;
+    frame.camera.frame = f.number;
+    if (f.number != pictureFrame) frame.output.clear();
     if (auto failed = one(frame, &warned)) return failed;
   }
   return std::nullopt;

@@ -17,18 +17,20 @@
 namespace patchscan::render {
 
 // Renders one frame of o.file (its first, or o.camera.frame) to o.output, else the
-// scene's Display. Warnings and the progress line go to `log`; `warned`: warnings given
-// already (by earlier frames), not given again. Failure: BadOption for options that do
-// not fit the scene or each other, InputError for the scene or what it names,
-// OutputError for the image, Interrupted once render::gInterrupted is set.
+// scene's Display, else <stem>.png in the current directory (which `log` is told).
+// Warnings and the progress line go to `log`; `warned`: warnings given already (by
+// earlier frames), not given again. Failure: BadOption for options that do not fit the
+// scene or each other, InputError for the scene or what it names, OutputError for the
+// image, Interrupted once render::gInterrupted is set.
 Result<RenderReport> RenderFrame(const RenderOptions& o, std::ostream& log, std::set<std::string>* warned = nullptr);
 
 // Called after each frame with what it took; a failure stops the frames.
 using FrameDone = std::function<std::optional<Failure>(const RenderReport&)>;
 
-// Renders o.file: a RIB file of several frames each to its own Display, in order (with
-// o.output or o.camera.frame, one frame); any other file its one frame. Returns the first
-// failure, if any.
+// Renders o.file. A RIB file of several frames: every frame in order, or o.frames (or the
+// one frame o.camera.frame), each to its Display, except that o.output, when given, takes
+// the place of the last frame's that writes a picture (not a depth map). Any other file:
+// its one frame. Returns the first failure, if any.
 std::optional<Failure> RenderFile(const RenderOptions& o, std::ostream& log, const FrameDone& done);
 
 }  // namespace patchscan::render

@@ -52,9 +52,18 @@ struct RenderOptions;
 using ShareRows = std::function<std::unique_ptr<SharedRows>(const RenderOptions&, const Scene&, const Camera&,
                                                             const ExactScanOptions&, int aa, int threads)>;
 
+// Frames first to last of a RIB file, by their FrameBegin numbers.
+struct FrameRange {
+  int first = 0, last = 0;
+};
+
 struct RenderOptions {
-  std::string file;    // the scene file
-  std::string output;  // the image file; "": a RIB scene's Display
+  std::string file;  // the scene file
+  // The image file; "": the scene's Display, else <stem>.png in the current directory.
+  // Of a RIB file of several frames, the picture of the last frame that writes one (the
+  // others go to their Displays).
+  std::string output;
+  std::optional<FrameRange> frames;  // RenderFile: only these frames; none: every frame
   RenderMode mode = RenderMode::Exact;
   bool noExtrapolate = false;
   int thetaSteps = 16;

@@ -22,6 +22,17 @@ bool Runs(RenderMode mode, CounterGroup g) {
 }  // namespace
 
 long PeakResidentKiB() {
+  // The kernel's high-water mark of this process's own memory (VmHWM, proc(5)). Not
+  // getrusage's ru_maxrss: Linux carries that across exec, so a program started by a
+  // larger one (a Python bench) would report its parent's peak as its own.
+  if (std::FILE* f = std::fopen("/proc/self/status", "r")) {
+    char line[256];
+    long kib = -1;
+    while (kib < 0 && std::fgets(line, sizeof line, f))
+      if (std::sscanf(line, "VmHWM: %ld kB", &kib) != 1) kib = -1;
+    std::fclose(f);
+    if (kib >= 0) return kib;
+  }
   rusage u{};
   getrusage(RUSAGE_SELF, &u);
   return u.ru_maxrss;

@@ -107,22 +107,26 @@ TEST(Cli, BadOptionsAreUsageErrors) {
   };
   for (const auto& [args, message] : cases) {
     const Result r = Patchscan("info " + kTeapot + " " + args);
-    EXPECT_EQ(r.code, 2) << args;
+    EXPECT_EQ(r.code, kExitUsage) << args;
     EXPECT_NE(r.err.find(message), std::string::npos) << args << "\n" << r.err;
   }
-  EXPECT_EQ(Patchscan("").code, 2);
-  EXPECT_EQ(Patchscan("info").code, 2);
-  EXPECT_EQ(Patchscan("frobnicate").code, 2);
+  EXPECT_EQ(Patchscan("").code, kExitUsage);
+  EXPECT_EQ(Patchscan("info").code, kExitUsage);
+  EXPECT_EQ(Patchscan("frobnicate").code, kExitUsage);
 }
 
 TEST(Cli, HelpDocumentsEveryOptionWithDefaults) {
-  const Result r = Patchscan("--help");
+  const Result top = Patchscan("--help");
+  EXPECT_EQ(top.code, 0);
+  for (const char* word : {"info", "render", "compare", "convert", "--version", "Exit codes"})
+    EXPECT_NE(top.out.find(word), std::string::npos) << "help lacks " << word << "\n" << top.out;
+  const Result r = Patchscan("render --help");
   EXPECT_EQ(r.code, 0);
-  for (const char* word : {"info", "render", "convert", "--frame", "--output", "--mode", "--tess-rate", "--aa",
+  for (const char* word : {"--frame", "--frames", "--output", "--mode", "--tess-rate", "--aa",
                            "--shading", "--texture", "--cull-backfaces", "--stats", "--stats-json",
                            "--overlay", "--no-extrapolate", "exact",
                            "--size", "640x480", "--eye", "--look-at", "--up", "--fov", "30",
-                           "--hither", "--version", "Exit codes"})
+                           "--hither"})
     EXPECT_NE(r.out.find(word), std::string::npos) << "help lacks " << word << "\n" << r.out;
   const Result sub = Patchscan("info --help");
   EXPECT_EQ(sub.code, 0);
@@ -172,7 +176,7 @@ TEST(Cli, ProgressLineAndQuiet) {
   r = Patchscan("render " + kTeapot + " -o " + out + " --size 64x48 --quiet");
   EXPECT_EQ(r.code, 0);
   EXPECT_EQ(r.err, "");
-  EXPECT_EQ(Patchscan("render " + kTeapot + " -o " + out + " --quiet --progress").code, 2);
+  EXPECT_EQ(Patchscan("render " + kTeapot + " -o " + out + " --quiet --progress").code, kExitUsage);
   std::filesystem::remove_all(dir);
 }
 
@@ -201,7 +205,7 @@ TEST(Cli, OpenImageIOIsLoadedOnlyWhenARunNeedsIt) {
   EXPECT_TRUE(std::filesystem::exists(dir / "a.exr"));
   // A compression the format does not have is a usage error, and nothing is written.
   r = Patchscan("render " + kTeapot + " -o " + (dir / "b.png").string() + " --size 1x1 --compression piz");
-  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.code, kExitUsage);
   EXPECT_NE(r.err.find("compression 'piz' is not one of PNG's"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "b.png"));
   std::filesystem::remove_all(dir);
@@ -230,7 +234,7 @@ TEST(Cli, ARibDisplaysCompressionIsUsed) {
   EXPECT_EQ(stored(), "packbits");
   std::filesystem::remove(dir / "c.tif");
   scene("piz");
-  EXPECT_EQ(WEXITSTATUS(std::system((cd + " 2>err.txt").c_str())), 2);
+  EXPECT_EQ(WEXITSTATUS(std::system((cd + " 2>err.txt").c_str())), kExitUsage);
   EXPECT_NE(Slurp(dir / "err.txt").find("s.rib:2: Display: c.tif: compression 'piz' is not one of TIFF's"),
             std::string::npos)
       << Slurp(dir / "err.txt");
@@ -255,15 +259,26 @@ TEST(Cli, ExactModeIsTheDefaultAndReportsItsTrackers) {
   for (const char* key : {"\"mode\": \"exact\"", "\"newton_iterations_per_tracker_row\": ",
                           "\"untracked_silhouettes\": ", "\"failures\": 0", "\"seconds_output\": "})
     EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
-  // What needs triangles is refused in exact mode, and the overlay outside it.
-  for (const char* args : {" --shading flat", " --shading gouraud", " --hidden-line",
-                           " --mode tess --overlay trackers"}) {
+  // What needs triangles is ignored in exact mode, and the overlay outside the direct modes,
+  // each with a warning: one rule for every option a mode does not use.
+  const std::pair<const char*, const char*> ignored[] = {
+      {" --shading flat", "--shading is for --mode tess; --mode exact ignores it"},
+      {" --hidden-line", "--hidden-line is for --mode tess; --mode exact ignores it"},
+      {" --tess-rate 4", "--tess-rate is for --mode tess; --mode exact ignores it"},
+      {" --mode tess --overlay trackers", "--overlay is for --mode exact or theta; --mode tess ignores it"},
+      {" --mode tess --theta-steps 8", "--theta-steps is for --mode theta; --mode tess ignores it"},
+      {" --mode exact --y-step 2", "--y-step is for --mode theta; --mode exact ignores it"},
+  };
+  for (const auto& [args, warning] : ignored) {
     std::filesystem::remove(out);
     r = Patchscan("render " + kTeapot + " -o " + out + " --size 32x24" + args);
-    EXPECT_EQ(r.code, 2) << args;
-    EXPECT_NE(r.err.find("--mode"), std::string::npos) << r.err;
-    EXPECT_FALSE(std::filesystem::exists(out));
+    EXPECT_EQ(r.code, 0) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(std::string("patchscan: warning: ") + warning), std::string::npos) << r.err;
+    EXPECT_TRUE(std::filesystem::exists(out));
   }
+  // An option the mode uses says nothing.
+  r = Patchscan("render " + kTeapot + " -o " + out + " --size 32x24 --mode tess --shading flat --tess-rate 2");
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
   std::filesystem::remove_all(dir);
 }
 
@@ -388,7 +403,7 @@ TEST(Cli, ThetaSlabsTradeSilhouetteAccuracyForScanLines) {
 TEST(Cli, FailedRenderLeavesNoFile) {
   // Unknown image format, missing directory, bad scene: no output, non-zero exit.
   Result r = Patchscan("render " + kTeapot + " -o /tmp/patchscan_cli_x.xyz");
-  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.code, kExitUsage);
   EXPECT_NE(r.err.find("unknown image format '.xyz'"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists("/tmp/patchscan_cli_x.xyz"));
   // A file that cannot be created: the output-error code, and the user's name for it (not
@@ -404,7 +419,7 @@ TEST(Cli, FailedRenderLeavesNoFile) {
   EXPECT_EQ(r.code, 1);
   EXPECT_FALSE(std::filesystem::exists("/tmp/patchscan_cli_y.png"));
   r = Patchscan("render " + kTeapot + " -o /tmp/patchscan_cli_z.png --aa 9");
-  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.code, kExitUsage);
   EXPECT_FALSE(std::filesystem::exists("/tmp/patchscan_cli_z.png"));
 }
 
@@ -425,7 +440,7 @@ TEST(Cli, TextureIsOpenedOnlyWhenVisible) {
   // A missing file is a usage error; an unreadable one an input error; neither leaves output.
   std::filesystem::remove(out);
   r = Patchscan("render " + kTeapot + " -o " + out + " --texture " + (dir / "none.png").string());
-  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.code, kExitUsage);
   std::ofstream(dir / "bad.png") << "not an image";
   r = Patchscan("render " + kTeapot + " -o " + out + " --size 32x24 --texture " + (dir / "bad.png").string());
   EXPECT_EQ(r.code, 1) << r.err;
@@ -467,14 +482,14 @@ TEST(Cli, CompareMeasuresAndAnswersInTheMannerOfIdiff) {
   r = Patchscan("compare " + theta + " " + exact + lax +
                 " --warn-silhouette 100 --warn-rmse 1 --warn-depth 1 --warn-normal 180");
   EXPECT_EQ(r.code, 0) << r.out;
-  // Different sizes 3; unreadable files and bad command lines 4; the diff image not left
+  // Different sizes 3; unreadable files 4; a bad command line 64, as for every command; the diff image not left
   // behind when it cannot be written.
   EXPECT_EQ(Patchscan("compare " + small + " " + exact).code, 3);
   r = Patchscan("compare " + exact + " " + (dir / "missing.exr").string());
   EXPECT_EQ(r.code, 4);
   EXPECT_NE(r.err.find("missing.exr"), std::string::npos) << r.err;
-  EXPECT_EQ(Patchscan("compare " + exact).code, 4);
-  EXPECT_EQ(Patchscan("compare " + exact + " " + exact + " --fail-rmse -1").code, 4);
+  EXPECT_EQ(Patchscan("compare " + exact).code, kExitUsage);
+  EXPECT_EQ(Patchscan("compare " + exact + " " + exact + " --fail-rmse -1").code, kExitUsage);
   EXPECT_EQ(Patchscan("compare " + exact + " " + exact + " --diff /nonexistent/d.png").code, 4);
   std::filesystem::remove_all(dir);
 }
@@ -512,7 +527,7 @@ TEST(Cli, InterruptStopsTheRenderAndLeavesNoFile) {
 
 // A file of several frames renders each to its own Display; a "zfile" or "shadow" Display
 // gets the frame's depth map (TIFF, one float channel, whatever its extension); -o takes
-// the first frame, and says so.
+// the place of the last frame's picture; --frames A-B renders some of them.
 TEST(Cli, EveryFrameRendersToItsDisplay) {
   const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_frames_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
@@ -538,10 +553,35 @@ TEST(Cli, EveryFrameRendersToItsDisplay) {
     EXPECT_NEAR(*std::min_element(z.begin(), z.end()), nearest, 1e-2) << name;
     EXPECT_EQ(*std::max_element(z.begin(), z.end()), std::numeric_limits<float>::max()) << name;
   }
-  const Result r = Patchscan("render " + (dir / "f.rib").string() + " -o " + (dir / "one.png").string());
-  EXPECT_EQ(r.code, 0);
-  EXPECT_NE(r.err.find("has 3 frames; -o writes the first"), std::string::npos) << r.err;
+  // -o takes the place of the last picture (frame 2's two.png); the depth passes before and
+  // after it still write theirs.
+  for (const char* name : {"depth.z", "two.png", "map.shd"}) std::filesystem::remove(dir / name);
+  Result r = Patchscan("render " + (dir / "f.rib").string() + " -o " + (dir / "one.png").string());
+  EXPECT_EQ(r.code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "one.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "two.png"));
+  EXPECT_NE(r.err.find("wrote depth.z (64x48, depth map"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("wrote map.shd (64x48, depth map"), std::string::npos) << r.err;
+  // --frames A-B: those frames only, in order.
+  std::filesystem::remove(dir / "depth.z");
+  EXPECT_EQ(std::system((cd + " render f.rib --frames 2-3 --quiet").c_str()), 0);
+  EXPECT_FALSE(std::filesystem::exists(dir / "depth.z"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "two.png"));
+  // Frames that write only depth maps have no picture for -o; frames the file lacks are
+  // named; a file without frames has no --frames.
+  r = Patchscan("render " + (dir / "f.rib").string() + " --frames 3 -o " + (dir / "x.png").string());
+  EXPECT_EQ(r.code, kExitUsage);
+  EXPECT_NE(r.err.find("frame 3 of " + (dir / "f.rib").string() + " writes a depth map, not a picture"),
+            std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
+  r = Patchscan("render " + (dir / "f.rib").string() + " --frames 5-9");
+  EXPECT_EQ(r.code, kExitUsage);
+  EXPECT_NE(r.err.find("has no such frame (its frames: 1, 2, 3)"), std::string::npos) << r.err;
+  r = Patchscan("render " + kTeapot + " --frames 1 -o " + (dir / "x.png").string());
+  EXPECT_EQ(r.code, kExitUsage);
+  EXPECT_NE(r.err.find("is not a RIB file"), std::string::npos) << r.err;
+  for (const char* bad : {"2-1", "a", "1-", "-3"}) EXPECT_EQ(Patchscan("render " + kTeapot + " --frames " + bad).code, kExitUsage) << bad;
+  EXPECT_EQ(Patchscan("render " + kTeapot + " --frame 1 --frames 1").code, kExitUsage);
   std::filesystem::remove_all(dir);
 }
 
@@ -808,11 +848,11 @@ TEST(Cli, CropRendersAWindowWithTheFullRendersPixels) {
   // Windows that are no window, or hold no pixel centre.
   for (const char* bad : {"0.5,0.5,0,1", "0,1,0.6,0.2", "-0.1,0.5,0,1", "0,1,0,1.5", "0.1,0.2,0.3", "a,b,c,d"}) {
     const Result r = Patchscan("render " + kTeapot + " -o " + (dir / "x.png").string() + " --size 160x120 --crop " + bad);
-    EXPECT_EQ(r.code, 2) << bad << "\n" << r.err;
+    EXPECT_EQ(r.code, kExitUsage) << bad << "\n" << r.err;
     EXPECT_NE(r.err.find("--crop"), std::string::npos) << r.err;
   }
   const Result none = Patchscan("render " + kTeapot + " -o " + (dir / "x.png").string() + " --size 160x120 --crop 0.001,0.002,0,1");
-  EXPECT_EQ(none.code, 2) << none.err;
+  EXPECT_EQ(none.code, kExitUsage) << none.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
   std::filesystem::remove_all(dir);
 }

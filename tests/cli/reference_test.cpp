@@ -18,7 +18,9 @@ std::string Roffed(const std::string& name) {
 TEST(Reference, EveryOptionOfEveryCommandIsDocumented) {
   Commands commands;
   const auto app = MakeApp(&commands, "test");
-  const std::string man = ManPage(*app, "test"), markdown = MarkdownReference(*app);
+  RenderCommand mpiCommand;
+  const auto mpi = MakeMpiApp(&mpiCommand, "test");
+  const std::string man = ManPage(*app, *mpi, "test"), markdown = MarkdownReference(*app, *mpi);
   const std::vector<std::string> names = OptionNames(*app);
   // Every command's own options, not only help: render alone has more than twenty.
   EXPECT_GT(names.size(), 60u);
@@ -39,10 +41,28 @@ TEST(Reference, EveryOptionOfEveryCommandIsDocumented) {
   }
 }
 
+// patchscan-mpi's reference says its render command takes patchscan render's options:
+// so it must, every one, and the reference must have its section.
+TEST(Reference, MpiTakesTheRenderOptions) {
+  Commands commands;
+  const auto app = MakeApp(&commands, "test");
+  RenderCommand mpiCommand;
+  const auto mpi = MakeMpiApp(&mpiCommand, "test");
+  std::vector<std::string> render, mpiRender;
+  for (const std::string& n : OptionNames(*app))
+    if (n.rfind("render ", 0) == 0) render.push_back(n);
+  for (const std::string& n : OptionNames(*mpi)) mpiRender.push_back(n);
+  EXPECT_EQ(mpiRender, render);
+  EXPECT_NE(MarkdownReference(*app, *mpi).find("## patchscan-mpi render\n"), std::string::npos);
+  EXPECT_NE(ManPage(*app, *mpi, "test").find(".SH \"patchscan\\-mpi render FILE"), std::string::npos);
+}
+
 TEST(Reference, ManPageIsRoff) {
   Commands commands;
   const auto app = MakeApp(&commands, "9.9.9");
-  const std::string man = ManPage(*app, "9.9.9");
+  RenderCommand mpiCommand;
+  const auto mpi = MakeMpiApp(&mpiCommand, "9.9.9");
+  const std::string man = ManPage(*app, *mpi, "9.9.9");
   EXPECT_EQ(man.rfind(".TH PATCHSCAN 1 ", 0), 0u);
   EXPECT_NE(man.find("patchscan 9.9.9"), std::string::npos);
   for (const char* section : {".SH NAME\n", ".SH SYNOPSIS\n", ".SH DESCRIPTION\n", ".SH \"EXIT STATUS\"\n"})
@@ -55,7 +75,7 @@ TEST(Reference, ManPageIsRoff) {
     const std::string line = man.substr(start, end - start);
     if (!line.empty() && line[0] == '.') {
       EXPECT_TRUE(line.rfind(".TH", 0) == 0 || line.rfind(".SH", 0) == 0 || line.rfind(".TP", 0) == 0 ||
-                  line.rfind(".B ", 0) == 0 || line == ".br")
+                  line.rfind(".B ", 0) == 0 || line == ".br" || line == ".PP")
           << line;
     }
     EXPECT_NE(line.rfind("'", 0), 0u) << line;

@@ -13,6 +13,9 @@
 
 namespace {
 
+// A bad command line, for every command (sysexits' EX_USAGE).
+constexpr int kExitUsage = 64;
+
 struct Result {
   int code;
   std::string out, err;
@@ -25,12 +28,13 @@ std::string Slurp(const std::filesystem::path& p) {
   return s.str();
 }
 
-// Runs the program with `args` (shell words), capturing stdout, stderr and the exit code.
-Result Patchscan(const std::string& args) {
+// Runs the program with `args` (shell words), capturing stdout, stderr and the exit code;
+// `env`: shell assignments before the command ("COLUMNS=60").
+Result Patchscan(const std::string& args, const std::string& env = "") {
   const auto dir = std::filesystem::temp_directory_path();
   const auto out = dir / ("patchscan_cli_out_" + std::to_string(::getpid()));
   const auto err = dir / ("patchscan_cli_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(PATCHSCAN_BINARY) + " " + args + " >" + out.string() +
+  const std::string cmd = env + (env.empty() ? "" : " ") + std::string(PATCHSCAN_BINARY) + " " + args + " >" + out.string() +
                           " 2>" + err.string() + " </dev/null";
   const int status = std::system(cmd.c_str());
   Result r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};

@@ -449,17 +449,30 @@ std::variant<Scene, SourceError> ParseRib(std::string_view text, const std::stri
   return parser.Run(text, name);
 }
 
-std::vector<int> RibFrames(const std::string& path) {
-  std::vector<int> frames;
+std::vector<RibFrame> RibFrames(const std::string& path) {
+  std::vector<RibFrame> frames;
   auto text = ReadTextFile(path);
   if (!std::holds_alternative<std::string>(text)) return frames;
   rib::Lexer lexer(std::get<std::string>(text), path);
   rib::Request r;
-  while (lexer.Next(&r))
+  bool outside = false;  // the depth-map flag of the Display given outside any frame
+  bool inFrame = false;
+  while (lexer.Next(&r)) {
     if (r.name == "FrameBegin" && !r.args.empty() && r.args[0].Numeric() && r.args[0].numbers.size() == 1) {
       const double n = r.args[0].numbers[0];
-      if (n == std::floor(n) && std::abs(n) <= 2e9) frames.push_back(static_cast<int>(n));
+      inFrame = n == std::floor(n) && std::abs(n) <= 2e9;
+      if (inFrame) frames.push_back({static_cast<int>(n), outside});
+    } else if (r.name == "FrameEnd") {
+      inFrame = false;
+    } else if (r.name == "Display" && r.args.size() >= 2 && !r.args[0].Numeric() && r.args[0].Size() == 1 &&
+               !r.args[1].Numeric() && r.args[1].Size() == 1) {
+      // As the reader takes a Display: a framebuffer or a further display ('+') is not the file.
+      const std::string& name = r.args[0].strings[0];
+      if (r.args[1].strings[0] == "framebuffer" || name.empty() || name[0] == '+') continue;
+      const bool depth = r.args[1].strings[0] == "zfile" || r.args[1].strings[0] == "shadow";
+      (inFrame ? frames.back().depthMap : outside) = depth;
     }
+  }
   return frames;
 }
 

@@ -48,9 +48,17 @@ std::variant<Scene, SourceError> ReadRib(const std::string& path, const LoadOpti
 std::variant<Scene, SourceError> ParseRib(std::string_view text, const std::string& name,
                                           const LoadOptions& options = {});
 
-// The numbers of the frames (FrameBegin) of the .rib file at `path`, in order: empty when
-// it has none or cannot be read (ReadRib says why).
-std::vector<int> RibFrames(const std::string& path);
+// A frame of a RIB file: its FrameBegin number, and whether its Display (the last in the
+// frame, else the last before it) writes a depth map ("zfile" or "shadow") rather than a
+// picture. Display requests inside ReadArchive files are not seen.
+struct RibFrame {
+  int number = 0;
+  bool depthMap = false;
+};
+
+// The frames of the .rib file at `path`, in order: empty when it has none or cannot be
+// read (ReadRib says why).
+std::vector<RibFrame> RibFrames(const std::string& path);
 
 // The Utah teapot as RenderMan's Geometry "teapot" makes it: 32 bicubic Bézier patches,
 // z up, its base on z = 0 (the same data as surfaces/teapot.bpt).
