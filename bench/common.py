@@ -54,9 +54,11 @@ def provenance(binary="build/patchscan"):
     root = os.path.dirname(HERE)
     code, commit, _ = run(["git", "-C", root, "rev-parse", "--short=7", "HEAD"])
     commit = commit.strip() if code == 0 else "unknown"
-    code, changes, _ = run(["git", "-C", root, "status", "--porcelain", "--untracked-files=no"])
+    # Changes to what the program is built from (the pages this run writes are not).
+    code, changes, _ = run(["git", "-C", root, "status", "--porcelain", "--untracked-files=no", "--",
+                            "src", "cmake", "CMakeLists.txt"])
     if code == 0 and changes.strip():
-        commit += " with changes not yet committed"
+        commit += " with changes to the source not yet committed"
     code, version, _ = run([binary, "--version"])
     version = version.strip() if code == 0 else "patchscan"
     date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")

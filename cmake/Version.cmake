@@ -1,7 +1,8 @@
 # cmake -DRELEASE=X.Y.Z -DSOURCE_DIR=DIR -DOUT=FILE -P Version.cmake: writes FILE, a header
 # defining PATCHSCAN_RELEASE (the release, CHANGELOG.md's newest section) and
 # PATCHSCAN_VERSION (the release, and the commit built from when DIR is a git checkout:
-# "0.3.0 (git 123abcd)", "modified" when its tracked files differ from the commit). Run at
+# "0.3.0 (git 123abcd)", "modified" when the files it is built from, src/, cmake/ and
+# CMakeLists.txt, differ from the commit's). Run at
 # every build; the file is rewritten only when its text changes, so nothing rebuilds for it
 # otherwise.
 set(version "${RELEASE}")
@@ -11,6 +12,7 @@ if(GIT_FOUND AND EXISTS "${SOURCE_DIR}/.git")
                   OUTPUT_VARIABLE commit OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET RESULT_VARIABLE failed)
   if(NOT failed AND commit)
     execute_process(COMMAND "${GIT_EXECUTABLE}" -C "${SOURCE_DIR}" status --porcelain --untracked-files=no
+                            -- src cmake CMakeLists.txt
                     OUTPUT_VARIABLE changes OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET)
     if(changes)
       set(version "${RELEASE} (git ${commit}, modified)")
