@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <limits>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <memory>
 
@@ -217,8 +218,14 @@ void ShadePixel(const Geometry& geo, const RenderSettings& s, const Lattice& lat
 // rows in flight, so memory stays O(width x threads).
 template <class Geometry>
 std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const Lattice& lat,
-                                      int layers, Counters& stats, RowSink& sink) {
+                                      int layers, Counters& stats, RowSink& sink, BackEndTimes* times) {
   const int threads = s.threads > 1 ? std::min(s.threads, tbb::info::default_concurrency()) : 1;
+  // Each thread's shading seconds in a slot of its own (its index in the arena, sized
+  // below), so no two threads write one; the serial parts' on the calling thread.
+  BackEndTimes timed;
+  timed.shading.assign(1, 0.0);
+  using Clock = std::chrono::steady_clock;
+  auto since = [](Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); };
   // Rows in flight a thread: with two, the threads ran out of rows to shade while the
   // calling thread resolved and handed over (4096x3072 θ teapot at two threads 3 % slower).
   constexpr int kRowsInFlightPerThread = 4;
@@ -260,24 +267,37 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
     above = &pr;
     return &pr;
   };
+  auto timedResolve = [&] {
+    const auto t0 = Clock::now();
+    PixelRow<Geometry>* pr = resolve();
+    timed.resolve += since(t0);
+    return pr;
+  };
   auto shade = [&](PixelRow<Geometry>& pr) {
+    const auto t0 = Clock::now();
     for (int px = 0; px < s.width; ++px) ShadePixel(geo, s, lat, layers, pr, px);
+    const int slot = threads > 1 ? tbb::this_task_arena::current_thread_index() : 0;
+    if (slot >= 0 && static_cast<std::size_t>(slot) < timed.shading.size())
+      timed.shading[static_cast<std::size_t>(slot)] += since(t0);
   };
   auto emit = [&](PixelRow<Geometry>& pr) {
+    const auto t0 = Clock::now();
     shaded.Merge(pr.stats);
     // Rows still in flight when the render stopped are dropped.
     if (stopped || geo.Failed() || !sink.WriteRow(pr.py, pr.pixels.data())) stopped = true;
     written = pr.py + 1;
+    timed.handOver += since(t0);
   };
 
   if (threads <= 1) {
-    while (PixelRow<Geometry>* pr = resolve()) {
+    while (PixelRow<Geometry>* pr = timedResolve()) {
       shade(*pr);
       emit(*pr);
     }
   } else {
     const std::shared_ptr<tbb::task_arena> shared = WorkArena(threads);
     tbb::task_arena& arena = *shared;
+    timed.shading.assign(static_cast<std::size_t>(arena.max_concurrency()), 0.0);
     std::vector<tbb::task_group> shading(ring.size());  // per ring slot, its row's task
     std::size_t oldest = 0;                             // rows handed over: the oldest in flight
     // Waits for the oldest row in flight (running other rows' tasks meanwhile) and hands it over.
@@ -287,7 +307,7 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
       emit(ring[k]);
     };
     try {
-      while (PixelRow<Geometry>* pr = resolve()) {
+      while (PixelRow<Geometry>* pr = timedResolve()) {
         const std::size_t k = (resolved - 1) % ring.size();
         arena.execute([&] { shading[k].run([&shade, pr] { shade(*pr); }); });
         while (resolved - oldest >= static_cast<std::size_t>(inFlight)) finishOldest();
@@ -305,6 +325,7 @@ std::optional<Counters> RenderRows(Geometry& geo, const RenderSettings& s, const
       throw;
     }
   }
+  if (times) *times = std::move(timed);
   if (stopped) return std::nullopt;
   stats.Merge(shaded);
   return stats;
@@ -320,24 +341,24 @@ bool RenderSettings::AnyTransparency() const {
 }
 
 std::optional<Counters> RenderMesh(const TriangleMesh& mesh, const RenderSettings& s,
-                                      RowSink& sink) {
+                                      RowSink& sink, BackEndTimes* times) {
   Counters stats;
   const Lattice lat(s);
   // With transparency each sample keeps its `layers` nearest fragments, nearest first.
   const int layers = s.AnyTransparency() ? kMaxLayers : 1;
   TriangleGeometry geo(mesh, s, lat, layers, stats);
-  return RenderRows(geo, s, lat, layers, stats, sink);
+  return RenderRows(geo, s, lat, layers, stats, sink, times);
 }
 
 std::optional<Counters> RenderFragments(FragmentSource& source, const RenderSettings& s,
-                                           RowSink& sink) {
+                                           RowSink& sink, BackEndTimes* times) {
   Counters stats;
   const Lattice lat(s);
   const int layers = s.AnyTransparency() ? kMaxLayers : 1;
   FragmentGeometry geo(source, s, lat, layers, stats);
   source.BeginRows(SampleColumns{lat.offset, lat.spacing, lat.nx}, lat.At(0), lat.spacing, lat.ny,
                    KeptDepths{s.hither, geo.DepthDecides() ? layers : 0});
-  return RenderRows(geo, s, lat, layers, stats, sink);
+  return RenderRows(geo, s, lat, layers, stats, sink, times);
 }
 
 }  // namespace patchscan::raster

@@ -82,6 +82,17 @@ class RowSink {
   virtual bool WriteRow(int y, const float* pixels) = 0;
 };
 
+// Where a render's back end spent its time, for --stats (seconds of wall clock). The calling
+// thread resolves each pixel row's samples in order (asking the source for its rows, so
+// waiting for a scan that runs ahead counts here) and hands finished rows to the sink in
+// order: those two are the back end's serial part. Pixels are shaded on every thread:
+// `shading` holds each thread's seconds shading (one entry per thread of the render).
+struct BackEndTimes {
+  double resolve = 0.0;
+  double handOver = 0.0;
+  std::vector<double> shading;
+};
+
 // The renders below return the counts Woo and Chall 1990 reports (core/counters.h, the back-end
 // group): n triangles, the most active on one sample row (m), the samples tested and
 // covered, and the shading calls.
@@ -89,13 +100,13 @@ class RowSink {
 // Renders `mesh`. nullopt if the sink stopped it or the material's texture could not be
 // read (the texture's Error() says why). Allocates only before the first row.
 std::optional<Counters> RenderMesh(const TriangleMesh& mesh, const RenderSettings& settings,
-                                      RowSink& sink);
+                                      RowSink& sink, BackEndTimes* times = nullptr);
 
 // Renders the fragments `source` produces row by row (exact renders). Shading mode flat
 // and Gouraud and hidden-line mode need triangles and are not applied: every shading call
 // uses the fragments' exact normals. A group of samples of one surface in a pixel is
 // shaded once with its fragments' attributes averaged.
 std::optional<Counters> RenderFragments(FragmentSource& source, const RenderSettings& settings,
-                                           RowSink& sink);
+                                           RowSink& sink, BackEndTimes* times = nullptr);
 
 }  // namespace patchscan::raster

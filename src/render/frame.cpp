@@ -195,8 +195,9 @@ Result<RenderReport> RenderFrame(const RenderOptions& o, std::ostream& log, std:
     backEnd.settings.ownsRow = front.shared->OwnedRows();
     if ((assembled = front.shared->AssembleRows(progress))) rows = assembled.get();
   }
-  auto counted = scan ? raster::RenderFragments(front.Rows(), backEnd.settings, *rows)
-                      : raster::RenderMesh(*front.mesh, backEnd.settings, progress);
+  raster::BackEndTimes backEndTimes;
+  auto counted = scan ? raster::RenderFragments(front.Rows(), backEnd.settings, *rows, &backEndTimes)
+                      : raster::RenderMesh(*front.mesh, backEnd.settings, progress, &backEndTimes);
   if (counted && overlay && !overlay->Finish()) counted.reset();
   if (counted && async && !async->Finish()) counted.reset();
   if (!counted) {
@@ -231,6 +232,7 @@ Result<RenderReport> RenderFrame(const RenderOptions& o, std::ostream& log, std:
   report.render = Seconds(tSetUp, tDone);
   // Encoding and writing, inside the render (on the writer's thread: overlapping it).
   report.output = openSeconds + (async ? async->WriterSeconds() : progress.OutputSeconds()) + Seconds(tCommit, tDone);
+  report.backEnd = std::move(backEndTimes);
   report.peakKiB = PeakResidentKiB();
   report.texture = backEnd.TextureReport();
   report.imageLibrary = raster::imageio::Loaded();

@@ -64,6 +64,18 @@ void PrintReport(const RenderReport& r, std::ostream& out) {
     out << "; compositor " << r.compositeSeconds << " s (" << (r.render > 0 ? 100.0 * r.compositeSeconds / r.render : 0.0)
         << " % of the render)\n";
   }
+  {
+    const raster::BackEndTimes& b = r.backEnd;
+    double shading = 0.0;
+    int busy = 0;
+    for (const double t : b.shading) shading += t, busy += t > 0.0;
+    out << "time in the back end: resolving rows " << b.resolve << " s and handing them over " << b.handOver
+        << " s on the calling thread; shading " << shading << " s on " << busy << " thread" << (busy == 1 ? "" : "s")
+        << ":";
+    for (const double t : b.shading)
+      if (t > 0.0) out << ' ' << t;
+    out << '\n';
+  }
   for (const ProcessReport& p : r.processes)
     out << "process " << p.rank << ": scanning " << p.seconds << " s, sent " << p.bytesSent << " bytes, received "
         << p.bytesReceived << " bytes, peak memory " << p.peakKiB << " KiB\n";
@@ -81,7 +93,10 @@ std::string ReportJson(const RenderReport& r) {
   js << ", \"seconds_load\": " << r.load << ", \"seconds_tessellate\": " << r.setUp << ", \"seconds_render\": "
      << r.render << ", \"seconds_output\": " << r.output << ", \"seconds_workers\": [";
   for (std::size_t k = 0; k < r.workerSeconds.size(); ++k) js << (k ? ", " : "") << r.workerSeconds[k];
-  js << "], \"seconds_composite\": " << r.compositeSeconds << ", \"peak_rss_kib\": " << r.peakKiB
+  js << "], \"seconds_composite\": " << r.compositeSeconds << ", \"seconds_resolve\": " << r.backEnd.resolve
+     << ", \"seconds_hand_over\": " << r.backEnd.handOver << ", \"seconds_shading\": [";
+  for (std::size_t k = 0; k < r.backEnd.shading.size(); ++k) js << (k ? ", " : "") << r.backEnd.shading[k];
+  js << "], \"peak_rss_kib\": " << r.peakKiB
      << ", \"image_library_loaded\": " << (r.imageLibrary ? "true" : "false");
   if (!r.processes.empty()) {
     js << ", \"processes\": [";

@@ -38,6 +38,9 @@ struct RenderReport {
   // compositor's merging their rows.
   std::vector<double> workerSeconds;
   double compositeSeconds = 0.0;
+  // The back end's seconds: resolving rows and handing them over (the calling thread's,
+  // serial), and shading on each thread.
+  raster::BackEndTimes backEnd;
   std::string texture;  // what became of the texture: "none", "opened, N lookups", ...
   bool imageLibrary = false;  // whether OpenImageIO's module was loaded (raster/image_io.h)
   // A render shared between processes: each process's seconds, traffic and peak memory.
@@ -49,7 +52,10 @@ void PrintReport(const RenderReport& report, std::ostream& out);
 
 // The report as one JSON object: "mode", every counter and ratio by its key (all groups,
 // zero where the mode does not run them), "seconds_load", "seconds_tessellate" (the set-up),
-// "seconds_render", "seconds_output", "peak_rss_kib" and "image_library_loaded".
+// "seconds_render", "seconds_output", "seconds_workers" (each scanning worker's),
+// "seconds_composite", "seconds_resolve" and "seconds_hand_over" (the back end's serial
+// part, on the calling thread), "seconds_shading" (each thread's), "peak_rss_kib" and
+// "image_library_loaded".
 std::string ReportJson(const RenderReport& report);
 
 // Peak resident memory of this process so far, in KiB.

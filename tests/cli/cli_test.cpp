@@ -257,7 +257,8 @@ TEST(Cli, ExactModeIsTheDefaultAndReportsItsTrackers) {
     EXPECT_NE(r.err.find(line), std::string::npos) << "missing '" << line << "' in\n" << r.err;
   const std::string json = Slurp(js);
   for (const char* key : {"\"mode\": \"exact\"", "\"newton_iterations_per_tracker_row\": ",
-                          "\"untracked_silhouettes\": ", "\"failures\": 0", "\"seconds_output\": "})
+                          "\"untracked_silhouettes\": ", "\"failures\": 0", "\"seconds_output\": ",
+                          "\"seconds_resolve\": ", "\"seconds_hand_over\": ", "\"seconds_shading\": ["})
     EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
   // What needs triangles is ignored in exact mode, and the overlay outside the direct modes,
   // each with a warning: one rule for every option a mode does not use.
