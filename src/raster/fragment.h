@@ -412,6 +412,19 @@ class FragmentSource {
   // Sample rows come in increasing y. Returns false to stop the render (an error the
   // source reports itself).
   virtual bool ScanRow(double y, const SampleColumns& columns, FragmentRow& out) = 0;
+
+  // A source whose rows, once prepared in order, are scanned on any threads at once
+  // (xscan/row_scan.h). The back end then prepares a batch of sample rows, scans them on its
+  // threads, finishes the batch and only then prepares the next; a batch ends on a row that
+  // EndsBatch (or the frame's last). Rows are numbered from BeginRows' y0: row j at y0 + j dy.
+  virtual bool ScansInBatches() const { return false; }
+  virtual bool EndsBatch(int /*row*/) const { return true; }
+  // Rows [first, first + count), in order, after the batch before is finished.
+  virtual void PrepareRows(int /*first*/, int /*count*/) {}
+  // The k-th row prepared, into `out` (its own for each row); false stops the render.
+  virtual bool ScanPreparedRow(int /*k*/, FragmentRow& /*out*/) { return false; }
+  // After every row prepared is scanned.
+  virtual void FinishRows() {}
 };
 
 }  // namespace patchscan::raster

@@ -102,7 +102,7 @@ constexpr std::int32_t kChordHandle = std::int32_t{1} << 29;
 // that row which lasts while the pixel row needs it, and the triangles of θ slabs the
 // source hands over as it goes (always shaded per sample's interpolated normal, as the
 // fragments are: flat, Gouraud and hidden-line modes need a mesh).
-class FragmentGeometry final : public FragmentRow {
+class FragmentGeometry {
  public:
   FragmentGeometry(FragmentSource& source, const RenderSettings& s, const Lattice& lat,
                    int layers, Counters& stats)
@@ -139,61 +139,91 @@ class FragmentGeometry final : public FragmentRow {
     to.chords[static_cast<size_t>(rTo)] = from.chords[static_cast<size_t>(rFrom)];
   }
 
+  // One sample row being resolved: what the source hands its fragments, chords and
+  // triangles to. Rows of a batch (FragmentSource::ScansInBatches) are resolved on any
+  // threads at once, each with its own Target and counts; their sources hand over no
+  // triangles (the store is scanned in row order).
+  class Target final : public FragmentRow {
+   public:
+    Target(FragmentGeometry& geo, Sample* row, std::vector<Fragment>* pool, std::vector<Chord>* chords,
+           Counters& stats, bool triangles)
+        : geo_(geo), row_(row), pool_(pool), chords_(chords), stats_(stats), triangles_(triangles) {
+      pool_->clear();
+      chords_->clear();
+    }
+
+    void Add(int column, const Fragment& f) override {
+      ++stats_[Counter::SamplesTested];
+      if (column < 0 || column >= geo_.lat_.nx || !(f.w >= geo_.s_.hither) || !geo_.Shows(f)) return;
+      const auto handle = static_cast<std::int32_t>(pool_->size());
+      if (InsertNearest(Of(column), geo_.layers_, 1.0 / f.w, handle)) pool_->push_back(f);
+    }
+
+    bool Hidden(int column, double w) const override {
+      return column < 0 || column >= geo_.lat_.nx || !(w >= geo_.s_.hither) ||
+             Behind(Of(column), geo_.layers_, 1.0 / w);
+    }
+
+    // A chord is kept whole, and a sample of it made only when shaded (a hidden one never),
+    // or when its side may drop it (culling, a one-sided material): then a sample the depth
+    // test would keep is made first to ask its side.
+    void AddChord(const Chord& c, const SampleColumns& columns) override {
+      const auto handle = kChordHandle + static_cast<std::int32_t>(chords_->size());
+      const int layers = geo_.layers_;
+      bool kept = false;
+      const double nearest = 1.0 / geo_.s_.hither;  // the largest 1/w in front of the hither plane
+      const auto inFront = [&](double invW) { return invW > 0.0 && invW <= nearest; };  // false for NaN
+      if (!geo_.sided_) {
+        stats_[Counter::SamplesTested] += c.ForEachColumnInverseDepth(columns, [&](int column, double invW) {
+          kept |= inFront(invW) && InsertNearest(Of(column), layers, invW, handle);
+        });
+      } else {
+        c.ForEachColumnInverseDepth(columns, [&](int column, double invW) {
+          if (!inFront(invW) || Behind(Of(column), layers, invW)) return;
+          ++stats_[Counter::SamplesTested];
+          if (!geo_.Shows(c.At(columns.At(column)))) return;
+          if (InsertNearest(Of(column), layers, invW, handle)) kept = true;
+        });
+      }
+      if (kept) chords_->push_back(c);
+    }
+
+    void AddTriangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
+                     std::uint32_t surfaceId) override {
+      if (!triangles_) {
+        geo_.failed_ = true;  // a batch's source broke its contract: stop, rather than draw it wrong
+        return;
+      }
+      ++stats_[Counter::Triangles];
+      double yMax = geo_.s_.height;
+      if (a.h.z() > 0 && b.h.z() > 0 && c.h.z() > 0)
+        yMax = std::max({a.h.y() / a.h.z(), b.h.y() / b.h.z(), c.h.y() / c.h.z()}) + kBoundsSlackPx;
+      geo_.store_.Add(a, b, c, surfaceId, geo_.lat_.Floor(yMax, geo_.lat_.ny));
+    }
+
+   private:
+    Sample* Of(int column) const { return row_ + static_cast<std::ptrdiff_t>(column) * geo_.layers_; }
+    FragmentGeometry& geo_;
+    Sample* row_;
+    std::vector<Fragment>* pool_;
+    std::vector<Chord>* chords_;
+    Counters& stats_;
+    bool triangles_;
+  };
+
+  // Resolves sample row j, the r-th of its pixel row, from the source's ScanRow.
   void ScanRow(int j, int r, double y, Sample* row, Rows& rows) {
-    pool_ = &rows.pools[static_cast<size_t>(r)];
-    pool_->clear();
-    chords_ = &rows.chords[static_cast<size_t>(r)];
-    chords_->clear();
-    row_ = row;
-    const SampleColumns columns{lat_.offset, lat_.spacing, lat_.nx};
-    if (!source_.ScanRow(y, columns, *this)) failed_ = true;
+    Target target(*this, row, &rows.pools[static_cast<size_t>(r)], &rows.chords[static_cast<size_t>(r)], stats_, true);
+    if (!source_.ScanRow(y, Columns(), target)) failed_ = true;
     if (!store_.Empty()) store_.ScanRow(j, y, row, kTriangleHandle);
   }
-
-  void Add(int column, const Fragment& f) override {
-    ++stats_[Counter::SamplesTested];
-    if (column < 0 || column >= lat_.nx || !(f.w >= s_.hither) || !Shows(f)) return;
-    const auto handle = static_cast<std::int32_t>(pool_->size());
-    if (InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / f.w, handle))
-      pool_->push_back(f);
+  // Resolves the k-th row of the source's batch, the r-th of its pixel row, counting into
+  // `stats`: on any thread, other rows at once.
+  void ScanPreparedRow(int k, int r, Sample* row, Rows& rows, Counters& stats) {
+    Target target(*this, row, &rows.pools[static_cast<size_t>(r)], &rows.chords[static_cast<size_t>(r)], stats, false);
+    if (!source_.ScanPreparedRow(k, target)) failed_ = true;
   }
-
-  bool Hidden(int column, double w) const override {
-    return column < 0 || column >= lat_.nx || !(w >= s_.hither) ||
-           Behind(&row_[static_cast<size_t>(column) * layers_], layers_, 1.0 / w);
-  }
-
-  // A chord is kept whole, and a sample of it made only when shaded (a hidden one never),
-  // or when its side may drop it (culling, a one-sided material): then a sample the depth
-  // test would keep is made first to ask its side.
-  void AddChord(const Chord& c, const SampleColumns& columns) override {
-    const auto handle = kChordHandle + static_cast<std::int32_t>(chords_->size());
-    bool kept = false;
-    const double nearest = 1.0 / s_.hither;  // the largest 1/w in front of the hither plane
-    const auto inFront = [&](double invW) { return invW > 0.0 && invW <= nearest; };  // false for NaN
-    if (!sided_) {
-      stats_[Counter::SamplesTested] += c.ForEachColumnInverseDepth(columns, [&](int column, double invW) {
-        kept |= inFront(invW) && InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, invW, handle);
-      });
-    } else {
-      c.ForEachColumnInverseDepth(columns, [&](int column, double invW) {
-        if (!inFront(invW) || Behind(&row_[static_cast<size_t>(column) * layers_], layers_, invW)) return;
-        ++stats_[Counter::SamplesTested];
-        if (!Shows(c.At(columns.At(column)))) return;
-        if (InsertNearest(&row_[static_cast<size_t>(column) * layers_], layers_, invW, handle)) kept = true;
-      });
-    }
-    if (kept) chords_->push_back(c);
-  }
-
-  void AddTriangle(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c,
-                   std::uint32_t surfaceId) override {
-    ++stats_[Counter::Triangles];
-    double yMax = s_.height;
-    if (a.h.z() > 0 && b.h.z() > 0 && c.h.z() > 0)
-      yMax = std::max({a.h.y() / a.h.z(), b.h.y() / b.h.z(), c.h.y() / c.h.z()}) + kBoundsSlackPx;
-    store_.Add(a, b, c, surfaceId, lat_.Floor(yMax, lat_.ny));
-  }
+  SampleColumns Columns() const { return {lat_.offset, lat_.spacing, lat_.nx}; }
 
   std::uint32_t SurfaceOf(const Rows& rows, int r, const Sample& smp) const {
     if (smp.handle >= kTriangleHandle) return store_.SurfaceOf(smp.handle - kTriangleHandle);
@@ -298,10 +328,7 @@ class FragmentGeometry final : public FragmentRow {
   Counters& stats_;
   // The source failed, or a texture (set while shading, on any thread).
   mutable std::atomic<bool> failed_ = false;
-  std::vector<Fragment>* pool_ = nullptr;  // the pool of the sample row being scanned
-  std::vector<Chord>* chords_ = nullptr;   // and its chords
-  bool sided_ = false;                     // !DepthDecides()
-  Sample* row_ = nullptr;
+  bool sided_ = false;  // !DepthDecides()
   TriangleStore store_;
 };
 

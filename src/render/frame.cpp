@@ -21,6 +21,7 @@
 #include "xscan/overlay.h"
 #include "xscan/partitioned_scan.h"
 #include "xscan/polygon_feed.h"
+#include "xscan/row_scan.h"
 #include "xscan/tess_feed.h"
 
 namespace patchscan::render {
@@ -58,7 +59,7 @@ std::optional<raster::TriangleMesh> TessellatedMesh(const RenderOptions& o, cons
 // A frame's front end. Direct modes: the scan (this process's own, or its part of one
 // shared between processes) and the polygons fed with its rows; tess mode: the mesh.
 struct FrontEnd {
-  std::unique_ptr<PartitionedScan> own;
+  std::unique_ptr<DirectScanSource> own;
   std::unique_ptr<SharedRows> shared;
   std::unique_ptr<PolygonFeed> polygons;
   std::optional<raster::TriangleMesh> mesh;
@@ -69,8 +70,10 @@ struct FrontEnd {
   }
 };
 
-// The direct modes' front end: Blinn's Y scan with the exact or the θ-sampled X scan, its
-// surfaces dealt out to `threads` workers (one when tracing: the overlay is not shared).
+// The direct modes' front end: Blinn's Y scan with the exact or the θ-sampled X scan. With
+// threads, the exact scan's rows are split between them (RowScan: sort-first, occlusion
+// culling kept); the θ scans' surfaces are dealt out to `threads` workers (PartitionedScan:
+// Molnar's object partition). One scan, on one thread, when tracing: the overlay is not shared.
 FrontEnd DirectFrontEnd(const RenderOptions& o, const Scene& scene, const Camera& camera, int aa, int threads) {
   FrontEnd f;
   const ExactScanOptions xo = ScanOptionsFor(o, aa);
@@ -78,8 +81,11 @@ FrontEnd DirectFrontEnd(const RenderOptions& o, const Scene& scene, const Camera
     f.shared = o.shareRows(o, scene, camera, xo, aa, threads);  // it hands the polygons over itself
     return f;
   }
-  const int workers = o.overlay == Overlay::None ? threads : 1;
-  f.own = std::make_unique<PartitionedScan>(scene.surfaces, camera, xo, workers, threads);
+  const bool traced = o.overlay != Overlay::None;
+  if (threads > 1 && !traced && RowScan::Splits(xo))
+    f.own = std::make_unique<RowScan>(scene.surfaces, camera, xo, threads);
+  else
+    f.own = std::make_unique<PartitionedScan>(scene.surfaces, camera, xo, traced ? 1 : threads, threads);
   if (!scene.polygons.empty()) f.polygons = std::make_unique<PolygonFeed>(*f.own, PolygonTriangles(scene, camera));
   return f;
 }

@@ -155,7 +155,13 @@ void ExactScan::Activate(const ScanEntry& entry, double y, double spacing) {
 }
 
 void ExactScan::UpdateActive(double yLo, double yHi, double spacing) {
-  std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->Passed(yLo); });
+  if (holdRetired_) {
+    for (auto& a : active_)
+      if (a->Passed(yLo)) retired_.push_back(std::move(a));
+    std::erase(active_, nullptr);
+  } else {
+    std::erase_if(active_, [&](const std::unique_ptr<Active>& a) { return a->Passed(yLo); });
+  }
   for (; nextPending_ < pending_.size() && pending_[nextPending_].yMin <= yHi; ++nextPending_)
     if (pending_[nextPending_].yMax >= yLo) Activate(pending_[nextPending_], yLo, spacing);
 }
@@ -186,9 +192,10 @@ void ExactScan::VisitTheta(Active& a, double y, const raster::SampleColumns& col
   });
 }
 
-void ExactScan::FinishWalk(Active& a) {
+void ExactScan::FinishWalk(Active& a, bool adopt) {
   // Silhouettes the walk found without a tracker are tracked from the next row on.
-  for (const Vec2& uv : walkEvents_.untrackedSilhouettes) a.scan->Adopt(uv);
+  if (adopt)
+    for (const Vec2& uv : walkEvents_.untrackedSilhouettes) a.scan->Adopt(uv);
   if (trace_) TraceWalk(a);
 }
 
@@ -200,19 +207,78 @@ void ExactScan::WalkSurface(Active& a, double y, const RowTrackers& t, const ras
     VisitTheta(a, y, columns, [&](auto& walker, auto&& make) {
       walker.WalkAll(t, &edgeUsed_, &silUsed_, &chain_, make, take);
     });
+    FinishWalk(a);
   } else {
-    const Surface& surface = surfaces_[a.index];
-    VisitShape(surface, [&](const auto& shape) {
-      LevelWalker walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, &counters_, &walkEvents_);
-      walker.SetTrim(a.scan->Trim(), &trimScratch_);
-      walker.WalkAll(t, &edgeUsed_, &silUsed_, [&](int column, const LevelPoint& p) {
-        ++counters_[Counter::Fragments];
-        if (out.Hidden(column, p.w)) return;  // not worth its normal and texture coordinates
-        out.Add(column, FragmentAt(p, surface, a.scan->NormalFromObject(), static_cast<std::uint32_t>(a.index)));
-      });
-    });
+    WalkExact(a, y, t, columns, out, {&walkEvents_, &edgeUsed_, &silUsed_, &trimScratch_, &counters_});
+    FinishWalk(a, AdoptsOn(RowIndex(y, columns)));
   }
-  FinishWalk(a);
+}
+
+void ExactScan::WalkExact(const Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
+                          raster::FragmentRow& out, const WalkScratch& s) const {
+  const Surface& surface = surfaces_[a.index];
+  VisitShape(surface, [&](const auto& shape) {
+    LevelWalker walker(shape, a.scan->Map(), a.scan->LineFor(y), columns, s.counters, s.events);
+    walker.SetTrim(a.scan->Trim(), s.trim);
+    walker.WalkAll(t, s.edgeUsed, s.silUsed, [&](int column, const LevelPoint& p) {
+      ++(*s.counters)[Counter::Fragments];
+      if (out.Hidden(column, p.w)) return;  // not worth its normal and texture coordinates
+      out.Add(column, FragmentAt(p, surface, a.scan->NormalFromObject(), static_cast<std::uint32_t>(a.index)));
+    });
+  });
+}
+
+void ExactScan::PrepareRows(double y0, double dy, int first, int count, const raster::SampleColumns& columns) {
+  retired_.clear();  // the rows of the batch before are scanned
+  holdRetired_ = true;
+  if (prepared_.size() < static_cast<std::size_t>(count)) prepared_.resize(static_cast<std::size_t>(count));
+  preparedCount_ = count;
+  for (int k = 0; k < count; ++k) {
+    // As the back end's rows (raster::Lattice::At), bit for bit.
+    const double y = y0 + (first + k) * dy;
+    ++counters_[Counter::SampleRows];
+    UpdateActive(y, y, columns.dx);
+    PreparedRow& row = prepared_[static_cast<std::size_t>(k)];
+    row.y = y;
+    row.count = 0;
+    // As ScanRow's exact rows, but for the walks.
+    for (const auto& ap : active_) {
+      Active& a = *ap;
+      if (y < a.yFirst - kFirstYSlackPx) continue;
+      AdvanceTo(a, y);
+      if (a.scan->Done()) {
+        a.done = true;
+        continue;
+      }
+      if (row.entries.size() <= static_cast<std::size_t>(row.count)) row.entries.emplace_back();
+      Prepared& e = row.entries[static_cast<std::size_t>(row.count++)];
+      e.a = &a;
+      e.t = a.scan->Trackers();  // into the lists' capacity
+    }
+  }
+  holdRetired_ = false;
+}
+
+bool ExactScan::ScanPrepared(int k, const raster::SampleColumns& columns, raster::FragmentRow& out,
+                             RowScratch& scratch) {
+  const PreparedRow& row = prepared_[static_cast<std::size_t>(k)];
+  const bool adopts = k == preparedCount_ - 1 && AdoptsOn(RowIndex(row.y, columns));
+  const WalkScratch s{&scratch.events, &scratch.edgeUsed, &scratch.silUsed, &scratch.trim, &scratch.counters};
+  for (int e = 0; e < row.count; ++e) {
+    const Prepared& p = row.entries[static_cast<std::size_t>(e)];
+    scratch.events.Clear();
+    WalkExact(*p.a, row.y, p.t, columns, out, s);
+    // The last row's surfaces are each scanned by this thread alone.
+    if (adopts) p.a->adopt = scratch.events.untrackedSilhouettes;
+  }
+  return true;
+}
+
+void ExactScan::FinishPrepared() {
+  for (const auto& a : active_) {
+    for (const Vec2& uv : a->adopt) a->scan->Adopt(uv);
+    a->adopt.clear();
+  }
 }
 
 bool ExactScan::AdvanceSurface(Active& a, const ChainSet& from, double yFrom, double y, const RowTrackers& t,

@@ -44,6 +44,14 @@ struct ExactScanOptions {
   // the exact X scan from then on. Off: every surface keeps its chains (tests of the θ
   // scan's own error).
   bool exactWhereCheaper = true;
+  // A silhouette the exact X scan finds without a tracker is taken up by the Y scan
+  // (SurfaceScan::Adopt) only on the sample rows j >= adoptPhase with j - adoptPhase a
+  // multiple of adoptRows (ExactScan::AdoptsOn; j = 0 at the columns' x0, the lattice's
+  // first row).
+  // 1: on every row. More: the exact X scans of a batch of rows that ends on such a row
+  // depend on the Y scan alone, and run on any threads (xscan/row_scan.h).
+  int adoptRows = 1, adoptPhase = 0;
+  bool AdoptsOn(long row) const { return adoptRows <= 1 || (row >= adoptPhase && (row - adoptPhase) % adoptRows == 0); }
 };
 
 // A surface as the scan meets it: its index, and the y extent and area (pixels) of its
@@ -87,6 +95,31 @@ class ExactScan final : public raster::FragmentSource {
 
   // The counts so far (core/counters.h: set up, y scan, x scan, θ and slab groups).
   const Counters& Stats() const { return counters_; }
+
+  // Whether sample row `row` takes up the silhouettes its exact X scans found untracked
+  // (ExactScanOptions::adoptRows). The image is the same for any split of the rows between
+  // such rows; until it is taken up, such a silhouette is found again on each row by the
+  // walk that found it (a walk follows the level curve from a tracker, and finds every
+  // silhouette on it).
+  bool AdoptsOn(long row) const { return options_.AdoptsOn(row); }
+  // What one thread's exact X scans use beside the scan's state, and what they count.
+  struct RowScratch {
+    WalkEvents events;
+    std::vector<char> edgeUsed, silUsed;
+    TrimScratch trim;
+    Counters counters;
+  };
+  // Sort-first, exact X scan only (thetaSteps 0): the Y scan of rows y0 + j dy for j in
+  // [first, first + count), every surface's trackers on each kept for its X scan, which
+  // ScanPrepared then makes. `first` + count - 1 should be a row that AdoptsOn, or the
+  // frame's last: the rows before it do not.
+  void PrepareRows(double y0, double dy, int first, int count, const raster::SampleColumns& columns);
+  // The exact X scan of the k-th row prepared (k < count) into `out`, as ScanRow would make
+  // it. Rows may be scanned at once on several threads, each with scratch of its own.
+  bool ScanPrepared(int k, const raster::SampleColumns& columns, raster::FragmentRow& out, RowScratch& scratch);
+  // After every prepared row is scanned: the silhouettes the last row's X scans found
+  // untracked are taken up, if that row AdoptsOn.
+  void FinishPrepared();
 
  private:
   struct Active;
@@ -162,8 +195,19 @@ class ExactScan final : public raster::FragmentSource {
   // Calls f(walker, make) with the θ walker of a surface on line y and its fragment maker.
   template <class F>
   void VisitTheta(Active& a, double y, const raster::SampleColumns& columns, F&& f);
-  // After a surface's X scan: silhouettes found without a tracker are adopted; the trace.
-  void FinishWalk(Active& a);
+  // After a surface's X scan: silhouettes found without a tracker are adopted (if `adopt`);
+  // the trace.
+  void FinishWalk(Active& a, bool adopt = true);
+  // The exact X scan of a surface on line y from its trackers `t`, with `scratch`: what
+  // WalkSurface does for a surface not θ-scanned, less FinishWalk.
+  struct WalkScratch {
+    WalkEvents* events;
+    std::vector<char>*edgeUsed, *silUsed;
+    TrimScratch* trim;
+    Counters* counters;
+  };
+  void WalkExact(const Active& a, double y, const RowTrackers& t, const raster::SampleColumns& columns,
+                 raster::FragmentRow& out, const WalkScratch& scratch) const;
   // Whether a surface's sections keep their shape from line yTop to line yBottom, its
   // trackers advanced there from a count of eventsBefore events: no event of the Y scan,
   // stationary point or degenerate level set between them, and no trim.
@@ -189,6 +233,21 @@ class ExactScan final : public raster::FragmentSource {
   ThetaTable thetaTable_;           // the walkers' view of the table
   std::size_t nextPending_ = 0;
   std::vector<std::unique_ptr<Active>> active_;
+  // Sort-first: each prepared row's surfaces (in scan order) and their trackers; surfaces
+  // left behind within a batch are kept until its rows are scanned.
+  struct Prepared {
+    Active* a = nullptr;
+    RowTrackers t;
+  };
+  struct PreparedRow {
+    double y = 0.0;
+    int count = 0;
+    std::vector<Prepared> entries;  // the first count; the rest keep their lists' capacity
+  };
+  std::vector<PreparedRow> prepared_;
+  int preparedCount_ = 0;
+  std::vector<std::unique_ptr<Active>> retired_;
+  bool holdRetired_ = false;
   WalkEvents walkEvents_;
   std::vector<ThetaVertex> chain_;
   ThetaChainSink* chainSink_ = nullptr;

@@ -65,6 +65,8 @@ struct ExactScan::Active {
   // chains hold more such vertices per sample than kThetaVerticesPerSampleMax).
   long thetaVertices = 0, thetaSamples = 0;
   bool exactX = false;
+  // Sort-first: the silhouettes the X scan found untracked on a batch's last row, to take up.
+  std::vector<Vec2> adopt;
   // θ: whether the surface's object-to-world map is the identity (ThetaFrame::worldIsObject).
   bool worldIsObject = false;
   RowTrackers topTrackers;

@@ -9,15 +9,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <condition_variable>
-#include <exception>
-#include <mutex>
 #include <numeric>
-#include <thread>
 
 #include "raster/scanline_renderer.h"
 #include "raster/triangle_store.h"
 #include "raster/work_arena.h"
+#include "xscan/row_ring.h"
 
 namespace patchscan {
 
@@ -52,47 +49,6 @@ std::vector<std::vector<ScanEntry>> PartitionSurfaces(const std::vector<ScanEntr
 namespace {
 
 double Now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
-
-// What the back end will keep of a row's samples by depth (raster::KeptDepths), followed
-// as fragments arrive in the order the back end will take them: a fragment it would drop
-// (behind the `layers` nearest of those before it, or nearer than the hither plane) is
-// dropped here already. Dropping from the fragments of some surfaces only is safe: what
-// hides a fragment among them hides it among all, and merging keeps their order.
-class DepthFilter {
- public:
-  void Reset(const raster::KeptDepths& kept, int columns) {
-    kept_ = kept;
-    columns_ = columns;
-    keep_.clear();
-    touched_ = false;
-  }
-  // The depths are made when the first is kept: a row that keeps none (a θ scan's, whose
-  // chords are not tested here) costs nothing to hold or to clear.
-  void ClearRow() {
-    if (touched_) std::fill(keep_.begin(), keep_.end(), raster::kNoSample);
-    touched_ = false;
-  }
-  bool Hidden(int column, double w) const {
-    if (kept_.layers == 0) return false;
-    return column < 0 || column >= columns_ || !(w >= kept_.hither) ||
-           (touched_ && raster::Behind(Of(column), kept_.layers, 1.0 / w));
-  }
-  // Takes a fragment not Hidden: its depth joins the sample's nearest.
-  void Keep(int column, double w) {
-    if (kept_.layers == 0) return;
-    if (keep_.empty()) keep_.assign(static_cast<std::size_t>(columns_) * kept_.layers, raster::kNoSample);
-    raster::InsertNearest(Of(column), kept_.layers, 1.0 / w, 0);
-    touched_ = true;
-  }
-
- private:
-  const raster::Sample* Of(int column) const { return keep_.data() + static_cast<std::ptrdiff_t>(column) * kept_.layers; }
-  raster::Sample* Of(int column) { return keep_.data() + static_cast<std::ptrdiff_t>(column) * kept_.layers; }
-  raster::KeptDepths kept_;
-  int columns_ = 0;
-  bool touched_ = false;  // some depth kept since the row was cleared
-  std::vector<raster::Sample> keep_;  // per column its layers' depths, nearest first (as the back end's)
-};
 
 // One worker's share of a row, as its scan handed it over: fragments and triangles, each
 // with the rank of its surface in the scan order (non-decreasing: a scan hands over its
@@ -186,75 +142,7 @@ int RowsAhead(double dy) {
   return static_cast<int>(std::clamp(2.0 * perPixel, 2.0, static_cast<double>(kMaxRowsAhead)));
 }
 
-// A composited row kept for the back end: what the workers handed over, in scan order.
-class StoredRow final : public raster::FragmentRow {
- public:
-  void Clear() {
-    fragments_.clear();
-    triangles_.clear();
-    chords_.clear();
-    depth.ClearRow();
-  }
-  // Chords come from the workers' buffers, wholly hidden ones left out already: kept as
-  // they are (the back end tests their samples).
-  void AddChord(const raster::Chord& c, const raster::SampleColumns& columns) override {
-    chords_.push_back(c);
-    columns_ = columns;
-  }
-  void Add(int column, const raster::Fragment& f) override {
-    if (depth.Hidden(column, f.w)) return;
-    depth.Keep(column, f.w);
-    fragments_.push_back({column, f});
-  }
-  bool Hidden(int column, double w) const override { return depth.Hidden(column, w); }
-  void AddTriangle(const raster::RasterVertex& a, const raster::RasterVertex& b, const raster::RasterVertex& c,
-                   std::uint32_t surfaceId) override {
-    triangles_.push_back({a, b, c, surfaceId});
-  }
-  DepthFilter depth;
-  // Hands everything over to `out` in the order it came.
-  void Replay(raster::FragmentRow& out) const {
-    for (const auto& [column, f] : fragments_) out.Add(column, f);
-    for (const raster::Chord& c : chords_) out.AddChord(c, columns_);
-    for (const Triangle& t : triangles_) out.AddTriangle(t.a, t.b, t.c, t.surfaceId);
-  }
-
- private:
-  struct Triangle {
-    raster::RasterVertex a, b, c;
-    std::uint32_t surfaceId;
-  };
-  std::vector<std::pair<int, raster::Fragment>> fragments_;
-  std::vector<raster::Chord> chords_;
-  raster::SampleColumns columns_;
-  std::vector<Triangle> triangles_;
-};
-
 }  // namespace
-
-// The scan-ahead: a thread composites rows 0, 1, ... into a ring of `depth` slots (its
-// workers' scans on the arena) while the back end replays them in order; it waits while the
-// ring is full.
-struct PartitionedScan::Ahead {
-  raster::SampleColumns columns;
-  double y0 = 0.0, dy = 1.0;
-  int nRows = 0;
-  int depth = 2;  // RowsAhead(dy), or two θ batches
-  std::vector<StoredRow> slots;
-  std::vector<char> okOf;
-  std::mutex m;
-  // The producer waits on `space` for the back end to have replayed `producerNeeds` rows
-  // (half the ring: a wait frees room for several rows), the back end on `ready` for
-  // `consumerNeeds` rows composited; each is woken only once what it waits for is there.
-  std::condition_variable space, ready;
-  int produced = 0, consumed = 0;  // rows composited, rows replayed
-  int producerNeeds = -1, consumerNeeds = -1;  // -1: not waiting
-  bool cancel = false;
-  std::exception_ptr error;
-  // A plain thread, not a task of the arena: the destructor joins it without waiting inside
-  // the arena, where the wait could be run by the very worker the producer runs on.
-  std::thread producer;
-};
 
 struct PartitionedScan::Worker {
   Worker(std::span<const Surface> surfaces, const Camera& camera, ExactScanOptions options,
@@ -298,13 +186,7 @@ PartitionedScan::PartitionedScan(std::span<const Surface> surfaces, const Camera
 }
 
 PartitionedScan::~PartitionedScan() {
-  if (!ahead_) return;
-  {
-    std::lock_guard lock(ahead_->m);
-    ahead_->cancel = true;
-  }
-  ahead_->space.notify_one();
-  ahead_->producer.join();
+  if (ahead_) ahead_->Stop();  // before the workers it scans with go
 }
 
 void PartitionedScan::KeepDepths(const raster::KeptDepths& kept, int columns) {
@@ -320,63 +202,25 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
   }
   KeepDepths(kept, columns.n);
   if (!arena_ || tracing_ || ahead_) return;
-  ahead_ = std::make_unique<Ahead>();
-  Ahead& a = *ahead_;
-  a.columns = columns;
-  a.y0 = y0;
-  a.dy = dy;
-  a.nRows = nRows;
-  a.depth = std::max(RowsAhead(dy), 2 * batch_);
-  a.slots.resize(static_cast<std::size_t>(a.depth));
-  for (StoredRow& slot : a.slots) slot.depth.Reset(kept, columns.n);
-  a.okOf.assign(static_cast<std::size_t>(a.depth), 1);
-  a.producer = std::thread([this, &a] {
-    // The slot of row j once the back end is done with the row it held (null: cancelled).
-    const auto slotFor = [&](int j) -> StoredRow* {
-      std::unique_lock lock(a.m);
-      if (!a.cancel && j - a.consumed >= a.depth) {
-        a.producerNeeds = j - a.depth / 2;
-        a.space.wait(lock, [&] { return a.cancel || a.consumed >= a.producerNeeds; });
-        a.producerNeeds = -1;
+  aheadY0_ = y0;
+  aheadDy_ = dy;
+  ahead_ = std::make_unique<RowRing>(std::max(RowsAhead(dy), 2 * batch_), kept, columns.n);
+  ahead_->Start([this, columns, y0, dy, nRows] {
+    for (int j = 0; j < nRows;) {
+      const double y = y0 + j * dy;
+      if (workers_.size() == 1) {
+        if (!ahead_->Reserve(j + 1)) return;
+        ahead_->Publish(j, Composite(y, columns, ahead_->Slot(j)));
+        ++j;
+        continue;
       }
-      if (a.cancel) return nullptr;
-      StoredRow& slot = a.slots[static_cast<std::size_t>(j % a.depth)];
-      slot.Clear();
-      return &slot;
-    };
-    const auto publish = [&](int j, bool ok) {
-      bool wake = false;
-      {
-        std::lock_guard lock(a.m);
-        a.okOf[static_cast<std::size_t>(j % a.depth)] = ok;
-        a.produced = j + 1;
-        wake = a.consumerNeeds >= 0 && a.produced >= a.consumerNeeds;
+      // A batch of rows between one fork and join.
+      const int count = std::min(batch_, nRows - j);
+      ScanRows(y, dy, count, columns);
+      for (int k = 0; k < count; ++k, ++j) {
+        if (!ahead_->Reserve(j + 1)) return;
+        ahead_->Publish(j, MergeRow(k, columns, ahead_->Slot(j)));
       }
-      if (wake) a.ready.notify_one();
-    };
-    try {
-      for (int j = 0; j < a.nRows;) {
-        const double y = a.y0 + j * a.dy;
-        if (workers_.size() == 1) {
-          StoredRow* slot = slotFor(j);
-          if (!slot) return;
-          publish(j, Composite(y, a.columns, *slot));
-          ++j;
-          continue;
-        }
-        // A batch of rows between one fork and join.
-        const int count = std::min(batch_, a.nRows - j);
-        ScanRows(y, a.dy, count, a.columns);
-        for (int k = 0; k < count; ++k, ++j) {
-          StoredRow* slot = slotFor(j);
-          if (!slot) return;
-          publish(j, MergeRow(k, a.columns, *slot));
-        }
-      }
-    } catch (...) {
-      std::lock_guard lock(a.m);
-      a.error = std::current_exception();
-      a.ready.notify_one();
     }
   });
 }
@@ -404,26 +248,7 @@ void PartitionedScan::SetTrace(TraceSink* trace) {
 
 bool PartitionedScan::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
   if (!ahead_) return Composite(y, columns, out);
-  Ahead& a = *ahead_;
-  const int j = static_cast<int>(std::lround((y - a.y0) / a.dy));
-  std::unique_lock lock(a.m);
-  if (a.produced <= j && !a.error) {
-    a.consumerNeeds = j + 1;
-    a.ready.wait(lock, [&] { return a.produced > j || a.error; });
-    a.consumerNeeds = -1;
-  }
-  if (a.error) std::rethrow_exception(a.error);
-  lock.unlock();
-  // The producer leaves slot j alone until row j is consumed.
-  const auto k = static_cast<std::size_t>(j % a.depth);
-  a.slots[k].Replay(out);
-  const bool ok = a.okOf[k] != 0;
-  lock.lock();
-  a.consumed = j + 1;
-  const bool wake = a.producerNeeds >= 0 && a.consumed >= a.producerNeeds;
-  lock.unlock();
-  if (wake) a.space.notify_one();
-  return ok;
+  return ahead_->Replay(static_cast<int>(std::lround((y - aheadY0_) / aheadDy_)), out);
 }
 
 bool PartitionedScan::Composite(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {

@@ -25,6 +25,8 @@
 
 namespace patchscan {
 
+class RowRing;
+
 // How the surfaces are dealt out: each worker's share of `order` (ScanOrder), in scan
 // order. Balanced by an estimate of each surface's work — its screen box's area within
 // the image, plus a set-up's worth — largest first, each to the least loaded worker (ties:
@@ -111,10 +113,10 @@ class PartitionedScan final : public DirectScanSource {
   static constexpr int kThetaBatch = 8;
   bool chords_ = false;  // a θ scan
   int batch_ = 1;
-  struct Ahead;
 
   std::vector<std::unique_ptr<Worker>> workers_;
-  std::unique_ptr<Ahead> ahead_;  // the scan-ahead, when BeginRows started one
+  std::unique_ptr<RowRing> ahead_;  // the scan-ahead, when BeginRows started one
+  double aheadY0_ = 0.0, aheadDy_ = 1.0;  // its rows
   std::vector<std::uint32_t> rank_;  // per surface id: its place in the scan order
   std::shared_ptr<tbb::task_arena> arena_;
   std::vector<std::size_t> next_;  // merge scratch

@@ -16,48 +16,15 @@
 #include "xscan/partitioned_scan.h"
 #include "xscan/polygon_feed.h"
 #include "xscan/render_settings.h"
+#include "xscan/small_scenes.h"
 
 namespace patchscan {
 namespace {
 
 using test::KeepRows;
 
-struct SceneCase {
-  std::string name;
-  Scene scene;
-  Camera camera;
-};
-
-// The scenes of surfaces/, each at a small size through its own camera or framed.
-std::vector<SceneCase> Scenes() {
-  std::vector<SceneCase> out;
-  for (const char* file : {"teapot.bpt", "teacup.bpt", "teaspoon.bpt", "sphere.bpt", "quadrics.rib",
-                           "patchmesh.rib", "teapot_lit.rib", "cages.rib", "cube_tags.obj", "nurbs.rib", "trimmed.rib",
-                           "polygons.rib", "curves.rib", "still_life.rib"}) {
-    auto loaded = LoadScene(std::string(PATCHSCAN_SURFACES_DIR) + "/" + file);
-    EXPECT_TRUE(std::holds_alternative<Scene>(loaded)) << file;
-    if (!std::holds_alternative<Scene>(loaded)) continue;
-    Scene scene = std::get<Scene>(std::move(loaded));
-    // Framed from the scene's bounds (RIB scenes too: their own cameras are not the point).
-    const std::string f = file;
-    const Vec3 up = f == "teacup.bpt" || f == "teaspoon.bpt" ? Vec3(0, 1, 0) : Vec3(0, 0, 1);
-    Camera camera;
-    camera.width = 120;
-    camera.height = 90;
-    camera.up = up;
-    camera = FrameBounds(scene.WorldBounds(), camera, DefaultViewDirection(up));
-    scene.FaceCamera(camera);
-    out.push_back({file, std::move(scene), camera});
-  }
-  // The teapot twice over: every sample sees two fragments at exactly the same depth, and
-  // which one is kept (the surface id written) rests on the order they reach the back end.
-  SceneCase twice = out.front();
-  twice.name = "teapot twice over";
-  const std::size_t n = twice.scene.surfaces.size();
-  for (std::size_t k = 0; k < n; ++k) twice.scene.surfaces.push_back(twice.scene.surfaces[k]);
-  out.push_back(std::move(twice));
-  return out;
-}
+using test::SceneCase;
+using test::SmallScenes;
 
 struct Mode {
   std::string name;
@@ -74,7 +41,7 @@ class SameImageForAnyNumberOfWorkers : public ::testing::TestWithParam<std::size
 TEST_P(SameImageForAnyNumberOfWorkers, InEveryScene) {
   long compared = 0;
   const Mode& m = kModes[GetParam()];
-  for (const SceneCase& c : Scenes()) {
+  for (const SceneCase& c : SmallScenes()) {
     ExactScanOptions o;
     o.thetaSteps = m.thetaSteps;
     o.slabRows = m.slabRows;
@@ -121,7 +88,7 @@ INSTANTIATE_TEST_SUITE_P(Partition, SameImageForAnyNumberOfWorkers, ::testing::R
                          });
 
 TEST(Partition, EverySurfaceOnceInScanOrderAndBalanced) {
-  for (const SceneCase& c : Scenes()) {
+  for (const SceneCase& c : SmallScenes()) {
     const std::vector<ScanEntry> order = ScanOrder(c.scene.surfaces, c.camera);
     for (int workers : {1, 2, 3, 7, 64}) {
       const auto shares = PartitionSurfaces(order, c.camera, workers);
