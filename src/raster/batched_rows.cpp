@@ -83,7 +83,7 @@ std::optional<Counters> RenderBatches(FragmentGeometry& geo, FragmentSource& sou
       // The batch's sample rows: the first pixel row's first is the batch before's last.
       const int first = p0 > 0 && s.aa > 1 ? lat.FirstOfPixel(static_cast<int>(p0)) + 1 : lat.FirstOfPixel(static_cast<int>(p0));
       const int count = lastRow(static_cast<int>(p1) - 1) - first + 1;
-      source.PrepareRows(first, count);
+      arena.execute([&] { source.PrepareRows(first, count); });  // its parallel parts on these threads
       timed.resolve += since(t0);
       rowStats.assign(static_cast<std::size_t>(count), Counters());
       // Each sample row resolved into the pixel row it is the last of (or the first's first).

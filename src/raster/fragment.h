@@ -419,7 +419,8 @@ class FragmentSource {
   // EndsBatch (or the frame's last). Rows are numbered from BeginRows' y0: row j at y0 + j dy.
   virtual bool ScansInBatches() const { return false; }
   virtual bool EndsBatch(int /*row*/) const { return true; }
-  // Rows [first, first + count), in order, after the batch before is finished.
+  // Rows [first, first + count), in order, after the batch before is finished; called in
+  // the back end's arena, so that it may run parts on its threads.
   virtual void PrepareRows(int /*first*/, int /*count*/) {}
   // The k-th row prepared, into `out` (its own for each row); false stops the render.
   virtual bool ScanPreparedRow(int /*k*/, FragmentRow& /*out*/) { return false; }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/check.h"
 #include "patch/screen.h"
 #include "patch/tessellate.h"
 #include "xscan/exact_scan_active.h"
@@ -135,15 +136,26 @@ ExactScan::ExactScan(std::span<const Surface> surfaces, const Camera& camera, Ex
 
 ExactScan::~ExactScan() = default;
 
+std::unique_ptr<ExactScan::Active> ExactScan::SetUp(const ScanEntry& entry, double y, double spacing,
+                                                   Counters& counters) const {
+  auto a = std::make_unique<Active>();
+  a->index = entry.index;
+  a->yMax = entry.yMax;
+  a->scan = std::make_unique<SurfaceScan>(surfaces_[entry.index], camera_, options_.extrapolate, counters);
+  a->scan->StartAt(y, spacing);
+  a->worldIsObject = surfaces_[entry.index].worldFromObject.matrix().isIdentity(0.0);
+  a->yFirst = a->scan->FirstY();
+  return a;
+}
+
 void ExactScan::Activate(const ScanEntry& entry, double y, double spacing) {
   const std::size_t index = entry.index;
-  auto a = std::make_unique<Active>();
-  a->index = index;
-  a->yMax = entry.yMax;
-  a->scan = std::make_unique<SurfaceScan>(surfaces_[index], camera_, options_.extrapolate, counters_);
-  a->scan->StartAt(y, spacing);
-  a->worldIsObject = surfaces_[index].worldFromObject.matrix().isIdentity(0.0);
-  a->yFirst = a->scan->FirstY();
+  std::unique_ptr<Active> a;
+  // Set up ahead (PrepareRows), on this very row.
+  if (nextReady_ < ready_.size() && ready_[nextReady_].index == static_cast<std::size_t>(&entry - pending_.data()))
+    a = std::move(ready_[nextReady_++].a);
+  else
+    a = SetUp(entry, y, spacing, counters_);
   if (options_.thetaSteps > 0 && options_.slabRows == 0 && options_.exactWhereCheaper &&
       ThetaStepsPerPixel(surfaces_[index], a->scan->Map(), a->scan->NormalFromObject(), options_.thetaSteps) >
           kThetaStepsPerPixelMax) {
@@ -152,6 +164,18 @@ void ExactScan::Activate(const ScanEntry& entry, double y, double spacing) {
   }
   active_.push_back(std::move(a));
   counters_.Raise(Counter::MaxActiveSurfaces, static_cast<std::int64_t>(active_.size()));
+}
+
+void ExactScan::GatherCounts() {
+  const auto gather = [&](const std::vector<std::unique_ptr<Active>>& list) {
+    for (const auto& a : list)
+      if (a && a->own) {
+        counters_.Merge(*a->own);
+        *a->own = Counters();
+      }
+  };
+  gather(active_);
+  gather(retired_);
 }
 
 void ExactScan::UpdateActive(double yLo, double yHi, double spacing) {
@@ -228,9 +252,26 @@ void ExactScan::WalkExact(const Active& a, double y, const RowTrackers& t, const
   });
 }
 
-void ExactScan::PrepareRows(double y0, double dy, int first, int count, const raster::SampleColumns& columns) {
-  retired_.clear();  // the rows of the batch before are scanned
+void ExactScan::PrepareRows(double y0, double dy, int first, int count, const raster::SampleColumns& columns,
+                            const ParallelFor& parallel) {
+  retired_.clear();  // the rows of the batch before are scanned (their counts gathered)
   holdRetired_ = true;
+  // As the row loop below asks (UpdateActive): the surfaces each row reaches, set up at once.
+  ready_.clear();
+  nextReady_ = 0;
+  if (parallel) {
+    for (std::size_t next = nextPending_, k = 0; k < static_cast<std::size_t>(count); ++k) {
+      const double y = y0 + (first + static_cast<int>(k)) * dy;
+      for (; next < pending_.size() && pending_[next].yMin <= y; ++next)
+        if (pending_[next].yMax >= y) ready_.push_back({next, y, nullptr});
+    }
+    parallel(static_cast<int>(ready_.size()), [&](int i) {
+      Ready& r = ready_[static_cast<std::size_t>(i)];
+      auto own = std::make_unique<Counters>();
+      r.a = SetUp(pending_[r.index], r.y, columns.dx, *own);
+      r.a->own = std::move(own);
+    });
+  }
   if (prepared_.size() < static_cast<std::size_t>(count)) prepared_.resize(static_cast<std::size_t>(count));
   preparedCount_ = count;
   for (int k = 0; k < count; ++k) {
@@ -257,6 +298,8 @@ void ExactScan::PrepareRows(double y0, double dy, int first, int count, const ra
     }
   }
   holdRetired_ = false;
+  PATCHSCAN_DCHECK(nextReady_ == ready_.size(), "every surface set up ahead is reached");
+  GatherCounts();
 }
 
 bool ExactScan::ScanPrepared(int k, const raster::SampleColumns& columns, raster::FragmentRow& out,
@@ -279,6 +322,7 @@ void ExactScan::FinishPrepared() {
     for (const Vec2& uv : a->adopt) a->scan->Adopt(uv);
     a->adopt.clear();
   }
+  GatherCounts();
 }
 
 bool ExactScan::AdvanceSurface(Active& a, const ChainSet& from, double yFrom, double y, const RowTrackers& t,

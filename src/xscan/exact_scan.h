@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <utility>
@@ -112,8 +113,13 @@ class ExactScan final : public raster::FragmentSource {
   // Sort-first, exact X scan only (thetaSteps 0): the Y scan of rows y0 + j dy for j in
   // [first, first + count), every surface's trackers on each kept for its X scan, which
   // ScanPrepared then makes. `first` + count - 1 should be a row that AdoptsOn, or the
-  // frame's last: the rows before it do not.
-  void PrepareRows(double y0, double dy, int first, int count, const raster::SampleColumns& columns);
+  // frame's last: the rows before it do not. The surfaces the rows reach are set up first,
+  // through `parallel` if given (its calls f(i) for i in [0, n) may run at once; a surface
+  // set up that way counts into its own counters, added to the scan's in order), each as
+  // the Y scan would set it up on the row that reaches it.
+  using ParallelFor = std::function<void(int n, const std::function<void(int)>& f)>;
+  void PrepareRows(double y0, double dy, int first, int count, const raster::SampleColumns& columns,
+                   const ParallelFor& parallel = {});
   // The exact X scan of the k-th row prepared (k < count) into `out`, as ScanRow would make
   // it. Rows may be scanned at once on several threads, each with scratch of its own.
   bool ScanPrepared(int k, const raster::SampleColumns& columns, raster::FragmentRow& out, RowScratch& scratch);
@@ -127,6 +133,10 @@ class ExactScan final : public raster::FragmentSource {
   // (top at or above yHi, bottom at or below yLo), their trackers first advanced to yLo.
   void UpdateActive(double yLo, double yHi, double spacing);
   void Activate(const ScanEntry& entry, double y, double spacing);
+  // A surface set up on row y, counting into `counters` (which must outlive it).
+  std::unique_ptr<Active> SetUp(const ScanEntry& entry, double y, double spacing, Counters& counters) const;
+  // Adds the counts of the surfaces set up apart (Active::own) to the scan's.
+  void GatherCounts();
   // Advances a surface's trackers to y (and traces them).
   void AdvanceTo(Active& a, double y);
   // The X scan of a surface on line y from its trackers `t`: exact fragments, or (θ) each
@@ -248,6 +258,14 @@ class ExactScan final : public raster::FragmentSource {
   int preparedCount_ = 0;
   std::vector<std::unique_ptr<Active>> retired_;
   bool holdRetired_ = false;
+  // Sort-first: surfaces set up ahead of the rows that reach them, by pending_ index.
+  struct Ready {
+    std::size_t index;  // in pending_
+    double y;           // the row that reaches it
+    std::unique_ptr<Active> a;
+  };
+  std::vector<Ready> ready_;
+  std::size_t nextReady_ = 0;
   WalkEvents walkEvents_;
   std::vector<ThetaVertex> chain_;
   ThetaChainSink* chainSink_ = nullptr;

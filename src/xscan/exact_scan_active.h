@@ -33,6 +33,9 @@ struct ExactScan::Active {
   // set-up line, nothing of it walked).
   bool idle = false;
   std::unique_ptr<SurfaceScan> scan;
+  // Sort-first: the counts of a surface set up apart from the scan's thread, and of its Y
+  // scan after (ExactScan::GatherCounts adds them to the scan's); null: the scan's own.
+  std::unique_ptr<Counters> own;
   std::size_t nextStationary = 0;  // for the trace: the next stationary point to pass
   // θ slabs: the chains on the interval's top line and on its bottom line (whether a walk
   // there failed or repaired a tracker miss), the trackers on the top line and on each of

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 
 #include "raster/work_arena.h"
 #include "xscan/row_ring.h"
@@ -52,7 +53,11 @@ void RowScan::BeginRows(const raster::SampleColumns& columns, double y0, double 
 
 void RowScan::PrepareRows(int first, int count) {
   const double t0 = Now();
-  scan_.PrepareRows(y0_, dy_, first, count, columns_);
+  // The surfaces the rows reach set up on every thread of the arena this runs in (a
+  // surface's set-up, its maxima pre-pass, costs as much as hundreds of rows of its Y scan).
+  scan_.PrepareRows(y0_, dy_, first, count, columns_, [](int n, const std::function<void(int)>& f) {
+    tbb::parallel_for(0, n, [&](int i) { f(i); });
+  });
   serialSeconds_ += Now() - t0;
 }
 
@@ -86,9 +91,9 @@ void RowScan::StartRing(int nRows, const raster::KeptDepths& kept) {
       int count = 1;
       while (j + count < nRows && !EndsBatch(j + count - 1)) ++count;
       if (!ring_->Reserve(j + count)) return;
-      PrepareRows(j, count);
       std::vector<char> ok(static_cast<std::size_t>(count), 1);
       arena->execute([&] {
+        PrepareRows(j, count);
         tbb::parallel_for(0, count, [&](int k) {
           ok[static_cast<std::size_t>(k)] = ScanPreparedRow(k, ring_->Slot(j + k));
         });
