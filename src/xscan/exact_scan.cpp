@@ -151,7 +151,7 @@ std::unique_ptr<ExactScan::Active> ExactScan::SetUp(const ScanEntry& entry, doub
 void ExactScan::Activate(const ScanEntry& entry, double y, double spacing) {
   const std::size_t index = entry.index;
   std::unique_ptr<Active> a;
-  // Set up ahead (PrepareRows), on this very row.
+  // Set up ahead (PrepareBatch), on this very row.
   if (nextReady_ < ready_.size() && ready_[nextReady_].index == static_cast<std::size_t>(&entry - pending_.data()))
     a = std::move(ready_[nextReady_++].a);
   else
@@ -252,7 +252,7 @@ void ExactScan::WalkExact(const Active& a, double y, const RowTrackers& t, const
   });
 }
 
-void ExactScan::PrepareRows(double y0, double dy, int first, int count, const raster::SampleColumns& columns,
+void ExactScan::PrepareBatch(double y0, double dy, int first, int count, const raster::SampleColumns& columns,
                             const ParallelFor& parallel) {
   retired_.clear();  // the rows of the batch before are scanned (their counts gathered)
   holdRetired_ = true;
@@ -317,7 +317,7 @@ bool ExactScan::ScanPrepared(int k, const raster::SampleColumns& columns, raster
   return true;
 }
 
-void ExactScan::FinishPrepared() {
+void ExactScan::FinishBatch() {
   for (const auto& a : active_) {
     for (const Vec2& uv : a->adopt) a->scan->Adopt(uv);
     a->adopt.clear();

@@ -118,14 +118,14 @@ class ExactScan final : public raster::FragmentSource {
   // set up that way counts into its own counters, added to the scan's in order), each as
   // the Y scan would set it up on the row that reaches it.
   using ParallelFor = std::function<void(int n, const std::function<void(int)>& f)>;
-  void PrepareRows(double y0, double dy, int first, int count, const raster::SampleColumns& columns,
+  void PrepareBatch(double y0, double dy, int first, int count, const raster::SampleColumns& columns,
                    const ParallelFor& parallel = {});
   // The exact X scan of the k-th row prepared (k < count) into `out`, as ScanRow would make
   // it. Rows may be scanned at once on several threads, each with scratch of its own.
   bool ScanPrepared(int k, const raster::SampleColumns& columns, raster::FragmentRow& out, RowScratch& scratch);
   // After every prepared row is scanned: the silhouettes the last row's X scans found
   // untracked are taken up, if that row AdoptsOn.
-  void FinishPrepared();
+  void FinishBatch();
 
  private:
   struct Active;

@@ -55,7 +55,7 @@ void RowScan::PrepareRows(int first, int count) {
   const double t0 = Now();
   // The surfaces the rows reach set up on every thread of the arena this runs in (a
   // surface's set-up, its maxima pre-pass, costs as much as hundreds of rows of its Y scan).
-  scan_.PrepareRows(y0_, dy_, first, count, columns_, [](int n, const std::function<void(int)>& f) {
+  scan_.PrepareBatch(y0_, dy_, first, count, columns_, [](int n, const std::function<void(int)>& f) {
     tbb::parallel_for(0, n, [&](int i) { f(i); });
   });
   serialSeconds_ += Now() - t0;
@@ -72,7 +72,7 @@ bool RowScan::ScanPreparedRow(int k, raster::FragmentRow& out) {
 
 void RowScan::FinishRows() {
   const double t0 = Now();
-  scan_.FinishPrepared();
+  scan_.FinishBatch();
   serialSeconds_ += Now() - t0;
 }
 

@@ -91,13 +91,15 @@ TEST(Quadrics, TorusAndSaddlesClosedForms) {
 }
 
 TEST(Surfaces, DerivativesMatchDifferences) {
-  for (const auto& [name, surface] : test::AllSurfaceKinds())
+  for (const auto& kind : test::AllSurfaceKinds()) {
+    const auto& surface = kind.second;  // a lambda may not capture a structured binding (clang 14)
     for (auto [u, v] : test::SampleParams(40))
       test::ExpectDerivativesMatchDifferences(
           [&](double a, double b, DerivOrder o, SurfaceDerivs* d) {
             EvaluateObject(surface, a, b, o, d);
           },
-          u, v, name);
+          u, v, kind.first);
+  }
 }
 
 TEST(Surfaces, HullContainsSurfaceAndIsTight) {

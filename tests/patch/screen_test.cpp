@@ -33,7 +33,10 @@ Affine3 TestPlacement() {
 
 TEST(Screen, DerivativesMatchDifferences) {
   const Camera cam = TestCamera();
-  for (auto [name, surface] : test::AllSurfaceKinds()) {
+  for (auto kind : test::AllSurfaceKinds()) {
+    // Named, not bound: a lambda may not capture a structured binding (clang 14).
+    const std::string& name = kind.first;
+    Surface& surface = kind.second;
     surface.worldFromObject = TestPlacement();
     const ScreenMap map(cam, surface.worldFromObject);
     for (auto [u, v] : test::SampleParams(30)) {
@@ -154,7 +157,10 @@ TEST(Screen, SphereSilhouetteIsTheAnalyticConic) {
 
 TEST(Screen, BoundsContainTheSurfaceOrAreRefused) {
   const Camera cam = TestCamera();
-  for (auto [name, surface] : test::AllSurfaceKinds()) {
+  for (auto kind : test::AllSurfaceKinds()) {
+    // Named, not bound: a lambda may not capture a structured binding (clang 14).
+    const std::string& name = kind.first;
+    Surface& surface = kind.second;
     surface.worldFromObject = TestPlacement();
     const ScreenMap map(cam, surface.worldFromObject);
     const auto box = ScreenBounds(surface, map);

@@ -473,7 +473,9 @@ TEST(Rib, QuadricParametersFollowTheSpecification) {
     std::function<Vec3(double, double)> formula;
   };
   std::vector<Case> cases;
-  for (const auto& [zmin, zmax, tmax] : std::vector<std::array<double, 3>>{{-2, 2, 360}, {-1, 1.5, 270}, {0.5, 1.9, 90}, {-2, 0, -120}}) {
+  for (const std::array<double, 3>& limits : std::vector<std::array<double, 3>>{{-2, 2, 360}, {-1, 1.5, 270}, {0.5, 1.9, 90}, {-2, 0, -120}}) {
+    // Named, not bound: a lambda may not capture a structured binding (clang 14).
+    const double zmin = limits[0], zmax = limits[1], tmax = limits[2];
     const double r = 2;
     const double pmin = std::asin(std::clamp(zmin / r, -1.0, 1.0)), pmax = std::asin(std::clamp(zmax / r, -1.0, 1.0));
     cases.push_back({"Sphere 2 " + std::to_string(zmin) + " " + std::to_string(zmax) + " " + std::to_string(tmax),

@@ -326,7 +326,7 @@ TEST(Extremes, EveryCaseInEveryModeIsFiniteAndAgrees) {
 // per-sample Newton would make the largest size a minute's test). Release builds only: the
 // sanitizers make these several minutes, and the smaller cases above run under them.
 TEST(Extremes, LargestImages) {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(__SANITIZE_ADDRESS__) || defined(PATCHSCAN_SANITIZED)
   GTEST_SKIP() << "16384x16384 renders are left to the release build";
 #endif
   for (int side : {4096, 16384}) {
