@@ -86,12 +86,14 @@ void RowScan::StartRing(int nRows, const raster::KeptDepths& kept) {
   }
   ring_ = std::make_unique<RowRing>(2 * longest, kept, columns_.n);
   std::shared_ptr<tbb::task_arena> arena = raster::WorkArena(std::clamp(threads_, 1, tbb::info::default_concurrency()));
-  ring_->Start([this, nRows, arena] {
+  ring_->Start([this, nRows, arena, longest] {
+    std::vector<char> ok;  // each row's scan succeeded
+    ok.reserve(static_cast<std::size_t>(longest));
     for (int j = 0; j < nRows;) {
       int count = 1;
       while (j + count < nRows && !EndsBatch(j + count - 1)) ++count;
       if (!ring_->Reserve(j + count)) return;
-      std::vector<char> ok(static_cast<std::size_t>(count), 1);
+      ok.assign(static_cast<std::size_t>(count), 1);
       arena->execute([&] {
         PrepareRows(j, count);
         tbb::parallel_for(0, count, [&](int k) {
