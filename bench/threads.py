@@ -69,6 +69,7 @@ def main():
     ap.add_argument("--out", default="docs")
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--threads", type=int, nargs="+", default=sorted({1, os.cpu_count() or 1}))
+    ap.add_argument("--only", default="", help="only the cases whose name holds this text")
     ap.add_argument("--povray-steps", type=int, default=4,
                     help="POV-Ray's bicubic_patch subdivision (2^steps pieces a side; 0: no POV-Ray)")
     args = ap.parse_args()
@@ -85,6 +86,8 @@ def main():
         if code != 0:
             sys.exit(f"threads: still_life.rib's frames failed:\n{err}")
         for name, scene, extra in CASES:
+            if args.only not in name:
+                continue
             path = cage if scene == "CAGE" else os.path.join(here, scene)
 
             def command(n, k=0):

@@ -1,10 +1,11 @@
-// The back end's row loop for a source that scans in batches (FragmentSource::ScansInBatches,
-// xscan/row_scan.h): per batch of pixel rows, the source prepares its sample rows (its
-// serial part), every thread resolves some of them (the source's X scans straight into the
-// rows' samples, the rows' surfaces hiding each other's samples as in one scan), the batch
-// is finished, and its pixel rows are shaded as tasks while the next batch is prepared and
-// resolved; the calling thread hands rows to the sink in order. Memory: two batches of pixel
-// rows and the row above them.
+// The back end's row loop in batches, on threads: per batch of pixel rows the geometry
+// prepares its sample rows (its serial part: a front end's Y scan, FragmentSource::
+// ScansInBatches, xscan/row_scan.h; or a mesh's triangles reaching the batch set up), every
+// thread resolves some of them (the rows' surfaces hiding each other's samples as in one
+// scan), and a pixel row whose sample rows are all resolved is shaded by the thread that
+// completed it, as a task that may run on while the next batch is prepared and resolved;
+// the calling thread hands rows to the sink in order. Memory: one batch of pixel rows and
+// the row above it.
 #pragma once
 
 #include <optional>
@@ -13,8 +14,9 @@
 
 namespace patchscan::raster::detail {
 
-std::optional<Counters> RenderBatches(FragmentGeometry& geo, FragmentSource& source, const RenderSettings& s,
-                                      const Lattice& lat, int layers, Counters& stats, RowSink& sink,
-                                      BackEndTimes* times);
+// Geometry: FragmentGeometry or TriangleGeometry (raster/row_geometry.h).
+template <class Geometry>
+std::optional<Counters> RenderBatches(Geometry& geo, const RenderSettings& s, const Lattice& lat, int layers,
+                                      Counters& stats, RowSink& sink, BackEndTimes* times);
 
 }  // namespace patchscan::raster::detail

@@ -422,6 +422,10 @@ class FragmentSource {
   // Rows [first, first + count), in order, after the batch before is finished; called in
   // the back end's arena, so that it may run parts on its threads.
   virtual void PrepareRows(int /*first*/, int /*count*/) {}
+  // The triangles of the k-th row prepared, into `out`: called for each row in order, on
+  // the calling thread, before any row's ScanPreparedRow, which then hands over only the
+  // row's fragments and chords.
+  virtual void PreparedTriangles(int /*k*/, FragmentRow& /*out*/) {}
   // The k-th row prepared, into `out` (its own for each row); false stops the render.
   virtual bool ScanPreparedRow(int /*k*/, FragmentRow& /*out*/) { return false; }
   // After every row prepared is scanned.

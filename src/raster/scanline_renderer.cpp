@@ -155,6 +155,8 @@ std::optional<Counters> RenderMesh(const TriangleMesh& mesh, const RenderSetting
   // With transparency each sample keeps its `layers` nearest fragments, nearest first.
   const int layers = s.AnyTransparency() ? kMaxLayers : 1;
   TriangleGeometry geo(mesh, s, lat, layers, stats);
+  // On threads, every row ours: rows resolved on every thread, in batches.
+  if (s.threads > 1 && !s.ownsRow) return detail::RenderBatches(geo, s, lat, layers, stats, sink, times);
   return RenderRows(geo, s, lat, layers, stats, sink, times);
 }
 
@@ -168,7 +170,7 @@ std::optional<Counters> RenderFragments(FragmentSource& source, const RenderSett
                    KeptDepths{s.hither, geo.DepthDecides() ? layers : 0});
   // A source scanning in batches, on threads, every row ours: rows resolved on every thread.
   if (source.ScansInBatches() && s.threads > 1 && !s.ownsRow)
-    return detail::RenderBatches(geo, source, s, lat, layers, stats, sink, times);
+    return detail::RenderBatches(geo, s, lat, layers, stats, sink, times);
   return RenderRows(geo, s, lat, layers, stats, sink, times);
 }
 

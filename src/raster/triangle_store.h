@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <vector>
@@ -127,9 +128,11 @@ class TriangleStore {
   bool Failed() const { return failed_; }
   bool Empty() const { return live_.empty(); }
 
-  // Sets up a triangle whose last sample row is `lastRow`; culled or degenerate ones are
-  // dropped.
-  void Add(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c, std::uint32_t surfaceId, int lastRow) {
+  // Sets up a triangle whose sample rows are [firstRow, lastRow]; culled or degenerate ones
+  // are dropped. A triangle may be added before its first row (a batch's rows are scanned at
+  // once: RenderBatches); the rows above it skip it.
+  void Add(const RasterVertex& a, const RasterVertex& b, const RasterVertex& c, std::uint32_t surfaceId, int lastRow,
+           int firstRow = std::numeric_limits<int>::min()) {
     const auto setup = SetupTriangle(a.h, b.h, c.h, s_.cullBackFaces, s_.width, s_.height);
     if (!setup) return;
     if (const Material& m = s_.MaterialOf(surfaceId); !m.twoSided) {
@@ -138,7 +141,7 @@ class TriangleStore {
         return;
     }
     ++stats_[Counter::TrianglesSetUp];
-    Active at{*setup, {a, b, c}, surfaceId, lastRow, {}, Vec3::Zero()};
+    Active at{*setup, {a, b, c}, surfaceId, firstRow, lastRow, {}, Vec3::Zero()};
     if (s_.orthographic) {
       // With W = 1 the barycentrics are e_i . (x, y, 1) / |det|.
       const double absInvDet = std::abs(setup->invDet);
@@ -183,11 +186,17 @@ class TriangleStore {
     });
   }
 
-  // Resolves sample row j against the live triangles: the nearest per sample, each
-  // sample's handle `handleBase` + the triangle's slot.
-  void ScanRow(int j, double y, Sample* row, std::int32_t handleBase) {
-    stats_.Raise(Counter::MaxActiveTriangles, static_cast<std::int64_t>(live_.size()));
+  // Resolves sample row j, of the pixel row whose first sample row is j0, against the live
+  // triangles: the nearest per sample, each sample's handle `handleBase` + the triangle's
+  // slot; counts into `stats`. Rows of a batch may be scanned on any threads at once: this
+  // reads the store and writes only `row` and `stats`.
+  void ScanRow(int j, int j0, double y, Sample* row, std::int32_t handleBase, Counters& stats) const {
+    // Active on row j: the triangles a scan adding them at their first row would hold, that
+    // is reached row j and not retired before j0's pixel row (the same count for any batches).
+    std::int64_t activeNow = 0;
     for (const int k : live_) {
+      if (active_[k].firstRow > j) continue;  // added ahead of its first row
+      if (active_[k].lastRow >= j0) ++activeNow;
       if (active_[k].lastRow < j) continue;  // done, retired at the next pixel row
       const TriangleSetup& t = active_[k].setup;
       // The span: each edge, and the hither edge sum(e) <= |det| / hither, is a half-line.
@@ -215,7 +224,7 @@ class TriangleStore {
       const int i0 = std::max(0, lat_.Ceil(lo, lat_.nx) - 1), i1 = std::min(lat_.nx - 1, lat_.Floor(hi, lat_.nx) + 1);
       for (int i = i0; i <= i1; ++i) {
         double e[3];
-        ++stats_[Counter::SamplesTested];
+        ++stats[Counter::SamplesTested];
         if (!Inside(t, lat_.At(i), y, e)) continue;
         const double invW = s_.orthographic ? 1.0 / (dp.x() * lat_.At(i) + dp.y() * y + dp.z())
                                             : (e[0] + e[1] + e[2]) * std::abs(t.invDet);
@@ -224,6 +233,7 @@ class TriangleStore {
         InsertNearest(&row[static_cast<size_t>(i) * layers_], layers_, invW, handleBase + k);
       }
     }
+    stats.Raise(Counter::MaxActiveTriangles, activeNow);
   }
 
   std::uint32_t SurfaceOf(int slot) const { return active_[slot].surfaceId; }
@@ -255,7 +265,7 @@ class TriangleStore {
     TriangleSetup setup;
     RasterVertex v[3];
     std::uint32_t surfaceId;
-    int lastRow;
+    int firstRow, lastRow;
     Rgb vertexColour[3];  // Gouraud only
     // Orthographic: the depth as an affine function of (x, y, 1), from the vertices' depths.
     Vec3 depthPlane = Vec3::Zero();

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <numeric>
+#include <utility>
 
 #include "raster/scanline_renderer.h"
 #include "raster/triangle_store.h"
@@ -196,16 +197,33 @@ void PartitionedScan::KeepDepths(const raster::KeptDepths& kept, int columns) {
 
 void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
                                 const raster::KeptDepths& kept) {
+  perPixel_ = static_cast<int>(std::max(1.0, std::round(1.0 / dy)));
   if (arena_ && !tracing_ && !ahead_) {
     batch_ = chords_ ? kThetaBatch : RowsAhead(dy) / 2;
-    for (auto& w : workers_) w->Batch(batch_);
+    // A batch of the back end's ends on the last pixel row whose last sample row is in a
+    // block of kReplayBatch rows: up to perPixel - 1 rows more than a block.
+    const int most = kReplayBatch + perPixel_ - 1;
+    if (ScansInBatches()) {
+      batchNext_.assign(static_cast<std::size_t>(most), {});
+      for (auto& next : batchNext_) next.reserve(workers_.size());
+      batchSeconds_.assign(static_cast<std::size_t>(most), 0.0);
+    }
+    for (auto& w : workers_) w->Batch(ScansInBatches() ? most : batch_);
   }
   KeepDepths(kept, columns.n);
   if (!arena_ || tracing_ || ahead_) return;
   aheadY0_ = y0;
   aheadDy_ = dy;
-  ahead_ = std::make_unique<RowRing>(std::max(RowsAhead(dy), 2 * batch_), kept, columns.n);
-  ahead_->Start([this, columns, y0, dy, nRows] {
+  aheadRows_ = nRows;
+  columns_ = columns;
+  kept_ = kept;
+  aheadAsked_ = true;
+}
+
+void PartitionedScan::StartAhead() {
+  aheadAsked_ = false;
+  ahead_ = std::make_unique<RowRing>(std::max(RowsAhead(aheadDy_), 2 * batch_), kept_, columns_.n);
+  ahead_->Start([this, columns = columns_, y0 = aheadY0_, dy = aheadDy_, nRows = aheadRows_] {
     for (int j = 0; j < nRows;) {
       const double y = y0 + j * dy;
       if (workers_.size() == 1) {
@@ -216,13 +234,37 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
       }
       // A batch of rows between one fork and join.
       const int count = std::min(batch_, nRows - j);
-      ScanRows(y, dy, count, columns);
+      ScanRows(y0, dy, j, count, columns);
       for (int k = 0; k < count; ++k, ++j) {
         if (!ahead_->Reserve(j + 1)) return;
-        ahead_->Publish(j, MergeRow(k, columns, ahead_->Slot(j)));
+        ahead_->Publish(j, TimedMerge(k, columns, ahead_->Slot(j)));
       }
     }
   });
+}
+
+void PartitionedScan::PrepareRows(int first, int count) {
+  batched_ = true;  // called in the back end's arena: the workers scan there
+  ScanRows(aheadY0_, aheadDy_, first, count, columns_);
+}
+
+void PartitionedScan::PreparedTriangles(int k, raster::FragmentRow& out) { MergeTriangles(k, out, &next_); }
+
+void PartitionedScan::MergeTriangles(int k, raster::FragmentRow& out, std::vector<std::size_t>* next) const {
+  MergeByRank(workers_.size(),
+              [&](std::size_t w) -> const auto& { return workers_[w]->rows[static_cast<std::size_t>(k)].triangles; }, next,
+              [&](const RowBuffer::BufferedTriangle& e) { out.AddTriangle(e.a, e.b, e.c, e.surfaceId); });
+}
+
+bool PartitionedScan::ScanPreparedRow(int k, raster::FragmentRow& out) {
+  const double t0 = Now();
+  const bool ok = MergeRow(k, columns_, out, &batchNext_[static_cast<std::size_t>(k)], /*triangles=*/false);
+  batchSeconds_[static_cast<std::size_t>(k)] += Now() - t0;
+  return ok;
+}
+
+void PartitionedScan::FinishRows() {
+  for (double& t : batchSeconds_) compositeSeconds_ += std::exchange(t, 0.0);
 }
 
 template <class F>
@@ -236,6 +278,10 @@ void PartitionedScan::ForEachWorker(F&& f) {
     for (auto& w : workers_) timed(*w);
     return;
   }
+  if (batched_) {  // in the back end's arena already
+    tbb::parallel_for(std::size_t{0}, workers_.size(), [&](std::size_t k) { timed(*workers_[k]); });
+    return;
+  }
   arena_->execute([&] {
     tbb::parallel_for(std::size_t{0}, workers_.size(), [&](std::size_t k) { timed(*workers_[k]); });
   });
@@ -247,6 +293,7 @@ void PartitionedScan::SetTrace(TraceSink* trace) {
 }
 
 bool PartitionedScan::ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  if (aheadAsked_) StartAhead();
   if (!ahead_) return Composite(y, columns, out);
   return ahead_->Replay(static_cast<int>(std::lround((y - aheadY0_) / aheadDy_)), out);
 }
@@ -261,39 +308,44 @@ bool PartitionedScan::Composite(double y, const raster::SampleColumns& columns, 
   return ScanRowNow(y, columns, out);
 }
 
-void PartitionedScan::ScanRows(double y, double dy, int count, const raster::SampleColumns& columns) {
+void PartitionedScan::ScanRows(double y0, double dy, int first, int count, const raster::SampleColumns& columns) {
   // Step 1: every worker's rows, each into its own buffers (a θ slab interval's surfaces
   // each decide alone whether they are slabs: no worker waits for another's within it).
   ForEachWorker([&](Worker& w) {
     for (int k = 0; k < count; ++k) {
       RowBuffer& row = w.rows[static_cast<std::size_t>(k)];
       row.Clear();
-      row.scanned = w.scan.ScanRow(y + k * dy, columns, row);
+      row.scanned = w.scan.ScanRow(y0 + (first + k) * dy, columns, row);
     }
   });
 }
 
-bool PartitionedScan::MergeRow(int k, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+bool PartitionedScan::MergeRow(int k, const raster::SampleColumns& columns, raster::FragmentRow& out,
+                               std::vector<std::size_t>* next, bool triangles) const {
   // Step 2: composite, in scan order.
-  const double t0 = Now();
   const std::size_t n = workers_.size();
   const auto row = [&](std::size_t w) -> const RowBuffer& { return workers_[w]->rows[static_cast<std::size_t>(k)]; };
   // A scan hands over fragments (exact mode) or chords (θ mode), not both.
-  MergeByRank(n, [&](std::size_t w) -> const auto& { return row(w).fragments; }, &next_,
+  MergeByRank(n, [&](std::size_t w) -> const auto& { return row(w).fragments; }, next,
               [&](const RowBuffer::BufferedFragment& e) { out.Add(e.column, e.f); });
-  MergeByRank(n, [&](std::size_t w) -> const auto& { return row(w).chords; }, &next_,
+  MergeByRank(n, [&](std::size_t w) -> const auto& { return row(w).chords; }, next,
               [&](const RowBuffer::BufferedChord& e) { out.AddChord(e.chord, columns); });
-  MergeByRank(n, [&](std::size_t w) -> const auto& { return row(w).triangles; }, &next_,
-              [&](const RowBuffer::BufferedTriangle& e) { out.AddTriangle(e.a, e.b, e.c, e.surfaceId); });
-  compositeSeconds_ += Now() - t0;
+  if (triangles) MergeTriangles(k, out, next);
   bool ok = true;
   for (const auto& w : workers_) ok = ok && w->rows[static_cast<std::size_t>(k)].scanned;
   return ok;
 }
 
+bool PartitionedScan::TimedMerge(int k, const raster::SampleColumns& columns, raster::FragmentRow& out) {
+  const double t0 = Now();
+  const bool ok = MergeRow(k, columns, out, &next_);
+  compositeSeconds_ += Now() - t0;
+  return ok;
+}
+
 bool PartitionedScan::ScanRowNow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) {
-  ScanRows(y, 0.0, 1, columns);
-  return MergeRow(0, columns, out);
+  ScanRows(y, 0.0, 0, 1, columns);
+  return TimedMerge(0, columns, out);
 }
 
 PartitionedScan::Timing PartitionedScan::Times() const {

@@ -9,7 +9,7 @@
 // surface's own in its own order), so even ties of depth resolve alike. No decision joins
 // surfaces (each decides alone whether a θ slab interval is a slab for it), so the workers
 // meet only to hand their rows over. Memory: each worker holds a batch of rows (a pixel
-// row's sample rows, or 8 rows of θ chords).
+// row's sample rows, or 8 rows of θ chords; the back end's batches of θ, about 16).
 #pragma once
 
 #include <functional>
@@ -62,12 +62,25 @@ class PartitionedScan final : public DirectScanSource {
                   int threads, std::vector<ScanEntry> share);
   ~PartitionedScan() override;
 
-  // With more than one thread, rows are scanned and composited ahead of the back end (up
-  // to two pixel rows, or two θ batches) on a thread of their own while the back end
-  // shades the rows before.
+  // With more than one thread, unless the back end takes the rows in batches, rows are
+  // scanned and composited ahead of the back end (up to two pixel rows, or two θ batches)
+  // on a thread of their own, from the first ScanRow on, while the back end shades the
+  // rows before.
   void BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
                  const raster::KeptDepths& kept) override;
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
+  // θ on threads: the back end takes the rows in batches (raster/batched_rows.h). A batch's
+  // rows are scanned by every worker at once (PrepareRows, on the back end's threads); the
+  // triangles of θ slabs are merged row by row on the calling thread for the back end's
+  // store (PreparedTriangles); then every thread merges and resolves rows' fragments and
+  // chords, a row a task: no thread of the scan's own. A back end that takes the rows one by
+  // one (ScanRow) gets the scan-ahead instead.
+  bool ScansInBatches() const override { return arena_ && chords_ && !tracing_; }
+  bool EndsBatch(int row) const override { return row / kReplayBatch != (row + perPixel_) / kReplayBatch; }
+  void PrepareRows(int first, int count) override;
+  void PreparedTriangles(int k, raster::FragmentRow& out) override;
+  bool ScanPreparedRow(int k, raster::FragmentRow& out) override;
+  void FinishRows() override;
 
   // A row for a scan shared between processes: scanned by every worker (a θ slab interval
   // beginning at it first), and handed to `out` in scan order.
@@ -100,10 +113,20 @@ class PartitionedScan final : public DirectScanSource {
 
   // One row of all workers, composited (into `out`, or into a slot of the scan-ahead).
   bool Composite(double y, const raster::SampleColumns& columns, raster::FragmentRow& out);
-  // Every worker scans `count` rows from y into its buffers.
-  void ScanRows(double y, double dy, int count, const raster::SampleColumns& columns);
-  // The workers' k-th buffered rows, merged in scan order into `out`: whether all scanned.
-  bool MergeRow(int k, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // Every worker scans rows first, ..., first + count - 1 into its buffers, row j at
+  // y0 + j dy (as the back end's lattice places it: y + k dy would round differently).
+  void ScanRows(double y0, double dy, int first, int count, const raster::SampleColumns& columns);
+  // The workers' k-th buffered rows, merged in scan order into `out` (`next`: scratch),
+  // their triangles too if `triangles`: whether all scanned. Rows of a batch may be merged
+  // on any threads at once.
+  bool MergeRow(int k, const raster::SampleColumns& columns, raster::FragmentRow& out,
+                std::vector<std::size_t>* next, bool triangles = true) const;
+  // The workers' k-th rows' triangles, merged in scan order into `out`.
+  void MergeTriangles(int k, raster::FragmentRow& out, std::vector<std::size_t>* next) const;
+  // MergeRow on one thread at a time, its seconds counted.
+  bool TimedMerge(int k, const raster::SampleColumns& columns, raster::FragmentRow& out);
+  // Starts the scan-ahead on BeginRows' rows.
+  void StartAhead();
   // With a scan-ahead, the workers scan batch_ rows between one fork and join: a fork and
   // join a sample row cost more than a θ
   // scan's row at two threads (4096x3072 θ teapot at two threads: 958 ms of CPU with,
@@ -111,8 +134,21 @@ class PartitionedScan final : public DirectScanSource {
   // each: kThetaBatch of them; an exact scan's hold a fragment a covered sample: a pixel
   // row's sample rows (1024x768 exact aa 3 teapot at two threads 0.285 -> 0.265 s).
   static constexpr int kThetaBatch = 8;
+  // Sample rows of the back end's batches (ScansInBatches), scanned and then resolved
+  // between two forks and joins of the threads, against about 40 microseconds to scan a
+  // sample row (the 2048x1536 θ teapot at aa 3: 3073 rows in 0.12 s on one thread,
+  // --stats); each row's buffers hold a few dozen chords.
+  static constexpr int kReplayBatch = kThetaBatch;
   bool chords_ = false;  // a θ scan
   int batch_ = 1;
+  int perPixel_ = 1;      // new sample rows a pixel row (BeginRows' dy: 1 / perPixel)
+  bool batched_ = false;  // the back end has taken a batch: the workers scan on its threads
+  bool aheadAsked_ = false;  // BeginRows wants a scan-ahead, started by the first ScanRow
+  int aheadRows_ = 0;
+  raster::SampleColumns columns_;  // BeginRows' rows, and what the back end keeps of them
+  raster::KeptDepths kept_;
+  std::vector<std::vector<std::size_t>> batchNext_;  // merge scratch, a row of a batch each
+  std::vector<double> batchSeconds_;                 // compositing seconds, a row of a batch each
 
   std::vector<std::unique_ptr<Worker>> workers_;
   std::unique_ptr<RowRing> ahead_;  // the scan-ahead, when BeginRows started one

@@ -80,7 +80,7 @@ TEST_P(SameImageAndWorkForAnyNumberOfThreads, InEveryScene) {
   EXPECT_GE(compared, 15 * 3);  // every scene, each thread count at least one way
 }
 
-INSTANTIATE_TEST_SUITE_P(RowScan, SameImageAndWorkForAnyNumberOfThreads, ::testing::Values(1, 3),
+INSTANTIATE_TEST_SUITE_P(RowScan, SameImageAndWorkForAnyNumberOfThreads, ::testing::Values(1, 3, 4),
                          [](const ::testing::TestParamInfo<int>& info) { return "aa" + std::to_string(info.param); });
 
 // A batch ends on the rows that take up what the X scans found, and only there: the same
