@@ -40,8 +40,19 @@ PolygonQueue::PolygonQueue(raster::TriangleMesh triangles) : mesh_(std::move(tri
 
 void PolygonFeed::BeginRows(const raster::SampleColumns& columns, double y0, double dy, int nRows,
                             const raster::KeptDepths& kept) {
+  y0_ = y0;
   dy_ = dy;
   inner_.BeginRows(columns, y0, dy, nRows, kept);
+}
+
+void PolygonFeed::PrepareRows(int first, int count) {
+  first_ = first;
+  inner_.PrepareRows(first, count);
+}
+
+void PolygonFeed::PreparedTriangles(int k, raster::FragmentRow& out) {
+  inner_.PreparedTriangles(k, out);
+  queue_.HandOver(y0_ + (first_ + k) * dy_, dy_, out);  // row j at y0 + j dy, as the back end's
 }
 
 void PolygonQueue::HandOver(double y, double dy, raster::FragmentRow& out) {

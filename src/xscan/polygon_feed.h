@@ -44,10 +44,20 @@ class PolygonFeed final : public raster::FragmentSource {
                  const raster::KeptDepths& kept) override;
   bool ScanRow(double y, const raster::SampleColumns& columns, raster::FragmentRow& out) override;
 
+  // In batches when the inner source is: a row's polygon triangles follow its own (all
+  // handed over by PreparedTriangles, in row order).
+  bool ScansInBatches() const override { return inner_.ScansInBatches(); }
+  bool EndsBatch(int row) const override { return inner_.EndsBatch(row); }
+  void PrepareRows(int first, int count) override;
+  void PreparedTriangles(int k, raster::FragmentRow& out) override;
+  bool ScanPreparedRow(int k, raster::FragmentRow& out) override { return inner_.ScanPreparedRow(k, out); }
+  void FinishRows() override { inner_.FinishRows(); }
+
  private:
   raster::FragmentSource& inner_;
   PolygonQueue queue_;
-  double dy_ = 1.0;
+  double y0_ = 0.0, dy_ = 1.0;
+  int first_ = 0;  // the prepared batch's first row
 };
 
 }  // namespace patchscan

@@ -56,14 +56,10 @@ TEST_P(SameImageForAnyNumberOfWorkers, InEveryScene) {
       PartitionedScan parts(c.scene.surfaces, c.camera, o, workers, threads);
       PolygonFeed partsFed(parts, polygons);
       KeepRows got(c.camera.width);
-      // Without polygons the back end takes the rows on as many threads (θ rows: in
-      // batches, raster/batched_rows.h).
+      // The back end on as many threads (θ: in batches, raster/batched_rows.h).
       raster::RenderSettings on = s;
       on.threads = threads;
-      if (polygons.triangles.empty())
-        ASSERT_TRUE(raster::RenderFragments(parts, on, got)) << c.name << ", " << m.name;
-      else
-        ASSERT_TRUE(raster::RenderFragments(partsFed, s, got)) << c.name << ", " << m.name;
+      ASSERT_TRUE(raster::RenderFragments(partsFed, on, got)) << c.name << ", " << m.name;
       ASSERT_EQ(got.rows.size(), want.rows.size());
       std::size_t differ = 0, first = 0;
       for (std::size_t k = 0; k < want.rows.size(); ++k)
@@ -96,13 +92,14 @@ INSTANTIATE_TEST_SUITE_P(Partition, SameImageForAnyNumberOfWorkers, ::testing::R
 
 TEST(Partition, ThetaInBatchesIsTheRowsOneByOne) {
   // The back end on threads takes θ rows in batches (the workers scan a batch, the slabs'
-  // triangles join the store, then every thread merges and resolves rows); on one thread it
+  // and the scene's polygons' triangles join the store, then every thread merges and
+  // resolves rows); on one thread it
   // takes them one by one from the scan-ahead. The same workers give the same pixels and
   // counts either way, at any supersampling (a batch's rows are whole pixel rows: at aa 4,
   // three sample rows a pixel row, a batch may run past its block of rows).
   long compared = 0;
   for (const SceneCase& c : SmallScenes()) {
-    if (!c.scene.polygons.empty()) continue;
+    const raster::TriangleMesh polygons = render::PolygonTriangles(c.scene, c.camera);
     for (const int slabRows : {0, 2, 9}) {
       ExactScanOptions o;
       o.thetaSteps = 16;
@@ -110,17 +107,19 @@ TEST(Partition, ThetaInBatchesIsTheRowsOneByOne) {
       for (const int aa : {1, 3, 4}) {
         raster::RenderSettings s = SettingsFor(c.camera, aa);
         PartitionedScan byRow(c.scene.surfaces, c.camera, o, 2, 2);
+        PolygonFeed byRowFed(byRow, polygons);
         KeepRows want(c.camera.width);
-        const auto backEnd = raster::RenderFragments(byRow, s, want);  // the back end's counts
+        const auto backEnd = raster::RenderFragments(byRowFed, s, want);  // the back end's counts
         ASSERT_TRUE(backEnd) << c.name;
         for (const int threads : {2, 7}) {
           const std::string what =
               c.name + ", slabs " + std::to_string(slabRows) + ", aa " + std::to_string(aa) + ", " + std::to_string(threads);
           PartitionedScan batched(c.scene.surfaces, c.camera, o, 2, threads);
+          PolygonFeed batchedFed(batched, polygons);
           s.threads = threads;
-          ASSERT_TRUE(batched.ScansInBatches()) << what;
+          ASSERT_TRUE(batchedFed.ScansInBatches()) << what;
           KeepRows got(c.camera.width);
-          const auto batchedBackEnd = raster::RenderFragments(batched, s, got);
+          const auto batchedBackEnd = raster::RenderFragments(batchedFed, s, got);
           ASSERT_TRUE(batchedBackEnd) << what;
           ASSERT_EQ(got.rows.size(), want.rows.size());
           EXPECT_EQ(std::memcmp(got.rows.data(), want.rows.data(), want.rows.size() * sizeof(float)), 0) << what;
