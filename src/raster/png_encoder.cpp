@@ -3,6 +3,7 @@
 
 #include "raster/srgb.h"
 
+#include <oneapi/tbb/info.h>
 #include <oneapi/tbb/task_arena.h>
 #include <zlib.h>
 
@@ -313,7 +314,9 @@ PngEncoder::PngEncoder(std::FILE* file, int width, int height, Options options)
   s.height = height;
   s.level = std::clamp(options.level, 0, 9);
   s.runLength = options.runLength;
-  s.threads = std::max(1, options.threads);
+  // No more bands in flight than the machine has cores to deflate them (the bytes do not
+  // depend on it).
+  s.threads = std::clamp(options.threads, 1, std::max(1, tbb::info::default_concurrency()));
   s.rowBytes = static_cast<std::size_t>(width) * kBytesPerPixel;
   s.rowsPerBand = RowsPerBand(width);
   s.dictRows = static_cast<int>((kWindow + s.rowBytes) / (s.rowBytes + 1));  // ceil(32 KiB / row)

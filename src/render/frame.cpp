@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <memory>
 #include <ostream>
+#include <thread>
 #include <vector>
 
 #include "patch/tessellate.h"
@@ -82,10 +83,14 @@ FrontEnd DirectFrontEnd(const RenderOptions& o, const Scene& scene, const Camera
     return f;
   }
   const bool traced = o.overlay != Overlay::None;
-  if (threads > 1 && !traced && RowScan::Splits(xo))
+  if (threads > 1 && !traced && RowScan::Splits(xo)) {
     f.own = std::make_unique<RowScan>(scene.surfaces, camera, xo, threads);
-  else
-    f.own = std::make_unique<PartitionedScan>(scene.surfaces, camera, xo, traced ? 1 : threads, threads);
+  } else {
+    // A worker a thread the machine runs at once: more only split the surfaces finer, and
+    // every batch waits for the most loaded (the image is the same for any number).
+    const int workers = traced ? 1 : std::min(threads, std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
+    f.own = std::make_unique<PartitionedScan>(scene.surfaces, camera, xo, workers, threads);
+  }
   if (!scene.polygons.empty()) f.polygons = std::make_unique<PolygonFeed>(*f.own, PolygonTriangles(scene, camera));
   return f;
 }
