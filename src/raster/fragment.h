@@ -399,6 +399,12 @@ struct KeptDepths {
   int layers = 0;
 };
 
+// The batch rule of a source whose batches are only a size: batches of whole pixel rows
+// (`perPixel` new sample rows each) end on the pixel row whose last sample row `row` is the
+// last in its block of `rows` sample rows, so a batch holds at most rows + perPixel - 1
+// sample rows (for FragmentSource::EndsBatch).
+inline bool EndsRowBlock(int row, int perPixel, int rows) { return row / rows != (row + perPixel) / rows; }
+
 // Produces, row by row from the top, every fragment of every surface at the samples of
 // a row, in any order and including hidden ones: the back end keeps the nearest.
 class FragmentSource {

@@ -30,8 +30,6 @@ class TriangleGeometry {
   TriangleGeometry(const TriangleMesh& mesh, const RenderSettings& s, const Lattice& lat,
                    int layers, Counters& stats)
       : mesh_(mesh), lat_(lat), store_(s, lat, layers, s.shading, stats), stats_(stats) {
-    const int perPixel = lat.l == 1 ? 1 : lat.l - 1;  // new sample rows a pixel row
-    batchPixelRows_ = (kTriangleBatchSampleRows + perPixel - 1) / perPixel;
     stats[Counter::Triangles] = static_cast<std::int64_t>(mesh.triangles.size());
     ySorted_.reserve(mesh.triangles.size());
     for (std::uint32_t k = 0; k < mesh.triangles.size(); ++k) {
@@ -67,11 +65,10 @@ class TriangleGeometry {
     store_.ScanRow(j, j - r, y, row, 0, stats_);
   }
 
-  // The rows in batches (RenderBatches, on threads): a batch is whole pixel rows, about
+  // The rows in batches (RenderBatches, on threads): whole pixel rows, about
   // kTriangleBatchSampleRows sample rows. `row` is a pixel row's last sample row.
   bool EndsBatch(int row) const {
-    const int pixelRow = lat_.l == 1 ? row : row / (lat_.l - 1) - 1;
-    return (pixelRow + 1) % batchPixelRows_ == 0;
+    return EndsRowBlock(row, lat_.l == 1 ? 1 : lat_.l - 1, kTriangleBatchSampleRows);
   }
   // Sample rows [first, first + count): every triangle reaching them set up, in the order
   // one row at a time adds them.
@@ -124,7 +121,6 @@ class TriangleGeometry {
   Counters& stats_;
   std::vector<YEntry> ySorted_;
   size_t nextY_ = 0;
-  int batchPixelRows_ = 1;
   int first_ = 0;  // the prepared batch's first sample row
 };
 

@@ -200,9 +200,7 @@ void PartitionedScan::BeginRows(const raster::SampleColumns& columns, double y0,
   perPixel_ = static_cast<int>(std::max(1.0, std::round(1.0 / dy)));
   if (arena_ && !tracing_ && !ahead_) {
     batch_ = chords_ ? kThetaBatch : RowsAhead(dy) / 2;
-    // A batch of the back end's ends on the last pixel row whose last sample row is in a
-    // block of kReplayBatch rows: up to perPixel - 1 rows more than a block.
-    const int most = kReplayBatch + perPixel_ - 1;
+    const int most = kReplayBatch + perPixel_ - 1;  // the most rows of a batch (EndsRowBlock)
     if (ScansInBatches()) {
       batchNext_.assign(static_cast<std::size_t>(most), {});
       for (auto& next : batchNext_) next.reserve(workers_.size());

@@ -76,7 +76,7 @@ class PartitionedScan final : public DirectScanSource {
   // chords, a row a task: no thread of the scan's own. A back end that takes the rows one by
   // one (ScanRow) gets the scan-ahead instead.
   bool ScansInBatches() const override { return arena_ && chords_ && !tracing_; }
-  bool EndsBatch(int row) const override { return row / kReplayBatch != (row + perPixel_) / kReplayBatch; }
+  bool EndsBatch(int row) const override { return raster::EndsRowBlock(row, perPixel_, kReplayBatch); }
   void PrepareRows(int first, int count) override;
   void PreparedTriangles(int k, raster::FragmentRow& out) override;
   bool ScanPreparedRow(int k, raster::FragmentRow& out) override;
