@@ -1,6 +1,8 @@
 // What a surface evaluation returns: position and partial derivatives at (u,v).
 #pragma once
 
+#include <algorithm>
+
 #include "patch/geometry.h"
 
 namespace patchscan {
@@ -23,6 +25,15 @@ struct SurfaceDerivs {
 // many orders above. One threshold for every test of it: the edge trackers, the maxima
 // pre-pass, the silhouette search, the normals and `patchscan info`.
 constexpr double kCollapsedRel = 1e-9;
+
+// True where dp/du x dp/dv is rounding, not a normal: one tangent vanishing against the
+// other (at a collapsed edge the vanishing one is rounding noise in any direction, so the
+// cross product's own size says nothing) or the two parallel. Normals there are limits
+// from inside (WorldNormal).
+inline bool NormalVanishes(const Vec3& pu, const Vec3& pv) {
+  const double a = pu.norm(), b = pv.norm();
+  return !(pu.cross(pv).norm() > kCollapsedRel * a * b) || !(std::min(a, b) > kCollapsedRel * std::max(a, b));
+}
 
 inline bool Wants(DerivOrder order, DerivOrder level) {
   return static_cast<int>(order) >= static_cast<int>(level);

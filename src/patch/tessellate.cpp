@@ -15,13 +15,12 @@ Vec3 WorldNormal(const Surface& s, double u, double v) {
   const Mat3 normalFromObject = s.worldFromObject.linear().inverse().transpose();
   SurfaceDerivs d;
   EvaluateObject(s, u, v, DerivOrder::First, &d);
-  Vec3 n = d.dpdu.cross(d.dpdv);
   // A collapsed edge: the cross product is rounding.
-  if (n.norm() <= kCollapsedRel * d.dpdu.norm() * d.dpdv.norm() || n.norm() == 0.0) {
+  if (NormalVanishes(d.dpdu, d.dpdv)) {
     auto inward = [](double t) { return t < 0.5 ? kNormalNudge : (t > 0.5 ? -kNormalNudge : 0.0); };
     EvaluateObject(s, u + inward(u), v + inward(v), DerivOrder::First, &d);
-    n = d.dpdu.cross(d.dpdv);
   }
+  const Vec3 n = d.dpdu.cross(d.dpdv);
   const Vec3 w = normalFromObject * n;
   const double len = w.norm();
   return len > 0.0 ? Vec3(w / len) : Vec3(0, 0, 1);

@@ -91,7 +91,7 @@ double TurnFunction(const SurfaceDerivs& object, const Vec2& gradY, const ThetaF
 Vec3 NormalSlope(const SurfaceDerivs& o, const Vec2& duv, const ThetaFrame& frame) {
   const WorldNormal w = WorldNormalOf(o, frame);
   const double len = w.n.norm();
-  if (!(len > kCollapsedRel * w.pu.norm() * w.pv.norm())) return Vec3::Constant(NAN);  // FragmentAt's limit normal
+  if (NormalVanishes(w.pu, w.pv)) return Vec3::Constant(NAN);  // FragmentAt's limit normal
   const Vec3 N = w.n / len, dn = w.nu * duv.x() + w.nv * duv.y();
   const Vec3 slope = (dn - N * N.dot(dn)) / len;
   return slope.allFinite() ? slope : Vec3::Constant(NAN);

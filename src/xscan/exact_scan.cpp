@@ -81,10 +81,9 @@ raster::Fragment FragmentAt(const LevelPoint& p, const Surface& surface,
   raster::Fragment f;
   f.w = p.w;
   f.position = surface.worldFromObject * o.p;
-  const Vec3 n = o.dpdu.cross(o.dpdv);
   // As WorldNormal: at a collapsed edge the normal is its limit from inside.
-  if (n.norm() > kCollapsedRel * o.dpdu.norm() * o.dpdv.norm() && n.norm() > 0.0)
-    f.normal = (normalFromObject * n).normalized();
+  if (!NormalVanishes(o.dpdu, o.dpdv))
+    f.normal = (normalFromObject * o.dpdu.cross(o.dpdv)).normalized();
   else
     f.normal = WorldNormal(surface, p.uv.x(), p.uv.y());
   // The texture coordinates and, through the inverse of the screen Jacobian

@@ -2,10 +2,16 @@
 // patches that share a boundary sharing their boundary vertices (no cracks).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <map>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "scene/scene.h"
 #include "patch/tessellate.h"
+#include "all_surfaces.h"
 
 namespace patchscan {
 namespace {
@@ -207,6 +213,59 @@ TEST(Tessellate, ChordErrorFollowsTheScreen) {
   }
   EXPECT_LE(worst, kBoundPx);
   RecordProperty("teapot_chord_error_px", std::to_string(worst));
+}
+
+}  // namespace
+}  // namespace patchscan
+
+namespace patchscan {
+namespace {
+
+// The normal of `s` at (u,v) from central differences of positions at a point kInside
+// towards the domain's centre: independent of the derivative code and of WorldNormal's
+// limit step. The normal turns at most ~100 rad per unit parameter on the test surfaces (the
+// power-basis patch; ~1 rad at the teapot's lid apex), so kInside moves it by ~1e-3 rad:
+// inside kLimitTolRad, which is far below the right angle a rounding-noise tangent gave.
+// The paraboloid is left out: its radius grows as the square root of height, so its normal
+// turns as the square root of v and no point inside is near its pole's limit.
+constexpr double kInside = 1e-5, kDiffStep = 1e-7, kLimitTolRad = 1e-2;
+Vec3 FiniteDifferenceNormal(const Surface& s, double u, double v) {
+  auto inward = [](double t) { return t < 0.5 ? t + kInside : (t > 0.5 ? t - kInside : t); };
+  const double ui = inward(u), vi = inward(v);
+  auto at = [&](double a, double b) {
+    SurfaceDerivs d;
+    EvaluateObject(s, a, b, DerivOrder::Position, &d);
+    return Vec3(s.worldFromObject * d.p);
+  };
+  const Vec3 pu = at(ui + kDiffStep, vi) - at(ui - kDiffStep, vi), pv = at(ui, vi + kDiffStep) - at(ui, vi - kDiffStep);
+  return pu.cross(pv).normalized();
+}
+
+TEST(Tessellate, NormalsAtCollapsedEdgesAreTheLimitFromInside) {
+  // The teapot's lid apex and bottom centre: four Bézier points of an edge equal, so the
+  // tangent along it is rounding of the power form in any direction; a tessellated vertex
+  // there took the cross product with that noise as its normal, and the lid's apex showed a
+  // dark spot in tess mode. The quadrics' poles and a cone's apex too.
+  auto loaded = LoadScene(PATCHSCAN_SURFACES_DIR "/teapot.bpt");
+  std::vector<std::pair<std::string, Surface>> surfaces = test::AllSurfaceKinds();
+  for (const Surface& s : std::get<Scene>(loaded).surfaces) surfaces.emplace_back("teapot patch", s);
+  int onCollapsed = 0;
+  for (const auto& [name, s] : surfaces) {
+    if (std::holds_alternative<Paraboloid>(s.shape)) continue;
+    const SurfaceHold hold(s);
+    TessMesh m;
+    TessellateUniform(s, 8, 0, &m);
+    for (const TessVertex& v : m.vertices) {
+      const Vec3 want = FiniteDifferenceNormal(s, v.uv.x(), v.uv.y());
+      if (!want.allFinite()) continue;
+      SurfaceDerivs d;
+      EvaluateObject(s, v.uv.x(), v.uv.y(), DerivOrder::First, &d);
+      onCollapsed += NormalVanishes(d.dpdu, d.dpdv);
+      EXPECT_LT(std::acos(std::clamp(v.normal.dot(want), -1.0, 1.0)), kLimitTolRad)
+          << name << " at uv " << v.uv.transpose() << ": " << v.normal.transpose() << " against " << want.transpose();
+    }
+  }
+  EXPECT_GT(onCollapsed, 8 * 9);  // the teapot's 8 collapsed edges at rate 8, the poles and apexes besides
 }
 
 }  // namespace
