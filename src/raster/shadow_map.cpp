@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <system_error>
 
 #include "raster/image_io.h"
 
@@ -29,6 +31,8 @@ bool HasMatrices(const imageio::FileSpec& spec, ShadowCamera* camera) {
 }  // namespace
 
 std::variant<std::unique_ptr<ShadowMap>, std::string> ShadowMap::Load(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return path + ": no such file";
   const auto library = imageio::Get();
   if (const auto* why = std::get_if<std::string>(&library)) return path + ": " + *why;
   // The description first: the size is checked before the texels are read.
@@ -45,6 +49,8 @@ std::variant<std::unique_ptr<ShadowMap>, std::string> ShadowMap::Load(const std:
 }
 
 std::optional<std::string> MakeShadowTexture(const std::string& input, const std::string& output) {
+  std::error_code ec;
+  if (!std::filesystem::exists(input, ec)) return input + ": no such file";
   const auto library = imageio::Get();
   if (const auto* why = std::get_if<std::string>(&library)) return input + ": " + *why;
   auto header = std::get<const imageio::Library*>(library)->Read(input, 0, false);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "render/load.h"
+#include "scene/rib/reader.h"
 
 namespace patchscan::render {
 namespace {
@@ -71,6 +72,22 @@ raster::Material SceneMaterial(const Appearance& a, const raster::Material& fall
   m.specularColour = a.specularColour;
   return m;
 }
+// Where the depth or shadow map `name` comes from, for a warning that it is missing: the
+// frame of `ribFile` whose Display writes it, or the MakeShadow of `scene` that makes it
+// and the frame that writes that one's depth map.
+std::string WhereMade(const std::string& name, const Scene& scene, const std::string& ribFile) {
+  const std::vector<RibFrame> frames = RibFrames(ribFile);
+  auto writer = [&](const std::string& file) -> std::string {
+    for (const RibFrame& f : frames)
+      if (f.display == file) return "frame " + std::to_string(f.number) + " of " + ribFile + " writes " + file;
+    return "no frame of " + ribFile + " writes " + file;
+  };
+  for (const SceneMakeShadow& m : scene.makeShadows)
+    if (m.output == name)
+      return "MakeShadow at " + m.file + ':' + std::to_string(m.line) + " makes it from " + m.input + "; " + writer(m.input);
+  return writer(name);
+}
+
 }  // namespace
 
 std::string BackEndSetup::TextureError() const {
@@ -118,14 +135,16 @@ Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const
     if (l.kind == SceneLight::Kind::Ambient) continue;
     raster::Light& out = s.lights.lights[next++];
     for (const std::string& name : l.shadowNames) {
-      auto& map = setup->shadowMaps[name];
-      if (!map) {
+      if (!setup->shadowMaps.contains(name)) {
         auto loaded = raster::ShadowMap::Load(name);
         if (auto* why = std::get_if<std::string>(&loaded))
-          return Failure{Outcome::InputError, l.file + ':' + std::to_string(l.line) + ": LightSource: " + *why};
-        map = std::move(std::get<std::unique_ptr<raster::ShadowMap>>(loaded));
+          setup->warnings.push_back(l.file + ':' + std::to_string(l.line) + ": LightSource: " + *why + " (" +
+                                    WhereMade(name, scene, o.file) + "); the light casts no shadow through it");
+        else
+          setup->shadowMaps[name] = std::move(std::get<std::unique_ptr<raster::ShadowMap>>(loaded));
       }
-      out.shadows.push_back(map.get());
+      // A map that cannot be read leaves the light unshadowed (warned once, above).
+      if (auto it = setup->shadowMaps.find(name); it != setup->shadowMaps.end()) out.shadows.push_back(it->second.get());
     }
     out.shadowBias = l.shadowBias;
     out.shadowBlur = l.shadowBlur;
@@ -167,11 +186,13 @@ raster::ShadowCamera LightCamera(const Camera& camera) {
   return c;
 }
 
-std::optional<Failure> MakeShadows(const Scene& scene) {
+std::vector<std::string> MakeShadows(const Scene& scene, const std::string& ribFile) {
+  std::vector<std::string> warnings;
   for (const SceneMakeShadow& m : scene.makeShadows)
     if (const auto why = raster::MakeShadowTexture(m.input, m.output))
-      return Failure{Outcome::InputError, m.file + ':' + std::to_string(m.line) + ": MakeShadow: " + *why};
-  return std::nullopt;
+      warnings.push_back(m.file + ':' + std::to_string(m.line) + ": MakeShadow: " + *why + " (" +
+                         WhereMade(m.input, scene, ribFile) + "); " + m.output + " is not made");
+  return warnings;
 }
 
 }  // namespace patchscan::render

@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "patch/camera.h"
 #include "raster/scanline_renderer.h"
@@ -23,6 +24,9 @@ struct BackEndSetup {
   std::unique_ptr<raster::ImageTexture> texture;  // RenderOptions::texture, a file
   std::map<std::string, std::unique_ptr<raster::ImageTexture>> sceneTextures;
   std::map<std::string, std::unique_ptr<raster::ShadowMap>> shadowMaps;  // by file name
+  // Shadow maps that could not be read, each naming the light and the frame that would
+  // write the map: the light casts no shadow through them.
+  std::vector<std::string> warnings;
   // The first texture that could not be read, if any ("" when none failed).
   std::string TextureError() const;
   // What became of the textures, for reports: "none", "never needed", "opened, N lookups".
@@ -35,14 +39,17 @@ bool WritesDepthMap(const RenderOptions& o, const Scene& scene);
 
 // The settings for rendering `scene` through `camera` at `aa` (the AOV channels made only
 // for an output that keeps them: aov, a depth map). Failure: a texture option naming no
-// file (BadOption), a scene's texture or shadow map missing (InputError).
+// file (BadOption), a scene's texture missing (InputError). A shadow map missing or
+// unreadable is a warning, as in RenderMan: a shadow pass not rendered yet does not stop
+// the picture.
 Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const Scene& scene, const Camera& camera,
                                                    int aa);
 
 // The matrices of `camera` as a light's camera, for the depth maps it renders.
 raster::ShadowCamera LightCamera(const Camera& camera);
 
-// Runs the scene's MakeShadow requests, in order; the first that fails, with its file:line.
-std::optional<Failure> MakeShadows(const Scene& scene);
+// Runs the scene's MakeShadow requests, in order; a warning for each that fails, with its
+// file:line and the frame of o.file that writes its depth map.
+std::vector<std::string> MakeShadows(const Scene& scene, const std::string& ribFile);
 
 }  // namespace patchscan::render

@@ -150,6 +150,10 @@ std::variant<ResolvedCamera, std::string> ResolveCamera(const CameraOptions& o,
   return r;
 }
 
+void Warn(const std::string& warning, std::ostream& log, std::set<std::string>* warned) {
+  if (!warned || warned->insert(warning).second) log << "patchscan: warning: " << warning << '\n';
+}
+
 Result<LoadedScene> LoadSceneAndCamera(const std::string& file, const CameraOptions& opts, std::ostream& log,
                                        std::set<std::string>* warned) {
   LoadOptions lo;
@@ -159,8 +163,7 @@ Result<LoadedScene> LoadSceneAndCamera(const std::string& file, const CameraOpti
   if (auto* e = std::get_if<SourceError>(&loaded)) return Failure{Outcome::InputError, e->What()};
   auto resolved = ResolveCamera(opts, std::get<Scene>(loaded));
   if (auto* why = std::get_if<std::string>(&resolved)) return Failure{Outcome::BadOption, *why};
-  for (const std::string& w : std::get<Scene>(loaded).warnings)
-    if (!warned || warned->insert(w).second) log << "patchscan: warning: " << w << '\n';
+  for (const std::string& w : std::get<Scene>(loaded).warnings) Warn(w, log, warned);
   Scene& scene = std::get<Scene>(loaded);
   scene.FaceCamera(std::get<ResolvedCamera>(resolved).camera);
   return LoadedScene{std::move(scene), std::get<ResolvedCamera>(resolved)};

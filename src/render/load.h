@@ -30,6 +30,10 @@ std::variant<ResolvedCamera, std::string> ResolveCamera(const CameraOptions& opt
 // Reads a scene file and resolves its camera; the curves face it. The scene's warnings
 // ("patchscan: warning: ...") go to `log`, each once when `warned` (those already
 // given) is passed. Failure: InputError for the file, BadOption for the camera.
+// Writes "patchscan: warning: WARNING" to `log`, unless `warned` holds it already (it is
+// added).
+void Warn(const std::string& warning, std::ostream& log, std::set<std::string>* warned);
+
 struct LoadedScene {
   Scene scene;
   ResolvedCamera view;

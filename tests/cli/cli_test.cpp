@@ -586,53 +586,6 @@ TEST(Cli, EveryFrameRendersToItsDisplay) {
   std::filesystem::remove_all(dir);
 }
 
-// surfaces/shadows.rib: frame 1 renders a spot light's depth map, MakeShadow makes it a
-// shadow texture, frame 2 lights a sphere over a floor through it. Shadows only take
-// light away, and take a lot of it from a patch of the floor.
-TEST(Cli, ShadowMapsCastShadows) {
-  const auto dir = std::filesystem::temp_directory_path() / ("patchscan_cli_shadow_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string scene = Slurp(PATCHSCAN_SURFACES_DIR "/shadows.rib");
-  std::ofstream(dir / "s.rib") << scene;
-  std::string unshadowed = scene;
-  const std::string shadowName = "\"shadowname\" [\"spot.shd\"]";
-  ASSERT_NE(unshadowed.find(shadowName), std::string::npos);
-  unshadowed.replace(unshadowed.find(shadowName), shadowName.size(), "");
-  std::ofstream(dir / "u.rib") << unshadowed;
-  const std::string cd = "cd " + dir.string() + " && " + PATCHSCAN_BINARY;
-  ASSERT_EQ(std::system((cd + " render s.rib --aa 1 2>err.txt && mv lit.png shadowed.png").c_str()), 0) << Slurp(dir / "err.txt");
-  ASSERT_EQ(std::system((cd + " render u.rib --aa 1 2>err.txt").c_str()), 0) << Slurp(dir / "err.txt");
-  EXPECT_TRUE(std::filesystem::exists(dir / "spot.z"));
-  EXPECT_TRUE(std::filesystem::exists(dir / "spot.shd"));
-  auto read = [](const std::filesystem::path& p) {
-    auto in = OIIO::ImageInput::open(p.string());
-    std::vector<float> px;
-    if (!in) return px;
-    px.resize(static_cast<std::size_t>(in->spec().width * in->spec().height * in->spec().nchannels));
-    in->read_image(0, 0, 0, -1, OIIO::TypeDesc::FLOAT, px.data());
-    return px;
-  };
-  const std::vector<float> a = read(dir / "shadowed.png"), b = read(dir / "lit.png");
-  ASSERT_EQ(a.size(), b.size());
-  ASSERT_FALSE(a.empty());
-  long darker = 0, brighter = 0;
-  for (std::size_t k = 0; k < a.size(); k += 4) {
-    darker += a[k] < b[k] - 0.1f;
-    brighter += a[k] > b[k] + 1.5f / 255;
-  }
-  EXPECT_EQ(brighter, 0);
-  EXPECT_GT(darker, 2000);  // the shadow on the floor (320 x 240 image)
-  // A light whose shadow map cannot be read names the light.
-  std::string missing = scene;
-  missing.replace(missing.find("[\"spot.shd\"]"), 12, "[\"none.shd\"]");
-  std::ofstream(dir / "m.rib") << missing;
-  EXPECT_EQ(std::system((cd + " render m.rib --frame 2 -o x.png 2>err.txt").c_str()) >> 8, 1);
-  EXPECT_NE(Slurp(dir / "err.txt").find("m.rib:28: LightSource: none.shd: cannot read the shadow map"), std::string::npos)
-      << Slurp(dir / "err.txt");
-  EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
-  std::filesystem::remove_all(dir);
-}
-
 // surfaces/still_life.rib, a scene as production exports it: two frames that read one
 // world from an archive (polygons, instanced NURBS vases, the teapot, a subdivision cube,
 // a torus, curves), a shadow map made between them. Every frame renders, with no warning

@@ -455,13 +455,13 @@ std::vector<RibFrame> RibFrames(const std::string& path) {
   if (!std::holds_alternative<std::string>(text)) return frames;
   rib::Lexer lexer(std::get<std::string>(text), path);
   rib::Request r;
-  bool outside = false;  // the depth-map flag of the Display given outside any frame
+  RibFrame outside;  // the Display given outside any frame
   bool inFrame = false;
   while (lexer.Next(&r)) {
     if (r.name == "FrameBegin" && !r.args.empty() && r.args[0].Numeric() && r.args[0].numbers.size() == 1) {
       const double n = r.args[0].numbers[0];
       inFrame = n == std::floor(n) && std::abs(n) <= 2e9;
-      if (inFrame) frames.push_back({static_cast<int>(n), outside});
+      if (inFrame) frames.push_back({static_cast<int>(n), outside.depthMap, outside.display});
     } else if (r.name == "FrameEnd") {
       inFrame = false;
     } else if (r.name == "Display" && r.args.size() >= 2 && !r.args[0].Numeric() && r.args[0].Size() == 1 &&
@@ -469,8 +469,9 @@ std::vector<RibFrame> RibFrames(const std::string& path) {
       // As the reader takes a Display: a framebuffer or a further display ('+') is not the file.
       const std::string& name = r.args[0].strings[0];
       if (r.args[1].strings[0] == "framebuffer" || name.empty() || name[0] == '+') continue;
-      const bool depth = r.args[1].strings[0] == "zfile" || r.args[1].strings[0] == "shadow";
-      (inFrame ? frames.back().depthMap : outside) = depth;
+      RibFrame& frame = inFrame ? frames.back() : outside;
+      frame.depthMap = r.args[1].strings[0] == "zfile" || r.args[1].strings[0] == "shadow";
+      frame.display = name;
     }
   }
   return frames;

@@ -48,12 +48,13 @@ std::variant<Scene, SourceError> ReadRib(const std::string& path, const LoadOpti
 std::variant<Scene, SourceError> ParseRib(std::string_view text, const std::string& name,
                                           const LoadOptions& options = {});
 
-// A frame of a RIB file: its FrameBegin number, and whether its Display (the last in the
-// frame, else the last before it) writes a depth map ("zfile" or "shadow") rather than a
-// picture. Display requests inside ReadArchive files are not seen.
+// A frame of a RIB file: its FrameBegin number, the file its Display (the last in the
+// frame, else the last before it) names, and whether that is a depth map ("zfile" or
+// "shadow") rather than a picture. Display requests inside ReadArchive files are not seen.
 struct RibFrame {
   int number = 0;
   bool depthMap = false;
+  std::string display;  // as written ("" when no Display names a file)
 };
 
 // The frames of the .rib file at `path`, in order: empty when it has none or cannot be

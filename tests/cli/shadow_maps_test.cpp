@@ -1,0 +1,130 @@
+// Shadow maps end to end (RenderMan's MakeShadow and shadowspot light): a frame renders the
+// light's depth map, MakeShadow makes it a shadow texture, a later frame reads it. A map
+// that is not there yet is a warning naming the frame that writes it, and the light casts
+// no shadow: the picture is the one rendered without the map.
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "cli/run_program.h"
+
+namespace {
+
+// Every channel of every pixel of an image file (empty if it cannot be read).
+std::vector<float> Pixels(const std::filesystem::path& p) {
+  auto in = OIIO::ImageInput::open(p.string());
+  std::vector<float> px;
+  if (!in) return px;
+  px.resize(static_cast<std::size_t>(in->spec().width) * in->spec().height * in->spec().nchannels);
+  if (!in->read_image(0, 0, 0, -1, OIIO::TypeDesc::FLOAT, px.data())) px.clear();
+  return px;
+}
+
+// A folder of its own for one test, removed after it.
+struct Folder {
+  explicit Folder(const std::string& name)
+      : path(std::filesystem::temp_directory_path() / ("patchscan_" + name + "_" + std::to_string(::getpid()))) {
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~Folder() { std::filesystem::remove_all(path); }
+  // Runs patchscan with `args` in the folder; its exit code (its stderr kept for Err).
+  int Run(const std::string& args) {
+    const Result r = Patchscan(args, "cd " + path.string() + " &&");
+    err = r.err;
+    return r.code;
+  }
+  const std::string& Err() const { return err; }
+  std::filesystem::path path;
+  std::string err;
+};
+
+// surfaces/shadows.rib: frame 2 lights a sphere over a floor through frame 1's map. u.rib
+// is the same scene with no shadowname: the same light, unshadowed.
+struct ShadowScenes : Folder {
+  ShadowScenes() : Folder("shadow_maps") {
+    scene = Slurp(PATCHSCAN_SURFACES_DIR "/shadows.rib");
+    std::ofstream(path / "s.rib") << scene;
+    std::string unshadowed = scene;
+    const std::string shadowName = "\"shadowname\" [\"spot.shd\"]";
+    EXPECT_NE(unshadowed.find(shadowName), std::string::npos);
+    unshadowed.replace(unshadowed.find(shadowName), shadowName.size(), "");
+    std::ofstream(path / "u.rib") << unshadowed;
+  }
+  std::string scene;
+};
+
+// Shadows only take light away, and take a lot of it from a patch of the floor.
+TEST(ShadowMaps, CastShadows) {
+  ShadowScenes dir;
+  ASSERT_EQ(dir.Run("render s.rib --aa 1"), 0) << dir.Err();
+  std::filesystem::rename(dir.path / "lit.png", dir.path / "shadowed.png");
+  ASSERT_EQ(dir.Run("render u.rib --aa 1"), 0) << dir.Err();
+  EXPECT_TRUE(std::filesystem::exists(dir.path / "spot.z"));
+  EXPECT_TRUE(std::filesystem::exists(dir.path / "spot.shd"));
+  const std::vector<float> a = Pixels(dir.path / "shadowed.png"), b = Pixels(dir.path / "lit.png");
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_FALSE(a.empty());
+  long darker = 0, brighter = 0;
+  for (std::size_t k = 0; k < a.size(); k += 4) {
+    darker += a[k] < b[k] - 0.1f;
+    brighter += a[k] > b[k] + 1.5f / 255;
+  }
+  EXPECT_EQ(brighter, 0);
+  EXPECT_GT(darker, 2000);  // the shadow on the floor (320 x 240 image)
+}
+
+// The picture frame alone in a clean folder: its MakeShadow finds no depth map and its
+// light no shadow map. Both are warnings naming frame 1, and the picture is the unshadowed
+// scene's, pixel for pixel.
+TEST(ShadowMaps, AMapNotRenderedYetIsAWarningAndNoShadow) {
+  ShadowScenes dir;
+  ASSERT_EQ(dir.Run("render u.rib --frame 2 --aa 1 -o unshadowed.png"), 0) << dir.Err();
+  ASSERT_EQ(dir.Run("render s.rib --frame 2 --aa 1 -o x.png"), 0) << dir.Err();
+  const std::string err = dir.Err();
+  EXPECT_NE(err.find("patchscan: warning: s.rib:20: MakeShadow: spot.z: no such file (frame 1"), std::string::npos)
+      << err;
+  EXPECT_NE(err.find("(frame 1 of s.rib writes spot.z); spot.shd is not made"), std::string::npos) << err;
+  EXPECT_NE(err.find("patchscan: warning: s.rib:28: LightSource: spot.shd: no such file (MakeShadow"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("(MakeShadow at s.rib:20 makes it from spot.z; frame 1 of s.rib writes spot.z); the light "
+                     "casts no shadow through it"),
+            std::string::npos)
+      << err;
+  const std::vector<float> a = Pixels(dir.path / "x.png"), b = Pixels(dir.path / "unshadowed.png");
+  ASSERT_FALSE(a.empty());
+  EXPECT_EQ(a, b);
+  // A map no frame writes says so.
+  std::string missing = dir.scene;
+  missing.replace(missing.find("[\"spot.shd\"]"), 12, "[\"none.shd\"]");
+  std::ofstream(dir.path / "m.rib") << missing;
+  ASSERT_EQ(dir.Run("render m.rib --frame 2 --aa 1 -o y.png"), 0) << dir.Err();
+  EXPECT_NE(dir.Err().find("m.rib:28: LightSource: none.shd: no such file (no frame of m.rib writes none.shd)"), std::string::npos)
+      << dir.Err();
+  EXPECT_NE(dir.Err().find("(no frame of m.rib writes none.shd)"), std::string::npos) << dir.Err();
+  EXPECT_EQ(Pixels(dir.path / "y.png"), b);
+  // So does one that is there but no image.
+  std::ofstream(dir.path / "none.shd") << "not an image";
+  ASSERT_EQ(dir.Run("render m.rib --frame 2 --aa 1 -o z.png"), 0) << dir.Err();
+  EXPECT_NE(dir.Err().find("m.rib:28: LightSource: none.shd: cannot read the shadow map"), std::string::npos)
+      << dir.Err();
+  EXPECT_EQ(Pixels(dir.path / "z.png"), b);
+}
+
+// The production scene's picture frame alone in a clean folder renders, with the warnings.
+TEST(ShadowMaps, StillLifeFrameTwoRendersAlone) {
+  Folder dir("still_life_alone");
+  ASSERT_EQ(dir.Run(std::string("render ") + PATCHSCAN_SURFACES_DIR "/still_life.rib --frame 2 --size 160x120 -o p.png"), 0)
+      << dir.Err();
+  EXPECT_NE(dir.Err().find("frame 1 of " PATCHSCAN_SURFACES_DIR "/still_life.rib writes key.z"), std::string::npos)
+      << dir.Err();
+  EXPECT_FALSE(Pixels(dir.path / "p.png").empty());
+}
+
+}  // namespace
