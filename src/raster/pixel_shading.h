@@ -3,7 +3,9 @@
 // (scanline_renderer.cpp, batched_rows.cpp).
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <vector>
 
@@ -39,6 +41,39 @@ inline bool AnyCovered(const std::vector<std::vector<Sample>>& rows, int i0, int
     for (int c = 0; c < aa; ++c)
       if (rows[r][static_cast<size_t>(i0 + c) * layers].handle >= 0) return true;
   return false;
+}
+
+// Fragments of one sample closer in depth than this (relative) are one surface met twice,
+// for the midpoint depth filter: far below any thickness a shadow's bias could resolve,
+// far above the rounding of two solves at one point.
+constexpr double kSameDepthRel = 1e-7;
+
+// The depth of the pixel whose first sample column is i0 by `filter` (not Surface) from
+// its samples' nearest fragments (the midpoint: their two nearest); +inf where no sample
+// counts.
+inline float FilteredDepth(const std::vector<std::vector<Sample>>& rows, int i0, int aa, int layers,
+                           DepthFilter filter) {
+  double lo = INFINITY, hi = 0.0, sum = 0.0;
+  int n = 0;
+  for (int r = 0; r < aa; ++r)
+    for (int c = 0; c < aa; ++c) {
+      const Sample* keep = &rows[r][static_cast<size_t>(i0 + c) * layers];
+      if (keep[0].handle < 0) continue;
+      double w = 1.0 / keep[0].invW;
+      if (filter == DepthFilter::Midpoint) {
+        // The next surface: a fragment at the nearest's depth is that surface again (a
+        // quadric's seam gives one from each side of it).
+        int next = 1;
+        while (next < layers && keep[next].handle >= 0 && keep[next].invW >= keep[0].invW * (1.0 - kSameDepthRel)) ++next;
+        w = next < layers && keep[next].handle >= 0 ? 0.5 * (w + 1.0 / keep[next].invW) : INFINITY;
+      }
+      lo = std::min(lo, w);
+      hi = std::max(hi, w);
+      sum += w;
+      ++n;
+    }
+  const double depth = filter == DepthFilter::Max ? hi : filter == DepthFilter::Average && n > 0 ? sum / n : lo;
+  return static_cast<float>(depth);
 }
 
 // Pixel px of a resolved row: its samples grouped by surface and layer, one shading call
@@ -89,6 +124,7 @@ void ShadePixel(const Geometry& geo, const RenderSettings& s, const Lattice& lat
       writeAovs(f, surface);
     else
       std::copy(background.begin() + 4, background.end(), out + 4);
+    if (s.depthFilter != DepthFilter::Surface) out[kChannelZ] = FilteredDepth(pr.samples, i0, s.aa, layers, s.depthFilter);
     return;
   }
   // Group the pixel's samples by surface and layer: one shading call per group.
@@ -199,6 +235,7 @@ void ShadePixel(const Geometry& geo, const RenderSettings& s, const Lattice& lat
       majorFragment = geo.GroupFragment(pr.refs, gathered.data(), gather(major), gr.sx / gr.count, gr.sy / gr.count);
     writeAovs(majorFragment, gr.surface);
   }
+  if (s.depthFilter != DepthFilter::Surface) out[kChannelZ] = FilteredDepth(pr.samples, i0, s.aa, layers, s.depthFilter);
 }
 
 }  // namespace patchscan::raster::detail

@@ -148,12 +148,15 @@ bool RenderSettings::AnyTransparency() const {
   return false;
 }
 
+int RenderSettings::Layers() const {
+  return AnyTransparency() ? kMaxLayers : depthFilter == DepthFilter::Midpoint ? 3 : 1;
+}
+
 std::optional<Counters> RenderMesh(const TriangleMesh& mesh, const RenderSettings& s,
                                       RowSink& sink, BackEndTimes* times) {
   Counters stats;
   const Lattice lat(s);
-  // With transparency each sample keeps its `layers` nearest fragments, nearest first.
-  const int layers = s.AnyTransparency() ? kMaxLayers : 1;
+  const int layers = s.Layers();
   TriangleGeometry geo(mesh, s, lat, layers, stats);
   // On threads, every row ours: rows resolved on every thread, in batches.
   if (s.threads > 1 && !s.ownsRow) return detail::RenderBatches(geo, s, lat, layers, stats, sink, times);
@@ -164,7 +167,7 @@ std::optional<Counters> RenderFragments(FragmentSource& source, const RenderSett
                                            RowSink& sink, BackEndTimes* times) {
   Counters stats;
   const Lattice lat(s);
-  const int layers = s.AnyTransparency() ? kMaxLayers : 1;
+  const int layers = s.Layers();
   FragmentGeometry geo(source, s, lat, layers, stats);
   source.BeginRows(SampleColumns{lat.offset, lat.spacing, lat.nx}, lat.At(0), lat.spacing, lat.ny,
                    KeptDepths{s.hither, geo.DepthDecides() ? layers : 0});

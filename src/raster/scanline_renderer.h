@@ -27,6 +27,15 @@ constexpr int kMaxAa = 8;
 // 0.5 less than 1/16 of the light remains.
 constexpr int kMaxLayers = 4;
 
+// How a depth map's pixel takes its depth from its samples (RenderMan's Hider "hidden"
+// "depthfilter"): Surface, the AOV's (the eye distance where the surface covering most of
+// the pixel is shaded); the nearest, farthest or mean of the covered samples' nearest
+// depths; or Midpoint, the nearest of the samples' midpoints between their two nearest
+// distinct surfaces (Woo 1992: a lit surface lies half the occluder's thickness in front of its
+// map's depth, so it does not shadow itself without a bias; a sample with one surface has
+// nothing behind it to shadow and counts as infinitely far).
+enum class DepthFilter { Surface, Min, Max, Average, Midpoint };
+
 struct RenderSettings {
   int width = 0, height = 0;
   int aa = 1;  // l: l x l samples per pixel (l = 1: one sample at the pixel centre)
@@ -58,8 +67,12 @@ struct RenderSettings {
   const Material& MaterialOf(std::uint32_t surfaceId) const {
     return materialOf.empty() ? material : materials[materialOf[surfaceId]];
   }
+  DepthFilter depthFilter = DepthFilter::Surface;  // of the Z channel (kChannelZ)
   // Whether any surface is seen through (the back end then keeps kMaxLayers per sample).
   bool AnyTransparency() const;
+  // The fragments each sample keeps, nearest first: kMaxLayers with transparency, three
+  // for a midpoint depth filter (the nearest surface may come twice, at a seam), else one.
+  int Layers() const;
   // The point the eye looks from at world point p: the eye, or (orthographic) a unit
   // step back along the view axis.
   Vec3 EyeFor(const Vec3& p) const { return orthographic ? Vec3(p - forward) : eye; }

@@ -113,6 +113,11 @@ Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const
   raster::RenderSettings& s = setup->settings;
   s = SettingsFor(camera, aa);
   s.aovs = o.aov || WritesDepthMap(o, scene);
+  if (WritesDepthMap(o, scene)) {
+    const std::string& f = scene.image.depthFilter;
+    using D = raster::DepthFilter;
+    s.depthFilter = f == "max" ? D::Max : f == "average" ? D::Average : f == "midpoint" ? D::Midpoint : D::Min;
+  }
   s.shading = o.shading;
   s.cullBackFaces = o.cullBackFaces;
   s.hiddenLine = o.hiddenLine;

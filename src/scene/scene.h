@@ -31,6 +31,10 @@ struct Appearance {
   bool operator==(const Appearance&) const = default;
 };
 
+// A shadow light's depth bias where neither the light nor Option "shadow" "bias" gives one:
+// the shadowspot shader's default in RenderMan's standard light library (world units).
+constexpr double kDefaultShadowBias = 0.05;
+
 // A light source in world space (RenderMan's ambientlight, distantlight, pointlight and
 // spotlight). Intensities multiply the colour; point and spot lights fall off as 1/d^2.
 struct SceneLight {
@@ -44,7 +48,7 @@ struct SceneLight {
   // with the depth bias (world units), the blur (a fraction of the map's width) and
   // samples x samples points; "" where not given.
   std::vector<std::string> shadowNames;
-  double shadowBias = 0.05, shadowBlur = 0.0;
+  double shadowBias = kDefaultShadowBias, shadowBlur = 0.0;
   int shadowSamples = 4;
   std::string file;  // where the light was declared, for messages
   int line = 0;
@@ -71,6 +75,10 @@ struct SceneImage {
   std::string displayType;                  // its type: "file", "tiff", ..., "zfile", "shadow"
   std::string displayCompression;           // its "compression" parameter ("" when none)
   int displayLine = 0;                      // the Display request's line in the scene file
+  // How a depth map's pixel depth comes from its samples' (Hider "hidden" "depthfilter"):
+  // the nearest, the farthest, their mean, or Woo's midpoint between each sample's two
+  // nearest surfaces (raster::DepthFilter).
+  std::string depthFilter = "min";
 };
 
 // A subdivision cage of the scene, for `patchscan info` (its faces are among the scene's

@@ -649,7 +649,7 @@ TEST(Cli, RibScenesRenderInEveryMode) {
       EXPECT_TRUE(std::filesystem::exists(out)) << out;
     }
   std::ofstream(dir / "s.rib") << "Display \"shown.png\" \"file\" \"rgba\"\nFormat 40 30 1\n"
-                                  "Hider \"hidden\"\nTranslate 0 0 5\nFrameBegin 1\nWorldBegin\nSphere 1 -1 1 360\n"
+                                  "Hider \"raytrace\"\nTranslate 0 0 5\nFrameBegin 1\nWorldBegin\nSphere 1 -1 1 360\n"
                                   "WorldEnd\nFrameEnd\nFrameBegin 2\nDisplay \"two.png\" \"file\" \"rgba\"\n"
                                   "WorldBegin\nSphere 2 -2 2 360\nWorldEnd\nFrameEnd\n";
   // Display names a file relative to the working directory.
@@ -659,7 +659,7 @@ TEST(Cli, RibScenesRenderInEveryMode) {
   EXPECT_EQ(code, 0);
   EXPECT_TRUE(std::filesystem::exists(dir / "shown.png"));
   EXPECT_TRUE(std::filesystem::exists(dir / "two.png"));
-  EXPECT_EQ(Slurp(dir / "err.txt"), "patchscan: warning: " + (std::string("s.rib")) + ":3: Hider is not supported here: skipped\n");
+  EXPECT_EQ(Slurp(dir / "err.txt"), "patchscan: warning: " + (std::string("s.rib")) + ":3: Hider 'raytrace' is not supported here: the scan-line hider is used\n");
   std::filesystem::remove(dir / "two.png");
   code = std::system((cd + " render s.rib --frame 2 --mode tess 2>/dev/null").c_str());
   EXPECT_EQ(code, 0);

@@ -596,6 +596,29 @@ TEST(Rib, LightSourcesInWorldSpace) {
   EXPECT_EQ(s.warnings[0], "t.rib:9: LightSource: unknown light shader 'arealight': skipped");
 }
 
+// Option "shadow" "bias" is the bias of the shadow lights after it that give none; Hider
+// "hidden" "depthfilter" how depth maps are filtered (min by default, as in RenderMan).
+TEST(Rib, ShadowBiasOptionAndDepthFilter) {
+  EXPECT_EQ(Parse(World("Sphere 1 -1 1 360")).image.depthFilter, "min");
+  const Scene s = Parse("Hider \"hidden\" \"depthfilter\" \"midpoint\"\n"
+                        "LightSource \"shadowspot\" 1 \"shadowname\" [\"a.shd\"]\n"
+                        "Option \"shadow\" \"bias\" [0.25]\n"
+                        "Option \"limits\" \"bucketsize\" [16 16]\n" +
+                        World("LightSource \"shadowspot\" 2 \"shadowname\" [\"a.shd\"]\n"
+                              "LightSource \"shadowspot\" 3 \"shadowname\" [\"a.shd\"] \"bias\" [0.5]"));
+  EXPECT_EQ(s.image.depthFilter, "midpoint");
+  ASSERT_EQ(s.lights.size(), 3u);
+  EXPECT_EQ(s.lights[0].shadowBias, kDefaultShadowBias);
+  EXPECT_EQ(s.lights[1].shadowBias, 0.25);
+  EXPECT_EQ(s.lights[2].shadowBias, 0.5);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0], "t.rib:4: Option 'limits' is not supported here: skipped");
+  const Scene bad = Parse("Hider \"hidden\" \"depthfilter\" \"median\"\n" + World("Sphere 1 -1 1 360"));
+  EXPECT_EQ(bad.image.depthFilter, "min");
+  ASSERT_EQ(bad.warnings.size(), 1u);
+  EXPECT_EQ(bad.warnings[0], "t.rib:1: Hider: depthfilter 'median' is not min, max, average or midpoint: min is used");
+}
+
 // ---- what is skipped, and what is refused ----
 
 TEST(Rib, ObjectInstancesReplayTheirObjectUnderTheCurrentState) {
@@ -707,7 +730,7 @@ TEST(Rib, SkippedKindsAreCounted) {
 
 TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
   const Scene s = Parse(
-      "Option \"searchpath\" \"shader\" [\"@\"]\nHider \"hidden\"\nDeclare \"foo\" \"float\"\n" +
+      "Option \"searchpath\" \"shader\" [\"@\"]\nHider \"raytrace\"\nDeclare \"foo\" \"float\"\n" +
       World("Attribute \"identifier\" \"name\" [\"a\"]\nAttribute \"visibility\" \"int camera\" [1]\n"
             "Displacement \"bumpy\"\nMakeTexture \"a\" \"b\"\nPolygon \"P\" [0 0 0 1 0 0 0 1 0] \"Os\" [1 1 1]\n"
             "FooBar 1 2 3\nSphere 1 -1 1 360 \"Cs\" [1 0 0]\n"
@@ -715,8 +738,8 @@ TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
   EXPECT_EQ(s.surfaces.size(), 1u);
   EXPECT_EQ(s.polygons.size(), 1u);
   const std::vector<std::string> want = {
-      "t.rib:1: Option is not supported here: skipped",
-      "t.rib:2: Hider is not supported here: skipped",
+      "t.rib:1: Option 'searchpath' is not supported here: skipped",
+      "t.rib:2: Hider 'raytrace' is not supported here: the scan-line hider is used",
       "t.rib:3: Declare is not supported here: skipped",
       "t.rib:5: Attribute 'identifier' is not supported here: skipped",
       "t.rib:6: Attribute 'visibility' is not supported here: skipped",

@@ -201,6 +201,10 @@ class RibParser {
   bool SurfaceShader(const Request& r);
   bool LightSource(const Request& r);
   bool MakeShadow(const Request& r);
+  // Hider "hidden" "depthfilter" and Option "shadow" "bias": how depth maps are written
+  // and the bias of the shadow lights that give none.
+  bool Hider(const Request& r);
+  bool Option(const Request& r);
 
   // ---- geometry ----
   bool InWorld(const Request& r);
@@ -277,6 +281,7 @@ class RibParser {
   std::unordered_map<std::size_t, std::vector<std::uint32_t>> appearanceIndex_;
   std::vector<std::uint32_t> polygonAppearance_;  // per ScenePolygons
   Mat4 cameraFromWorld_ = Mat4::Identity();
+  double shadowBias_ = kDefaultShadowBias;  // Option "shadow" "bias"
   bool sawWorld_ = false, skippingWorld_ = false, skippingFrame_ = false, done_ = false;
   struct Recorded {
     std::string file;

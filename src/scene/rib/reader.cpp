@@ -21,7 +21,7 @@ const char* BlockName(Block::Kind k) {
 // what a parametric surface looks like here.
 const std::set<std::string, std::less<>>& SkippedRequests() {
   static const std::set<std::string, std::less<>> k = {
-      "Option", "Hider", "Declare", "Displacement", "Atmosphere", "Interior",
+      "Declare", "Displacement", "Atmosphere", "Interior",
       "Exterior", "Imager", "Exposure", "Quantize", "PixelFilter", "PixelVariance",
       "ShadingRate", "ShadingInterpolation", "Matte", "Bound", "Detail", "DetailRange",
       "GeometricApproximation", "MakeTexture", "MakeLatLongEnvironment",
@@ -117,6 +117,8 @@ const std::unordered_map<std::string_view, RibParser::Handler>& RibParser::Reque
       {"Surface", &RibParser::SurfaceShader},
       {"LightSource", &RibParser::LightSource},
       {"MakeShadow", &RibParser::MakeShadow},
+      {"Hider", &RibParser::Hider},
+      {"Option", &RibParser::Option},
       // Geometry.
       {"Basis", &RibParser::BasisRequest},
       {"Patch", &RibParser::Patch},

@@ -219,6 +219,7 @@ bool RibParser::LightSource(const Request& r) {
   SceneLight l;
   l.line = r.line;
   l.file = file_;
+  l.shadowBias = shadowBias_;
   using K = SceneLight::Kind;
   // The standard lights, and the shadowing ones of RenderMan's light library.
   const bool shadowing = name == "shadowspot" || name == "shadowdistant" || name == "shadowpoint";
@@ -269,6 +270,49 @@ bool RibParser::LightSource(const Request& r) {
   if (!(l.shadowBias >= 0.0) || !(l.shadowBlur >= 0.0) || !std::isfinite(l.shadowBias) || !std::isfinite(l.shadowBlur))
     return Fail(r.line, "LightSource: \"bias\" and \"blur\" are not negative");
   scene_.lights.push_back(l);
+  return true;
+}
+
+bool RibParser::Hider(const Request& r) {
+  std::string type;
+  std::vector<Param> params;
+  if (!NameAndParams(r, &type, &params)) return false;
+  if (type != "hidden") Warn(r.line, "Hider", "Hider " + Shown(type) + " is not supported here: the scan-line hider is used");
+  for (const Param& p : params) {
+    if (p.name != "depthfilter" || type != "hidden") {
+      IgnoreParam(r, p);
+      continue;
+    }
+    std::string filter;
+    if (!ParamString(r, p, &filter)) return false;
+    if (filter == "min" || filter == "max" || filter == "average" || filter == "midpoint")
+      scene_.image.depthFilter = filter;
+    else
+      Warn(p.value->line, "depthfilter", "Hider: depthfilter " + Shown(filter) +
+                                             " is not min, max, average or midpoint: min is used");
+  }
+  return true;
+}
+
+bool RibParser::Option(const Request& r) {
+  // Only the shadow bias changes the picture here; other options are skipped, as before.
+  std::string name;
+  std::vector<Param> params;
+  if (!NameAndParams(r, &name, &params)) return false;
+  if (name != "shadow") {
+    Warn(r.line, "Option", "Option " + Shown(name) + " is not supported here: skipped");
+    return true;
+  }
+  for (const Param& p : params) {
+    if (p.name != "bias") {
+      IgnoreParam(r, p);
+      continue;
+    }
+    double bias = 0.0;
+    if (!ParamNumbers(r, p, 1, &bias)) return false;
+    if (!(bias >= 0.0) || !std::isfinite(bias)) return Fail(p.value->line, "Option: shadow \"bias\" is not negative");
+    shadowBias_ = bias;
+  }
   return true;
 }
 
