@@ -399,6 +399,11 @@ struct KeptDepths {
   int layers = 0;
 };
 
+// Where sample row j of the rows BeginRows announced lies: y0 + j dy, always in this form,
+// so that a row is the same double whichever thread or batch scans it (y + k dy from a
+// batch's first row is a rounding off at a spacing that is not a binary fraction).
+inline double RowY(double y0, double dy, int j) { return y0 + j * dy; }
+
 // The batch rule of a source whose batches are only a size: batches of whole pixel rows
 // (`perPixel` new sample rows each) end on the pixel row whose last sample row `row` is the
 // last in its block of `rows` sample rows, so a batch holds at most rows + perPixel - 1

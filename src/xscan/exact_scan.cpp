@@ -260,7 +260,7 @@ void ExactScan::PrepareBatch(double y0, double dy, int first, int count, const r
   nextReady_ = 0;
   if (parallel) {
     for (std::size_t next = nextPending_, k = 0; k < static_cast<std::size_t>(count); ++k) {
-      const double y = y0 + (first + static_cast<int>(k)) * dy;
+      const double y = raster::RowY(y0, dy, first + static_cast<int>(k));
       for (; next < pending_.size() && pending_[next].yMin <= y; ++next)
         if (pending_[next].yMax >= y) ready_.push_back({next, y, nullptr});
     }
@@ -275,7 +275,7 @@ void ExactScan::PrepareBatch(double y0, double dy, int first, int count, const r
   preparedCount_ = count;
   for (int k = 0; k < count; ++k) {
     // As the back end's rows (raster::Lattice::At), bit for bit.
-    const double y = y0 + (first + k) * dy;
+    const double y = raster::RowY(y0, dy, first + k);
     ++counters_[Counter::SampleRows];
     UpdateActive(y, y, columns.dx);
     PreparedRow& row = prepared_[static_cast<std::size_t>(k)];

@@ -223,7 +223,7 @@ void PartitionedScan::StartAhead() {
   ahead_ = std::make_unique<RowRing>(std::max(RowsAhead(aheadDy_), 2 * batch_), kept_, columns_.n);
   ahead_->Start([this, columns = columns_, y0 = aheadY0_, dy = aheadDy_, nRows = aheadRows_] {
     for (int j = 0; j < nRows;) {
-      const double y = y0 + j * dy;
+      const double y = raster::RowY(y0, dy, j);
       if (workers_.size() == 1) {
         if (!ahead_->Reserve(j + 1)) return;
         ahead_->Publish(j, Composite(y, columns, ahead_->Slot(j)));
@@ -313,7 +313,7 @@ void PartitionedScan::ScanRows(double y0, double dy, int first, int count, const
     for (int k = 0; k < count; ++k) {
       RowBuffer& row = w.rows[static_cast<std::size_t>(k)];
       row.Clear();
-      row.scanned = w.scan.ScanRow(y0 + (first + k) * dy, columns, row);
+      row.scanned = w.scan.ScanRow(raster::RowY(y0, dy, first + k), columns, row);
     }
   });
 }

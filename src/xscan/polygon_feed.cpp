@@ -52,7 +52,7 @@ void PolygonFeed::PrepareRows(int first, int count) {
 
 void PolygonFeed::PreparedTriangles(int k, raster::FragmentRow& out) {
   inner_.PreparedTriangles(k, out);
-  queue_.HandOver(y0_ + (first_ + k) * dy_, dy_, out);  // row j at y0 + j dy, as the back end's
+  queue_.HandOver(raster::RowY(y0_, dy_, first_ + k), dy_, out);
 }
 
 void PolygonQueue::HandOver(double y, double dy, raster::FragmentRow& out) {
