@@ -112,8 +112,9 @@ Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const
   auto setup = std::make_unique<BackEndSetup>();
   raster::RenderSettings& s = setup->settings;
   s = SettingsFor(camera, aa);
-  s.aovs = o.aov || WritesDepthMap(o, scene);
-  if (WritesDepthMap(o, scene)) {
+  const bool depthMap = WritesDepthMap(o, scene);
+  s.aovs = o.aov || depthMap;
+  if (depthMap) {
     const std::string& f = scene.image.depthFilter;
     using D = raster::DepthFilter;
     s.depthFilter = f == "max" ? D::Max : f == "average" ? D::Average : f == "midpoint" ? D::Midpoint : D::Min;
@@ -136,20 +137,25 @@ Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const
   // The lights' shadow maps, each read once (SceneLights keeps the scene's light order,
   // less the ambient lights).
   std::size_t next = 0;
+  std::map<std::string, std::string> unreadable;  // map file: why it could not be read
   for (const SceneLight& l : scene.lights) {
     if (l.kind == SceneLight::Kind::Ambient) continue;
     raster::Light& out = s.lights.lights[next++];
     for (const std::string& name : l.shadowNames) {
-      if (!setup->shadowMaps.contains(name)) {
+      // Each map read once, whichever lights share it; one that cannot be read leaves each
+      // light that names it unshadowed, with a warning naming that light.
+      if (!setup->shadowMaps.contains(name) && !unreadable.contains(name)) {
         auto loaded = raster::ShadowMap::Load(name);
         if (auto* why = std::get_if<std::string>(&loaded))
-          setup->warnings.push_back(l.file + ':' + std::to_string(l.line) + ": LightSource: " + *why + " (" +
-                                    WhereMade(name, scene, o.file) + "); the light casts no shadow through it");
+          unreadable[name] = *why + " (" + WhereMade(name, scene, o.file) + ")";
         else
           setup->shadowMaps[name] = std::move(std::get<std::unique_ptr<raster::ShadowMap>>(loaded));
       }
-      // A map that cannot be read leaves the light unshadowed (warned once, above).
-      if (auto it = setup->shadowMaps.find(name); it != setup->shadowMaps.end()) out.shadows.push_back(it->second.get());
+      if (auto it = setup->shadowMaps.find(name); it != setup->shadowMaps.end())
+        out.shadows.push_back(it->second.get());
+      else
+        setup->warnings.push_back(l.file + ':' + std::to_string(l.line) + ": LightSource: " + unreadable[name] +
+                                  "; the light casts no shadow through it");
     }
     out.shadowBias = l.shadowBias;
     out.shadowBlur = l.shadowBlur;

@@ -115,6 +115,16 @@ TEST(ShadowMaps, AMapNotRenderedYetIsAWarningAndNoShadow) {
   EXPECT_NE(dir.Err().find("m.rib:29: LightSource: none.shd: cannot read the shadow map"), std::string::npos)
       << dir.Err();
   EXPECT_EQ(Pixels(dir.path / "z.png"), b);
+  // Two lights naming one map that cannot be read: each is named.
+  std::string twice = missing;
+  const std::size_t light = twice.find("  LightSource \"shadowspot\"");
+  twice.insert(light, twice.substr(light, twice.find('\n', light) + 1 - light));
+  std::ofstream(dir.path / "t.rib") << twice;
+  ASSERT_EQ(dir.Run("render t.rib --frame 2 --aa 1 -o t.png"), 0) << dir.Err();
+  EXPECT_NE(dir.Err().find("t.rib:29: LightSource: none.shd: cannot read the shadow map"), std::string::npos)
+      << dir.Err();
+  EXPECT_NE(dir.Err().find("t.rib:30: LightSource: none.shd: cannot read the shadow map"), std::string::npos)
+      << dir.Err();
 }
 
 // Woo's midpoint maps (Hider "hidden" "depthfilter" "midpoint"): the sphere of shadows.rib

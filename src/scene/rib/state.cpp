@@ -300,7 +300,7 @@ bool RibParser::Option(const Request& r) {
   std::vector<Param> params;
   if (!NameAndParams(r, &name, &params)) return false;
   if (name != "shadow") {
-    Warn(r.line, "Option", "Option " + Shown(name) + " is not supported here: skipped");
+    Warn(r.line, "Option " + name, "Option " + Shown(name) + " is not supported here: skipped");
     return true;
   }
   for (const Param& p : params) {
