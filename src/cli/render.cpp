@@ -110,6 +110,11 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                   "needs it; 'maketx' makes mipmapped files)")
       ->type_name("none|checker|FILE")
       ->capture_default_str();
+  cmd->add_option("--bump", o->bump,
+                  "a bump map for every surface whose scene gives none (Blinn 1978): the first "
+                  "channel of an image file as a height along the normal, times AMPLITUDE (world "
+                  "units, default 1); the normal is perturbed, the surface does not move")
+      ->type_name("FILE[:AMPLITUDE]");
   cmd->add_flag("--cull-backfaces", o->cullBackFaces,
                 "drop triangles facing away from the eye (default: two-sided)");
   cmd->add_option("--opacity", o->opacity,

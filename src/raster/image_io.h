@@ -56,6 +56,10 @@ class Texture {
   // The first min(channels, 3) channels at (s, t), t down the image, wrapping periodically,
   // filtered over the footprint d(s, t)/dx, d(s, t)/dy. Safe from several threads at once.
   virtual bool Lookup(float s, float t, float dsdx, float dtdx, float dsdy, float dtdy, float* rgb) = 0;
+  // The first channel at (s, t), filtered over the same footprint, and its derivatives in
+  // s and t (OpenImageIO's dresultds, dresultdt: of the filtered value).
+  virtual bool LookupGradient(float s, float t, float dsdx, float dtdx, float dsdy, float dtdy, float* value,
+                              float* dds, float* ddt) = 0;
   virtual int Channels() const = 0;  // 1 to 3
   virtual std::string Error() = 0;
 };

@@ -108,6 +108,11 @@ class OiioTexture final : public Texture {
     return system_->texture(handle_, system_->get_perthread_info(), options_, s, t, dsdx, dtdx, dsdy, dtdy, channels_,
                             rgb);
   }
+  bool LookupGradient(float s, float t, float dsdx, float dtdx, float dsdy, float dtdy, float* value, float* dds,
+                      float* ddt) override {
+    return system_->texture(handle_, system_->get_perthread_info(), options_, s, t, dsdx, dtdx, dsdy, dtdy, 1, value,
+                            dds, ddt);
+  }
   int Channels() const override { return channels_; }
   std::string Error() override { return system_->geterror(); }
 

@@ -312,8 +312,7 @@ class FragmentGeometry {
   Rgb ShadeGroup(const Rows& rows, const Member* m, int n, double cx, double cy, std::int64_t& nCalls,
                  Fragment* f) const {
     ++nCalls;
-    *f = GroupFragment(rows, m, n, cx, cy);
-    return ShadeFragment(*f, s_, &failed_);
+    return ShadeFragment(GroupFragment(rows, m, n, cx, cy), s_, &failed_, f);
   }
   // A group of exact samples of one surface is shaded once, with its samples' attributes
   // averaged: the surface at their centroid to second order. A group with slab samples

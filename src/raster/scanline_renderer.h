@@ -54,6 +54,8 @@ struct RenderSettings {
   // vertices (W = 1), and fragments' w is that depth.
   bool orthographic = false;
   Vec3 forward = Vec3(0, 0, 1);
+  // The camera's projection to pixels, for bump maps (raster/bump.h); zero: none applied.
+  ScreenRows screen = ScreenRows::Zero();
   // A render shared between processes (patchscan-mpi): only the pixel rows this owns are
   // rendered and handed to the sink, and only their sample rows asked of the source
   // (empty: every row).

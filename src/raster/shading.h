@@ -12,6 +12,7 @@
 #include <optional>
 #include <vector>
 
+#include "raster/bump.h"
 #include "raster/mesh.h"
 #include "raster/shadow_map.h"
 #include "raster/texture.h"
@@ -63,6 +64,7 @@ struct Material {
   bool reversed = false;       // the front is the side the normal points away from
   int checkerSquares = 0;      // > 0: modulate colour by a uv checker of this many squares
   ImageTexture* texture = nullptr;  // not owned; modulates colour when set
+  BumpMap bump;                     // perturbs the shading normal when it has a height field
 };
 
 struct LightRig {

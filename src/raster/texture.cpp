@@ -30,21 +30,39 @@ bool ImageTexture::Open() {
   return !failed_;
 }
 
-std::optional<Eigen::Vector3d> ImageTexture::Lookup(const Vec2& uv, const Vec2& duvdx,
-                                                    const Vec2& duvdy) {
+void ImageTexture::Failed() {
+  std::lock_guard lock(errorMutex_);
+  if (!failed_) error_ = path_ + ": texture lookup failed: " + impl_->texture->Error();
+  failed_ = true;
+}
+
+std::optional<Eigen::Vector3d> ImageTexture::Lookup(const Vec2& uv, const Vec2& duvdx, const Vec2& duvdy) {
   if (failed_ || !Open()) return std::nullopt;
   ++nLookups_;
   float rgb[3] = {0, 0, 0};
   if (!impl_->texture->Lookup(static_cast<float>(uv.x()), static_cast<float>(uv.y()), static_cast<float>(duvdx.x()),
                               static_cast<float>(duvdx.y()), static_cast<float>(duvdy.x()),
                               static_cast<float>(duvdy.y()), rgb)) {
-    std::lock_guard lock(errorMutex_);
-    if (!failed_) error_ = path_ + ": texture lookup failed: " + impl_->texture->Error();
-    failed_ = true;
+    Failed();
     return std::nullopt;
   }
   if (impl_->texture->Channels() == 1) rgb[1] = rgb[2] = rgb[0];
   return Eigen::Vector3d(rgb[0], rgb[1], rgb[2]);
+}
+
+std::optional<ImageTexture::Height> ImageTexture::LookupHeight(const Vec2& uv, const Vec2& duvdx,
+                                                               const Vec2& duvdy) {
+  if (failed_ || !Open()) return std::nullopt;
+  ++nLookups_;
+  float value = 0, dds = 0, ddt = 0;
+  if (!impl_->texture->LookupGradient(static_cast<float>(uv.x()), static_cast<float>(uv.y()),
+                                      static_cast<float>(duvdx.x()), static_cast<float>(duvdx.y()),
+                                      static_cast<float>(duvdy.x()), static_cast<float>(duvdy.y()), &value, &dds,
+                                      &ddt)) {
+    Failed();
+    return std::nullopt;
+  }
+  return Height{value, Vec2(dds, ddt)};
 }
 
 }  // namespace patchscan::raster

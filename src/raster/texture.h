@@ -25,6 +25,13 @@ class ImageTexture {
   // derivatives of uv per pixel in x and y. nullopt if the texture cannot be read
   // (Error() says why). Safe to call from several threads at once.
   std::optional<Eigen::Vector3d> Lookup(const Vec2& uv, const Vec2& duvdx, const Vec2& duvdy);
+  // A height field's first channel at (s, t) = uv, filtered over the same footprint as a
+  // colour, with its derivatives in s and t (a bump map's B_s, B_t: Blinn 1978).
+  struct Height {
+    double value = 0.0;
+    Vec2 gradient = Vec2::Zero();  // (dh/ds, dh/dt)
+  };
+  std::optional<Height> LookupHeight(const Vec2& uv, const Vec2& duvdx, const Vec2& duvdy);
 
   // After the render (not while lookups run):
   bool Opened() const { return impl_ != nullptr; }
@@ -35,6 +42,8 @@ class ImageTexture {
   struct Impl;
   // Opens the texture (once, whichever thread asks first); false if it cannot be read.
   bool Open();
+  // After a lookup that failed: records why (the first failure only) and stops further ones.
+  void Failed();
   std::string path_, error_;
   std::unique_ptr<Impl> impl_;
   std::once_flag opened_;

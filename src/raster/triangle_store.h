@@ -74,12 +74,23 @@ struct Member {
   Sample smp;
 };
 
-// The colour of a surface point: the material's (textured) colour lit by the rig.
-inline Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, std::atomic<bool>* failed) {
+// The colour of a surface point: the material's (textured) colour lit by the rig, with
+// the normal its bump map perturbs. `shaded`, when given, receives the fragment as shaded
+// (its normal bumped: what the normal AOV shows, as RenderMan's N after displacement).
+inline Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, std::atomic<bool>* failed,
+                         Fragment* shaded = nullptr) {
   const Material& m = s.MaterialOf(a.surfaceId);
   const auto base = SurfaceColour(m, a.uv, a.duvdx, a.duvdy);
   if (!base) *failed = true;
-  return Shade(a.position, a.normal, base.value_or(Rgb::Zero()).cwiseProduct(a.colour), s.EyeFor(a.position), m,
+  Vec3 normal = a.normal;
+  if (m.bump.height) {
+    if (const auto h = m.bump.height->LookupHeight(a.uv, a.duvdx, a.duvdy))
+      normal = BumpedNormal(s.screen, a.position, a.normal, m.bump.amplitude * h->gradient, a.duvdx, a.duvdy);
+    else
+      *failed = true;
+  }
+  if (shaded) *shaded = a, shaded->normal = normal;
+  return Shade(a.position, normal, base.value_or(Rgb::Zero()).cwiseProduct(a.colour), s.EyeFor(a.position), m,
                s.lights);
 }
 
@@ -253,11 +264,12 @@ class TriangleStore {
   Rgb ShadeAt(int slot, double x, double y, std::int64_t& nCalls, Fragment* f = nullptr) const {
     const Active& at = active_[slot];
     const Interpolated a = InterpolateAt(at, x, y);
-    if (f) *f = a.f;
-    if (shading_ == ShadingMode::Gouraud)
+    if (shading_ == ShadingMode::Gouraud) {
+      if (f) *f = a.f;
       return a.b[0] * at.vertexColour[0] + a.b[1] * at.vertexColour[1] + a.b[2] * at.vertexColour[2];
+    }
     ++nCalls;
-    return ShadeFragment(a.f, s_, &failed_);
+    return ShadeFragment(a.f, s_, &failed_, f);
   }
 
  private:

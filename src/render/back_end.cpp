@@ -1,6 +1,7 @@
 #include "render/back_end.h"
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 
@@ -88,6 +89,18 @@ std::string WhereMade(const std::string& name, const Scene& scene, const std::st
   return writer(name);
 }
 
+// --bump's value: the file and the amplitude after its last ':' (1 without one); nullopt
+// when the amplitude is not a finite number.
+std::optional<std::pair<std::string, double>> BumpOption(const std::string& text) {
+  const std::size_t colon = text.rfind(':');
+  if (colon == std::string::npos) return std::pair{text, 1.0};
+  const std::string amplitude = text.substr(colon + 1);
+  char* end = nullptr;
+  const double a = std::strtod(amplitude.c_str(), &end);
+  if (amplitude.empty() || *end != '\0' || !std::isfinite(a)) return std::nullopt;
+  return std::pair{text.substr(0, colon), a};
+}
+
 }  // namespace
 
 std::string BackEndSetup::TextureError() const {
@@ -133,6 +146,22 @@ Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const
     setup->texture = std::make_unique<raster::ImageTexture>(o.texture);
     s.material.texture = setup->texture.get();
   }
+  // Textures by file name, each opened only when a visible sample needs it.
+  const auto texture = [&](const std::string& name) {
+    auto& t = setup->sceneTextures[name];
+    if (!t) t = std::make_unique<raster::ImageTexture>(name);
+    return t.get();
+  };
+  const auto exists = [](const std::string& name) {
+    std::error_code ec;
+    return std::filesystem::is_regular_file(name, ec);
+  };
+  if (!o.bump.empty()) {
+    const auto bump = BumpOption(o.bump);
+    if (!bump) return Failure{Outcome::BadOption, "--bump: expected FILE or FILE:AMPLITUDE, not '" + o.bump + "'"};
+    if (!exists(bump->first)) return Failure{Outcome::BadOption, "--bump: no such file '" + bump->first + "'"};
+    s.material.bump = {texture(bump->first), bump->second};
+  }
   if (!scene.lights.empty()) s.lights = SceneLights(scene.lights);
   // The lights' shadow maps, each read once (SceneLights keeps the scene's light order,
   // less the ambient lights).
@@ -161,17 +190,19 @@ Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const
     out.shadowBlur = l.shadowBlur;
     out.shadowSamples = l.shadowSamples;
   }
-  // The scene's own materials, each texture opened only when a visible sample needs it.
+  // The scene's own materials.
   for (const Appearance& a : scene.appearances) {
     raster::Material m = SceneMaterial(a, s.material);
     if (!a.textureName.empty()) {
-      std::error_code ec;
-      if (!std::filesystem::is_regular_file(a.textureName, ec))
+      if (!exists(a.textureName))
         return Failure{Outcome::InputError,
                        scene.source + ": paintedplastic texture '" + a.textureName + "' not found"};
-      auto& t = setup->sceneTextures[a.textureName];
-      if (!t) t = std::make_unique<raster::ImageTexture>(a.textureName);
-      m.texture = t.get();
+      m.texture = texture(a.textureName);
+    }
+    if (!a.bumpName.empty()) {
+      if (!exists(a.bumpName))
+        return Failure{Outcome::InputError, scene.source + ": bumpy texture '" + a.bumpName + "' not found"};
+      m.bump = {texture(a.bumpName), a.bumpScale};
     }
     s.materials.push_back(m);
   }

@@ -22,7 +22,7 @@ namespace patchscan::render {
 struct BackEndSetup {
   raster::RenderSettings settings;
   std::unique_ptr<raster::ImageTexture> texture;  // RenderOptions::texture, a file
-  std::map<std::string, std::unique_ptr<raster::ImageTexture>> sceneTextures;
+  std::map<std::string, std::unique_ptr<raster::ImageTexture>> sceneTextures;  // by file: the scene's, --bump's
   std::map<std::string, std::unique_ptr<raster::ShadowMap>> shadowMaps;  // by file name
   // Shadow maps that could not be read, each naming the light and the frame that would
   // write the map: the light casts no shadow through them.

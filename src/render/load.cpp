@@ -178,6 +178,8 @@ raster::RenderSettings SettingsFor(const Camera& camera, int aa) {
   s.eye = EyePoint(camera);
   s.orthographic = camera.orthographic;
   s.forward = ViewForward(camera);
+  const Mat4 screen = ScreenFromWorld(camera);  // rows X, Y, depth, W
+  s.screen << screen.row(0), screen.row(1), screen.row(3);
   const Vec3 right = ViewRight(camera);
   s.lights = raster::DefaultLightRig(s.forward, right.cross(s.forward), right);
   return s;

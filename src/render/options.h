@@ -77,6 +77,9 @@ struct RenderOptions {
   std::optional<int> aa;  // none: a RIB scene's PixelSamples, else kDefaultAa
   raster::ShadingMode shading = raster::ShadingMode::Phong;
   std::string texture = "none";  // "none", "checker" or an image file
+  // A bump map for every surface without its own: "FILE" or "FILE:AMPLITUDE" (world units
+  // per unit of the height texture's value, default 1); "": none.
+  std::string bump;
   bool cullBackFaces = false;
   bool hiddenLine = false;
   double opacity = 1.0;

@@ -26,6 +26,11 @@ struct Appearance {
   double ka = 1.0, kd = 0.5, ks = 0.5, roughness = 0.1;
   Vec3 specularColour = Vec3(1, 1, 1);
   std::string textureName;          // paintedplastic: a path, resolved against the scene file
+  // Displacement "bumpy" (RenderMan Interface 3.2, appendix A), applied as a bump map (Blinn
+  // 1978): its height texture (a path as above; "": none) and the scale of its values, Km
+  // times amplitude, in world units.
+  std::string bumpName;
+  double bumpScale = 1.0;
   bool twoSided = true;             // Sides 2 (the default) or 1
   bool reversed = false;            // the front is the side the normal points away from
   bool operator==(const Appearance&) const = default;

@@ -14,24 +14,11 @@
 #include <fstream>
 #include <sstream>
 
-#include "cli/run_program.h"
+#include "cli/folder.h"
 
 namespace {
 
 const std::string kTeapot = PATCHSCAN_SURFACES_DIR "/teapot.bpt";
-
-// Every channel of every pixel of an image file, as stored (alpha not multiplied in; empty
-// if it cannot be read).
-std::vector<float> Pixels(const std::string& path) {
-  OIIO::ImageSpec config;
-  config.attribute("oiio:UnassociatedAlpha", 1);
-  auto in = OIIO::ImageInput::open(path, &config);
-  if (!in) return {};
-  const OIIO::ImageSpec& spec = in->spec();
-  std::vector<float> px(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data())) return {};
-  return px;
-}
 
 // The sRGB encoding of linear v (IEC 61966-2-1), written out here independently of the
 // renderer's table.

@@ -2,7 +2,6 @@
 // light's depth map, MakeShadow makes it a shadow texture, a later frame reads it. A map
 // that is not there yet is a warning naming the frame that writes it, and the light casts
 // no shadow: the picture is the one rendered without the map.
-#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -11,38 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "cli/run_program.h"
+#include "cli/folder.h"
 
 namespace {
-
-// Every channel of every pixel of an image file (empty if it cannot be read).
-std::vector<float> Pixels(const std::filesystem::path& p) {
-  auto in = OIIO::ImageInput::open(p.string());
-  std::vector<float> px;
-  if (!in) return px;
-  px.resize(static_cast<std::size_t>(in->spec().width) * in->spec().height * in->spec().nchannels);
-  if (!in->read_image(0, 0, 0, -1, OIIO::TypeDesc::FLOAT, px.data())) px.clear();
-  return px;
-}
-
-// A folder of its own for one test, removed after it.
-struct Folder {
-  explicit Folder(const std::string& name)
-      : path(std::filesystem::temp_directory_path() / ("patchscan_" + name + "_" + std::to_string(::getpid()))) {
-    std::filesystem::remove_all(path);
-    std::filesystem::create_directories(path);
-  }
-  ~Folder() { std::filesystem::remove_all(path); }
-  // Runs patchscan with `args` in the folder; its exit code (its stderr kept for Err).
-  int Run(const std::string& args) {
-    const Result r = Patchscan(args, "cd " + path.string() + " &&");
-    err = r.err;
-    return r.code;
-  }
-  const std::string& Err() const { return err; }
-  std::filesystem::path path;
-  std::string err;
-};
 
 // surfaces/shadows.rib: frame 2 lights a sphere over a floor through frame 1's map. u.rib
 // is the same scene with no shadowname: the same light, unshadowed.

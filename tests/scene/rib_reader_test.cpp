@@ -565,6 +565,25 @@ TEST(Rib, ColourOpacityAndTheStandardShaders) {
   EXPECT_EQ(s.warnings[0], "t.rib:15: Surface: unknown shader 'wood': the default material is used");
 }
 
+TEST(Rib, BumpyDisplacementIsABumpMap) {
+  const Scene s = Parse(World(
+      "Attribute \"displacementbound\" \"sphere\" [0.1] \"coordinatesystem\" [\"shader\"]\n"
+      "Displacement \"bumpy\" \"Km\" [2] \"amplitude\" [0.25] \"texturename\" \"h.tx\"\nSphere 1 -1 1 360\n"
+      "AttributeBegin\nDisplacement \"bumpy\"\nSphere 1 -1 1 360\nAttributeEnd\n"
+      "Sphere 1 -1 1 360\nDisplacement \"dented\"\nSphere 1 -1 1 360"));
+  ASSERT_EQ(s.surfaces.size(), 4u);
+  const auto look = [&](int k) { return s.appearances[s.appearanceOf[k]]; };
+  EXPECT_EQ(look(0).bumpName, "h.tx");  // relative to the scene file's directory
+  EXPECT_EQ(look(0).bumpScale, 0.5);    // Km times amplitude
+  EXPECT_EQ(look(1).bumpName, "");      // bumpy without a texture: no bump
+  EXPECT_EQ(look(2).bumpName, "h.tx");  // the attribute block restored it
+  EXPECT_EQ(look(3).bumpName, "");
+  EXPECT_EQ(s.warnings, std::vector<std::string>{
+                            "t.rib:10: Displacement: unknown shader 'dented': the surface is not displaced"});
+  EXPECT_EQ(Error(World("Attribute \"displacementbound\" \"sphere\" [-1]")),
+            "t.rib:2: Attribute \"displacementbound\" \"sphere\" must be 0 or more");
+}
+
 TEST(Rib, LightSourcesInWorldSpace) {
   const Scene s = Parse(
       "Translate 0 0 10\n"
@@ -743,7 +762,6 @@ TEST(Rib, EverythingElseIsSkippedWithOneWarningPerKind) {
       "t.rib:3: Declare is not supported here: skipped",
       "t.rib:5: Attribute 'identifier' is not supported here: skipped",
       "t.rib:6: Attribute 'visibility' is not supported here: skipped",
-      "t.rib:7: Displacement is not supported here: skipped",
       "t.rib:8: MakeTexture is not supported here: skipped",
       "t.rib:9: Polygon: parameter \"Os\" is not supported here: ignored",
       "t.rib:10: unknown request 'FooBar': skipped",

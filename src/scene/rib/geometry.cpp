@@ -44,10 +44,11 @@ std::uint32_t RibParser::AppearanceIndex() {
 }
 
 std::size_t RibParser::HashOf(const Appearance& a) {
-  std::size_t h = std::hash<std::string>()(a.textureName) ^ (static_cast<std::size_t>(a.shader) << 1) ^
+  std::size_t h = std::hash<std::string>()(a.textureName) ^ (std::hash<std::string>()(a.bumpName) << 2) ^
+                  (static_cast<std::size_t>(a.shader) << 1) ^
                   (static_cast<std::size_t>(a.twoSided) << 5) ^ (static_cast<std::size_t>(a.reversed) << 6);
   for (const double x : {a.colour.x(), a.colour.y(), a.colour.z(), a.opacity.x(), a.opacity.y(), a.opacity.z(), a.ka,
-                         a.kd, a.ks, a.roughness, a.specularColour.x(), a.specularColour.y(), a.specularColour.z()})
+                         a.kd, a.ks, a.roughness, a.specularColour.x(), a.specularColour.y(), a.specularColour.z(), a.bumpScale})
     h = h * 1000003u ^ std::hash<double>()(x);
   return h;
 }
@@ -357,6 +358,17 @@ bool RibParser::AttributeRequest(const Request& r) {
   std::string name;
   std::vector<Param> params;
   if (!NameAndParams(r, &name, &params)) return false;
+  if (name == "displacementbound") {
+    // The bound a displacement may move the surface by: a bump never moves it, so no bound
+    // widens; its values are checked all the same.
+    for (const Param& p : params) {
+      if (p.name != "sphere") continue;
+      double sphere = 0.0;
+      if (!ParamNumbers(r, p, 1, &sphere)) return false;
+      if (!(sphere >= 0.0)) return Fail(p.value->line, "Attribute \"displacementbound\" \"sphere\" must be 0 or more");
+    }
+    return true;
+  }
   if (name != "trimcurve") {
     Warn(r.line, "Attribute " + name, "Attribute " + Shown(name) + " is not supported here: skipped");
     return true;

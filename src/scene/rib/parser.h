@@ -199,6 +199,7 @@ class RibParser {
 
   // ---- appearance ----
   bool SurfaceShader(const Request& r);
+  bool DisplacementShader(const Request& r);
   bool LightSource(const Request& r);
   bool MakeShadow(const Request& r);
   // Hider "hidden" "depthfilter" and Option "shadow" "bias": how depth maps are written

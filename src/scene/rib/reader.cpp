@@ -21,7 +21,7 @@ const char* BlockName(Block::Kind k) {
 // what a parametric surface looks like here.
 const std::set<std::string, std::less<>>& SkippedRequests() {
   static const std::set<std::string, std::less<>> k = {
-      "Declare", "Displacement", "Atmosphere", "Interior",
+      "Declare", "Atmosphere", "Interior",
       "Exterior", "Imager", "Exposure", "Quantize", "PixelFilter", "PixelVariance",
       "ShadingRate", "ShadingInterpolation", "Matte", "Bound", "Detail", "DetailRange",
       "GeometricApproximation", "MakeTexture", "MakeLatLongEnvironment",
@@ -115,6 +115,7 @@ const std::unordered_map<std::string_view, RibParser::Handler>& RibParser::Reque
       {"Color", &RibParser::Color},
       {"Opacity", &RibParser::Opacity},
       {"Surface", &RibParser::SurfaceShader},
+      {"Displacement", &RibParser::DisplacementShader},
       {"LightSource", &RibParser::LightSource},
       {"MakeShadow", &RibParser::MakeShadow},
       {"Hider", &RibParser::Hider},

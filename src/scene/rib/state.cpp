@@ -210,6 +210,40 @@ bool RibParser::SurfaceShader(const Request& r) {
   return true;
 }
 
+bool RibParser::DisplacementShader(const Request& r) {
+  std::string name;
+  std::vector<Param> params;
+  if (!NameAndParams(r, &name, &params)) return false;
+  Appearance& a = attr_.appearance;
+  a.bumpName.clear();
+  a.bumpScale = 1.0;
+  if (name != "bumpy") {
+    Warn(r.line, "displacement " + name,
+         "Displacement: unknown shader " + Shown(name) + ": the surface is not displaced");
+    return true;
+  }
+  // bumpy moves P by Km * amplitude * texture(texturename) along N and takes the moved
+  // surface's normal; here the surface stays and its normal is bumped (RenderMan Interface
+  // 3.2, 4.2.5: an implementation without the Displacements capability bumps).
+  double km = 1.0, amplitude = 1.0;
+  for (const Param& p : params) {
+    bool ok = true;
+    if (p.name == "Km") ok = ParamNumbers(r, p, 1, &km);
+    else if (p.name == "amplitude") ok = ParamNumbers(r, p, 1, &amplitude);
+    else if (p.name == "texturename") {
+      ok = ParamString(r, p, &a.bumpName);
+      if (ok && !a.bumpName.empty()) {
+        std::filesystem::path path(a.bumpName);
+        if (path.is_relative()) a.bumpName = (std::filesystem::path(file_).parent_path() / path).string();
+      }
+    } else IgnoreParam(r, p);
+    if (!ok) return false;
+  }
+  a.bumpScale = km * amplitude;
+  if (!std::isfinite(a.bumpScale)) return Fail(r.line, "Displacement: Km and amplitude must be finite");
+  return true;
+}
+
 bool RibParser::LightSource(const Request& r) {
   std::string name;
   if (!StringArg(r, 0, &name)) return false;

@@ -146,6 +146,9 @@ void Attributes(std::ostream& out, const Appearance& a) {
   Triple(out, a.opacity);
   out << "\nSides " << (a.twoSided ? 2 : 1) << '\n';
   if (a.reversed) out << "ReverseOrientation\n";
+  if (!a.bumpName.empty())
+    out << "Displacement \"bumpy\" \"amplitude\" [" << a.bumpScale << "] \"texturename\" \""
+        << std::filesystem::absolute(a.bumpName).string() << "\"\n";
   using S = Appearance::Shader;
   switch (a.shader) {
     case S::Default: return;
