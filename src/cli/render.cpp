@@ -115,6 +115,12 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                   "channel of an image file as a height along the normal, times AMPLITUDE (world "
                   "units, default 1); the normal is perturbed, the surface does not move")
       ->type_name("FILE[:AMPLITUDE]");
+  cmd->add_option("--environment", o->environment,
+                  "an environment map (Blinn and Newell 1976) reflected by every metal, plastic and "
+                  "default surface whose scene gives none: a lat-long image (+y up, as OpenEXR's; "
+                  "'maketx --envlatl' makes a filtered one), KR times the highlights' colour "
+                  "(default 1)")
+      ->type_name("FILE[:KR]");
   cmd->add_flag("--cull-backfaces", o->cullBackFaces,
                 "drop triangles facing away from the eye (default: two-sided)");
   cmd->add_option("--opacity", o->opacity,

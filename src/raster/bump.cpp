@@ -2,15 +2,37 @@
 
 namespace patchscan::raster {
 
-Vec3 SurfaceGradient(const ScreenRows& screen, const Vec3& p, const Vec3& n, const Vec2& perPixel) {
-  const Eigen::Vector4d ph(p.x(), p.y(), p.z(), 1.0);
-  const Vec3 h = screen * ph;  // (X, Y, W)
-  if (!(h.z() > 0.0)) return Vec3::Zero();
+namespace {
+
+// The world gradients of screen x and y at p; false where p is not in front of the eye.
+bool ScreenGradients(const ScreenRows& screen, const Vec3& p, Vec3* gradX, Vec3* gradY) {
+  const Vec3 h = screen * p.homogeneous();  // (X, Y, W)
+  if (!(h.z() > 0.0)) return false;
   const double invW = 1.0 / h.z(), x = h.x() * invW, y = h.y() * invW;
   const Vec3 mw = screen.block<1, 3>(2, 0).transpose();
   // x = X / W: dx = (M_x - x M_w) . dp / W, and likewise y.
-  const Vec3 gradX = (screen.block<1, 3>(0, 0).transpose() - x * mw) * invW;
-  const Vec3 gradY = (screen.block<1, 3>(1, 0).transpose() - y * mw) * invW;
+  *gradX = (screen.block<1, 3>(0, 0).transpose() - x * mw) * invW;
+  *gradY = (screen.block<1, 3>(1, 0).transpose() - y * mw) * invW;
+  return true;
+}
+
+}  // namespace
+
+std::pair<Vec3, Vec3> ScreenTangents(const ScreenRows& screen, const Vec3& p, const Vec3& n) {
+  Vec3 gradX, gradY;
+  if (!ScreenGradients(screen, p, &gradX, &gradY)) return {Vec3::Zero(), Vec3::Zero()};
+  // The tangent a with gradX . a = 1, gradY . a = 0, n . a = 0, and b likewise: the first
+  // two columns of the inverse of the matrix with those rows.
+  Eigen::Matrix3d rows;
+  rows << gradX.transpose(), gradY.transpose(), n.transpose();
+  const Eigen::Matrix3d inverse = rows.inverse();
+  if (!inverse.allFinite()) return {Vec3::Zero(), Vec3::Zero()};
+  return {inverse.col(0), inverse.col(1)};
+}
+
+Vec3 SurfaceGradient(const ScreenRows& screen, const Vec3& p, const Vec3& n, const Vec2& perPixel) {
+  Vec3 gradX, gradY;
+  if (!ScreenGradients(screen, p, &gradX, &gradY)) return Vec3::Zero();
   const Vec3 g = perPixel.x() * gradX + perPixel.y() * gradY;
   // Within the tangent plane: along any tangent t, g . t is then the function's change (the
   // screen's change along t, weighted by the change per pixel), and nothing along n.

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <utility>
 
 #include "raster/mesh.h"
 
@@ -40,6 +41,11 @@ struct BumpMap {
 // tangent plane, grad x = (M_x - x M_w) / W the world gradient of screen x. Zero where the
 // screen rows are unknown or the point is behind the eye.
 Vec3 SurfaceGradient(const ScreenRows& screen, const Vec3& p, const Vec3& n, const Vec2& perPixel);
+
+// The world change, per pixel along screen x and along y, of a point moving in the tangent
+// plane through p with unit normal n: the inverse of the screen's Jacobian there. Zero where
+// the screen rows are unknown, the point is behind the eye or the plane is seen edge-on.
+std::pair<Vec3, Vec3> ScreenTangents(const ScreenRows& screen, const Vec3& p, const Vec3& n);
 
 // Blinn's perturbed normal at a point with normal n (any length; the result's length is
 // near 1 for a gentle bump): n / |n| less the surface gradient of the height, from its

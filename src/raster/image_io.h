@@ -60,6 +60,10 @@ class Texture {
   // s and t (OpenImageIO's dresultds, dresultdt: of the filtered value).
   virtual bool LookupGradient(float s, float t, float dsdx, float dtdx, float dsdy, float dtdy, float* value,
                               float* dds, float* ddt) = 0;
+  // An environment map's first min(channels, 3) channels in world direction r, filtered over
+  // the directions' change per pixel drdx, drdy (OpenImageIO's environment(): a lat-long map
+  // with +y up and longitude 0 along +z, as OpenEXR lays them out).
+  virtual bool Environment(const float* r, const float* drdx, const float* drdy, float* rgb) = 0;
   virtual int Channels() const = 0;  // 1 to 3
   virtual std::string Error() = 0;
 };
@@ -84,6 +88,9 @@ class Library {
   virtual std::variant<Image, std::string> Read(const std::string& path, int channels, bool unassociatedAlpha) const = 0;
   // MakeShadow (maketx's shadow mode): a tiled, mipmapped float TIFF of the depth map `input`.
   virtual std::optional<std::string> MakeShadowTexture(const std::string& input, const std::string& output) const = 0;
+  // MakeLatLongEnvironment (maketx's --envlatl): a tiled, mipmapped TIFF of the lat-long
+  // image `input` that environment lookups filter across its seam and poles.
+  virtual std::optional<std::string> MakeLatLongTexture(const std::string& input, const std::string& output) const = 0;
   virtual std::variant<std::unique_ptr<Texture>, std::string> OpenTexture(const std::string& path) const = 0;
 };
 

@@ -1,5 +1,8 @@
 // patchscan-imageio.so: every call patchscan makes into OpenImageIO (raster/image_io.h says
 // why it is a module of its own). Built against nothing of patchscan but that header.
+// Imath before OpenImageIO: its texture.h declares a placeholder Imath::V3f otherwise.
+#include <Imath/ImathVec.h>
+
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
@@ -113,6 +116,11 @@ class OiioTexture final : public Texture {
     return system_->texture(handle_, system_->get_perthread_info(), options_, s, t, dsdx, dtdx, dsdy, dtdy, 1, value,
                             dds, ddt);
   }
+  bool Environment(const float* r, const float* drdx, const float* drdy, float* rgb) override {
+    return system_->environment(handle_, system_->get_perthread_info(), options_, Imath::V3f(r[0], r[1], r[2]),
+                                Imath::V3f(drdx[0], drdx[1], drdx[2]), Imath::V3f(drdy[0], drdy[1], drdy[2]), channels_,
+                                rgb);
+  }
   int Channels() const override { return channels_; }
   std::string Error() override { return system_->geterror(); }
 
@@ -125,6 +133,17 @@ class OiioTexture final : public Texture {
 };
 
 class OiioLibrary final : public Library {
+  // maketx's work in `mode`: a tiled, MIP-mapped TIFF of `input` (read as floats) at `output`.
+  static std::optional<std::string> MakeTexture(OIIO::ImageBufAlgo::MakeTextureMode mode, const std::string& input,
+                                                const std::string& output) {
+    OIIO::ImageBuf in(input);
+    if (!in.read(0, 0, true, OIIO::TypeDesc::FLOAT)) return in.geterror();
+    OIIO::ImageSpec config;
+    config.attribute("maketx:fileformatname", "tiff");
+    if (!OIIO::ImageBufAlgo::make_texture(mode, in, output, config)) return OIIO::geterror();
+    return std::nullopt;
+  }
+
  public:
   std::variant<std::unique_ptr<Output>, std::string> Create(const std::string& format, const std::string& file,
                                                             const FileSpec& spec, PixelType type) const override {
@@ -150,13 +169,10 @@ class OiioLibrary final : public Library {
   }
 
   std::optional<std::string> MakeShadowTexture(const std::string& input, const std::string& output) const override {
-    OIIO::ImageBuf in(input);
-    if (!in.read(0, 0, true, OIIO::TypeDesc::FLOAT)) return in.geterror();
-    OIIO::ImageSpec config;
-    config.attribute("maketx:fileformatname", "tiff");
-    if (!OIIO::ImageBufAlgo::make_texture(OIIO::ImageBufAlgo::MakeTxShadow, in, output, config))
-      return OIIO::geterror();
-    return std::nullopt;
+    return MakeTexture(OIIO::ImageBufAlgo::MakeTxShadow, input, output);
+  }
+  std::optional<std::string> MakeLatLongTexture(const std::string& input, const std::string& output) const override {
+    return MakeTexture(OIIO::ImageBufAlgo::MakeTxEnvLatl, input, output);
   }
 
   std::variant<std::unique_ptr<Texture>, std::string> OpenTexture(const std::string& path) const override {

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "raster/bump.h"
+#include "raster/environment.h"
 #include "raster/mesh.h"
 #include "raster/shadow_map.h"
 #include "raster/texture.h"
@@ -65,6 +66,9 @@ struct Material {
   int checkerSquares = 0;      // > 0: modulate colour by a uv checker of this many squares
   ImageTexture* texture = nullptr;  // not owned; modulates colour when set
   BumpMap bump;                     // perturbs the shading normal when it has a height field
+  // Reflected, times the colour the highlights take (metal: the surface's; else
+  // specularColour), on every model but constant and matte.
+  EnvironmentMap environment;
 };
 
 struct LightRig {

@@ -1,5 +1,7 @@
 #include "raster/texture.h"
 
+#include <filesystem>
+
 #include "raster/image_io.h"
 
 namespace patchscan::raster {
@@ -63,6 +65,30 @@ std::optional<ImageTexture::Height> ImageTexture::LookupHeight(const Vec2& uv, c
     return std::nullopt;
   }
   return Height{value, Vec2(dds, ddt)};
+}
+
+std::optional<Eigen::Vector3d> ImageTexture::LookupEnvironment(const Vec3& r, const Vec3& drdx, const Vec3& drdy) {
+  if (failed_ || !Open()) return std::nullopt;
+  ++nLookups_;
+  const auto f = [](const Vec3& v) { return Eigen::Vector3f(v.cast<float>()); };
+  const Eigen::Vector3f fr = f(r), fx = f(drdx), fy = f(drdy);
+  float rgb[3] = {0, 0, 0};
+  if (!impl_->texture->Environment(fr.data(), fx.data(), fy.data(), rgb)) {
+    Failed();
+    return std::nullopt;
+  }
+  if (impl_->texture->Channels() == 1) rgb[1] = rgb[2] = rgb[0];
+  return Eigen::Vector3d(rgb[0], rgb[1], rgb[2]);
+}
+
+std::optional<std::string> MakeLatLongEnvironment(const std::string& input, const std::string& output) {
+  std::error_code ec;
+  if (!std::filesystem::exists(input, ec)) return input + ": no such file";
+  const auto library = imageio::Get();
+  if (const auto* why = std::get_if<std::string>(&library)) return input + ": " + *why;
+  if (auto why = std::get<const imageio::Library*>(library)->MakeLatLongTexture(input, output))
+    return output + ": cannot make the environment texture: " + *why;
+  return std::nullopt;
 }
 
 }  // namespace patchscan::raster

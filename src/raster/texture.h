@@ -32,6 +32,9 @@ class ImageTexture {
     Vec2 gradient = Vec2::Zero();  // (dh/ds, dh/dt)
   };
   std::optional<Height> LookupHeight(const Vec2& uv, const Vec2& duvdx, const Vec2& duvdy);
+  // An environment map's RGB in world direction r (any length), filtered over r's change
+  // per pixel drdx, drdy (Blinn and Newell 1976; the layout is image_io.h's Environment).
+  std::optional<Eigen::Vector3d> LookupEnvironment(const Vec3& r, const Vec3& drdx, const Vec3& drdy);
 
   // After the render (not while lookups run):
   bool Opened() const { return impl_ != nullptr; }
@@ -51,5 +54,9 @@ class ImageTexture {
   std::atomic<bool> failed_ = false;
   std::atomic<long> nLookups_ = 0;
 };
+
+// MakeLatLongEnvironment: the environment texture (tiled, MIP-mapped TIFF) of the lat-long
+// image `input`, written to `output`; the message when that fails.
+std::optional<std::string> MakeLatLongEnvironment(const std::string& input, const std::string& output);
 
 }  // namespace patchscan::raster

@@ -90,8 +90,18 @@ inline Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, std::atomic
       *failed = true;
   }
   if (shaded) *shaded = a, shaded->normal = normal;
-  return Shade(a.position, normal, base.value_or(Rgb::Zero()).cwiseProduct(a.colour), s.EyeFor(a.position), m,
-               s.lights);
+  const Rgb colour = base.value_or(Rgb::Zero()).cwiseProduct(a.colour);
+  const Vec3 eye = s.EyeFor(a.position);
+  Rgb rgb = Shade(a.position, normal, colour, eye, m, s.lights);
+  using Model = Material::Model;
+  if (m.environment.map && m.model != Model::Constant && m.model != Model::Matte) {
+    const Reflection r = ReflectedView(s.screen, a.position, normal, eye, s.orthographic);
+    if (const auto seen = m.environment.map->LookupEnvironment(r.r, r.drdx, r.drdy))
+      rgb += m.environment.kr * (m.model == Model::Metal ? colour : m.specularColour).cwiseProduct(*seen);
+    else
+      *failed = true;
+  }
+  return rgb;
 }
 
 // Whether a point with normal n (any length) at p shows the front of material m to the eye.

@@ -62,7 +62,7 @@ raster::Material SceneMaterial(const Appearance& a, const raster::Material& fall
   }
   m.model = a.shader == S::Constant ? M::Constant
             : a.shader == S::Matte  ? M::Matte
-            : a.shader == S::Metal  ? M::Metal
+            : a.shader == S::Metal || a.shader == S::ShinyMetal ? M::Metal
                                     : M::Plastic;
   m.colour = a.colour;
   m.emission = raster::Rgb::Zero();
@@ -83,15 +83,15 @@ std::string WhereMade(const std::string& name, const Scene& scene, const std::st
       if (f.display == file) return "frame " + std::to_string(f.number) + " of " + ribFile + " writes " + file;
     return "no frame of " + ribFile + " writes " + file;
   };
-  for (const SceneMakeShadow& m : scene.makeShadows)
+  for (const SceneMakeTexture& m : scene.makeTextures)
     if (m.output == name)
-      return "MakeShadow at " + m.file + ':' + std::to_string(m.line) + " makes it from " + m.input + "; " + writer(m.input);
+      return std::string(m.kind == SceneMakeTexture::Kind::Shadow ? "MakeShadow" : "MakeLatLongEnvironment") + " at " + m.file + ':' + std::to_string(m.line) + " makes it from " + m.input + "; " + writer(m.input);
   return writer(name);
 }
 
-// --bump's value: the file and the amplitude after its last ':' (1 without one); nullopt
-// when the amplitude is not a finite number.
-std::optional<std::pair<std::string, double>> BumpOption(const std::string& text) {
+// --bump's and --environment's value: the file and the number after its last ':' (1
+// without one); nullopt when that is not a finite number.
+std::optional<std::pair<std::string, double>> FileAndNumber(const std::string& text) {
   const std::size_t colon = text.rfind(':');
   if (colon == std::string::npos) return std::pair{text, 1.0};
   const std::string amplitude = text.substr(colon + 1);
@@ -157,10 +157,16 @@ Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const
     return std::filesystem::is_regular_file(name, ec);
   };
   if (!o.bump.empty()) {
-    const auto bump = BumpOption(o.bump);
+    const auto bump = FileAndNumber(o.bump);
     if (!bump) return Failure{Outcome::BadOption, "--bump: expected FILE or FILE:AMPLITUDE, not '" + o.bump + "'"};
     if (!exists(bump->first)) return Failure{Outcome::BadOption, "--bump: no such file '" + bump->first + "'"};
     s.material.bump = {texture(bump->first), bump->second};
+  }
+  if (!o.environment.empty()) {
+    const auto env = FileAndNumber(o.environment);
+    if (!env) return Failure{Outcome::BadOption, "--environment: expected FILE or FILE:KR, not '" + o.environment + "'"};
+    if (!exists(env->first)) return Failure{Outcome::BadOption, "--environment: no such file '" + env->first + "'"};
+    s.material.environment = {texture(env->first), env->second};
   }
   if (!scene.lights.empty()) s.lights = SceneLights(scene.lights);
   // The lights' shadow maps, each read once (SceneLights keeps the scene's light order,
@@ -204,6 +210,16 @@ Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const
         return Failure{Outcome::InputError, scene.source + ": bumpy texture '" + a.bumpName + "' not found"};
       m.bump = {texture(a.bumpName), a.bumpScale};
     }
+    if (a.shader == Appearance::Shader::ShinyMetal) {
+      // Its own map, or none ("" : no reflection, as the shader's default).
+      m.environment = {nullptr, a.kr};
+      if (!a.environmentName.empty()) {
+        if (!exists(a.environmentName))
+          return Failure{Outcome::InputError, scene.source + ": shinymetal environment map '" + a.environmentName +
+                                                  "' not found (it is read from the working directory)"};
+        m.environment.map = texture(a.environmentName);
+      }
+    }
     s.materials.push_back(m);
   }
   s.materialOf = scene.appearanceOf;
@@ -228,12 +244,15 @@ raster::ShadowCamera LightCamera(const Camera& camera) {
   return c;
 }
 
-std::vector<std::string> MakeShadows(const Scene& scene, const std::string& ribFile) {
+std::vector<std::string> MakeTextures(const Scene& scene, const std::string& ribFile) {
   std::vector<std::string> warnings;
-  for (const SceneMakeShadow& m : scene.makeShadows)
-    if (const auto why = raster::MakeShadowTexture(m.input, m.output))
-      warnings.push_back(m.file + ':' + std::to_string(m.line) + ": MakeShadow: " + *why + " (" +
-                         WhereMade(m.input, scene, ribFile) + "); " + m.output + " is not made");
+  for (const SceneMakeTexture& m : scene.makeTextures) {
+    const bool shadow = m.kind == SceneMakeTexture::Kind::Shadow;
+    const auto why = shadow ? raster::MakeShadowTexture(m.input, m.output) : raster::MakeLatLongEnvironment(m.input, m.output);
+    if (why)
+      warnings.push_back(m.file + ':' + std::to_string(m.line) + (shadow ? ": MakeShadow: " : ": MakeLatLongEnvironment: ") +
+                         *why + " (" + WhereMade(m.input, scene, ribFile) + "); " + m.output + " is not made");
+  }
   return warnings;
 }
 

@@ -1,5 +1,6 @@
 // What a render builds before the first row: the back end's settings (lights, materials,
-// textures, shadow maps) from the scene and the options, and the scene's MakeShadow requests.
+// textures, shadow maps) from the scene and the options, and the textures the scene makes
+// (MakeShadow, MakeLatLongEnvironment).
 #pragma once
 
 #include <map>
@@ -48,8 +49,8 @@ Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const
 // The matrices of `camera` as a light's camera, for the depth maps it renders.
 raster::ShadowCamera LightCamera(const Camera& camera);
 
-// Runs the scene's MakeShadow requests, in order; a warning for each that fails, with its
-// file:line and the frame of o.file that writes its depth map.
-std::vector<std::string> MakeShadows(const Scene& scene, const std::string& ribFile);
+// Runs the scene's MakeShadow and MakeLatLongEnvironment requests, in order; a warning for
+// each that fails, with its file:line and the frame of o.file that writes its input.
+std::vector<std::string> MakeTextures(const Scene& scene, const std::string& ribFile);
 
 }  // namespace patchscan::render

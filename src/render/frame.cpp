@@ -155,7 +155,7 @@ Result<RenderReport> RenderFrame(const RenderOptions& o, std::ostream& log, std:
 
   // Step 3: the back end (after the scene's MakeShadow requests: its lights may read what
   // they make), and the rows' way to the image file.
-  for (const std::string& w : MakeShadows(scene, o.file)) Warn(w, log, warned);
+  for (const std::string& w : MakeTextures(scene, o.file)) Warn(w, log, warned);
   auto setup = SetUpBackEnd(o, scene, camera, aa);
   if (auto* failed = std::get_if<Failure>(&setup)) return *failed;
   BackEndSetup& backEnd = *std::get<std::unique_ptr<BackEndSetup>>(setup);

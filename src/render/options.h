@@ -80,6 +80,9 @@ struct RenderOptions {
   // A bump map for every surface without its own: "FILE" or "FILE:AMPLITUDE" (world units
   // per unit of the height texture's value, default 1); "": none.
   std::string bump;
+  // An environment map reflected by every metal, plastic and default surface without its own:
+  // "FILE" or "FILE:KR" (the share reflected, default 1); "": none.
+  std::string environment;
   bool cullBackFaces = false;
   bool hiddenLine = false;
   double opacity = 1.0;

@@ -19,13 +19,17 @@ namespace patchscan {
 // How a surface looks, as RenderMan's attributes say (RenderMan Interface 3.2: Color,
 // Opacity, Surface, Sides, and the standard shaders of its appendix A).
 struct Appearance {
-  enum class Shader { Default, Constant, Matte, Plastic, Metal, PaintedPlastic };
+  enum class Shader { Default, Constant, Matte, Plastic, Metal, PaintedPlastic, ShinyMetal };
   Shader shader = Shader::Default;  // Default: the renderer's own material
   Vec3 colour = Vec3(1, 1, 1);      // Cs
   Vec3 opacity = Vec3(1, 1, 1);     // Os
   double ka = 1.0, kd = 0.5, ks = 0.5, roughness = 0.1;
   Vec3 specularColour = Vec3(1, 1, 1);
   std::string textureName;          // paintedplastic: a path, resolved against the scene file
+  // shinymetal: its environment map (as given: relative to the working directory, where
+  // MakeLatLongEnvironment writes one; "": none) and Kr, the share of it reflected.
+  std::string environmentName;
+  double kr = 1.0;
   // Displacement "bumpy" (RenderMan Interface 3.2, appendix A), applied as a bump map (Blinn
   // 1978): its height texture (a path as above; "": none) and the scale of its values, Km
   // times amplitude, in world units.
@@ -59,8 +63,11 @@ struct SceneLight {
   int line = 0;
 };
 
-// MakeShadow: a shadow texture made of a depth map before the frame is rendered.
-struct SceneMakeShadow {
+// A texture made before the frame is rendered: MakeShadow (a shadow texture of a depth map)
+// or MakeLatLongEnvironment (an environment texture of a lat-long image).
+struct SceneMakeTexture {
+  enum class Kind { Shadow, LatLong };
+  Kind kind = Kind::Shadow;
   std::string input, output;
   std::string file;
   int line = 0;
@@ -113,7 +120,7 @@ struct Scene {
   std::vector<SceneLight> lights;        // empty: the renderer's default lights
   SceneImage image;
   std::vector<std::string> warnings;     // statements read and skipped, file:line: what
-  std::vector<SceneMakeShadow> makeShadows;  // in the order read, to run before rendering
+  std::vector<SceneMakeTexture> makeTextures;  // in the order read, to run before rendering
   std::vector<SceneCage> cages;
   // Polygons come after the surfaces in the surface ids: polygons[k] is surface id
   // surfaces.size() + k, and appearanceOf (when not empty) covers them after the surfaces.

@@ -584,6 +584,27 @@ TEST(Rib, BumpyDisplacementIsABumpMap) {
             "t.rib:2: Attribute \"displacementbound\" \"sphere\" must be 0 or more");
 }
 
+TEST(Rib, ShinyMetalAndMakeLatLongEnvironment) {
+  const Scene s = Parse("MakeLatLongEnvironment \"sky.exr\" \"sky.tx\" \"gaussian\" 1 1\n"
+                        "MakeShadow \"key.z\" \"key.shd\"\n" +
+                        World("Surface \"shinymetal\" \"Kr\" [0.4] \"Ks\" [0.8] \"texturename\" \"sky.tx\"\n"
+                              "Sphere 1 -1 1 360\nSurface \"metal\"\nSphere 1 -1 1 360"));
+  ASSERT_EQ(s.surfaces.size(), 2u);
+  const auto look = [&](int k) { return s.appearances[s.appearanceOf[k]]; };
+  EXPECT_EQ(look(0).shader, Appearance::Shader::ShinyMetal);
+  EXPECT_EQ(look(0).kr, 0.4);
+  EXPECT_EQ(look(0).ks, 0.8);
+  EXPECT_EQ(look(0).environmentName, "sky.tx");  // as given: where MakeLatLongEnvironment writes it
+  EXPECT_EQ(look(1).shader, Appearance::Shader::Metal);
+  EXPECT_EQ(look(1).environmentName, "");
+  ASSERT_EQ(s.makeTextures.size(), 2u);
+  EXPECT_EQ(s.makeTextures[0].kind, SceneMakeTexture::Kind::LatLong);
+  EXPECT_EQ(s.makeTextures[0].input, "sky.exr");  // beside the scene file
+  EXPECT_EQ(s.makeTextures[0].output, "sky.tx");
+  EXPECT_EQ(s.makeTextures[1].kind, SceneMakeTexture::Kind::Shadow);
+  EXPECT_TRUE(s.warnings.empty());
+}
+
 TEST(Rib, LightSourcesInWorldSpace) {
   const Scene s = Parse(
       "Translate 0 0 10\n"

@@ -45,10 +45,11 @@ std::uint32_t RibParser::AppearanceIndex() {
 
 std::size_t RibParser::HashOf(const Appearance& a) {
   std::size_t h = std::hash<std::string>()(a.textureName) ^ (std::hash<std::string>()(a.bumpName) << 2) ^
+                  (std::hash<std::string>()(a.environmentName) << 3) ^
                   (static_cast<std::size_t>(a.shader) << 1) ^
                   (static_cast<std::size_t>(a.twoSided) << 5) ^ (static_cast<std::size_t>(a.reversed) << 6);
   for (const double x : {a.colour.x(), a.colour.y(), a.colour.z(), a.opacity.x(), a.opacity.y(), a.opacity.z(), a.ka,
-                         a.kd, a.ks, a.roughness, a.specularColour.x(), a.specularColour.y(), a.specularColour.z(), a.bumpScale})
+                         a.kd, a.ks, a.roughness, a.specularColour.x(), a.specularColour.y(), a.specularColour.z(), a.bumpScale, a.kr})
     h = h * 1000003u ^ std::hash<double>()(x);
   return h;
 }

@@ -24,7 +24,7 @@ const std::set<std::string, std::less<>>& SkippedRequests() {
       "Declare", "Atmosphere", "Interior",
       "Exterior", "Imager", "Exposure", "Quantize", "PixelFilter", "PixelVariance",
       "ShadingRate", "ShadingInterpolation", "Matte", "Bound", "Detail", "DetailRange",
-      "GeometricApproximation", "MakeTexture", "MakeLatLongEnvironment",
+      "GeometricApproximation", "MakeTexture",
       "MakeCubeFaceEnvironment", "MakeBump", "FrameAspectRatio", "DepthOfField",
       "Shutter", "ColorSamples", "RelativeDetail", "TextureCoordinates", "Illuminate",
       "AreaLightSource", "CoordinateSystem", "CoordSysTransform", "ScopedCoordinateSystem",
@@ -117,7 +117,8 @@ const std::unordered_map<std::string_view, RibParser::Handler>& RibParser::Reque
       {"Surface", &RibParser::SurfaceShader},
       {"Displacement", &RibParser::DisplacementShader},
       {"LightSource", &RibParser::LightSource},
-      {"MakeShadow", &RibParser::MakeShadow},
+      {"MakeShadow", &RibParser::MakeTexture},
+      {"MakeLatLongEnvironment", &RibParser::MakeTexture},
       {"Hider", &RibParser::Hider},
       {"Option", &RibParser::Option},
       // Geometry.

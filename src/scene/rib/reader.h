@@ -22,9 +22,10 @@
 //               Curves "linear"/"cubic", periodic or not, with "width" or "constantwidth"
 //               (rib_curves.cpp): ribbons facing the camera, a surface per segment
 //   appearance  Color, Opacity, Surface "constant"/"matte"/"plastic"/"metal"/
-//               "paintedplastic", LightSource "ambientlight"/"distantlight"/
-//               "pointlight"/"spotlight" and "shadowspot"/"shadowdistant"/"shadowpoint",
-//               MakeShadow
+//               "paintedplastic"/"shinymetal", Displacement "bumpy" (a bump map),
+//               LightSource "ambientlight"/"distantlight"/"pointlight"/"spotlight" and
+//               "shadowspot"/"shadowdistant"/"shadowpoint", MakeShadow,
+//               MakeLatLongEnvironment
 // Every other request is read and skipped with one warning per kind naming file:line and
 // counting how often it came. Malformed input (unbalanced blocks, wrong argument counts or
 // array lengths, unknown bases, truncated files, bad numbers) is an error naming

@@ -168,11 +168,14 @@ bool RibParser::SurfaceShader(const Request& r) {
     a.shader = S::Matte;
     a.ka = 1.0;
     a.kd = 1.0;
-  } else if (name == "metal") {
-    a.shader = S::Metal;
+  } else if (name == "metal" || name == "shinymetal") {
+    // shinymetal (The RenderMan Companion; RenderMan's example shaders): metal reflecting
+    // Kr times its colour times the environment map "texturename" in the mirror direction.
+    a.shader = name == "metal" ? S::Metal : S::ShinyMetal;
     a.ka = 1.0;
     a.ks = 1.0;
     a.roughness = 0.1;
+    a.kr = 1.0;
   } else if (name == "plastic" || name == "paintedplastic") {
     a.shader = name == "plastic" ? S::Plastic : S::PaintedPlastic;
     a.ka = 1.0;
@@ -186,12 +189,16 @@ bool RibParser::SurfaceShader(const Request& r) {
     return true;
   }
   a.textureName.clear();
+  a.environmentName.clear();
+  const bool metal = a.shader == S::Metal || a.shader == S::ShinyMetal;
   for (const Param& p : params) {
     bool ok = true;
     if (p.name == "Ka" && a.shader != S::Constant) ok = ParamNumbers(r, p, 1, &a.ka);
-    else if (p.name == "Kd" && a.shader != S::Constant && a.shader != S::Metal) ok = ParamNumbers(r, p, 1, &a.kd);
-    else if (p.name == "Ks" && (a.shader == S::Metal || a.shader == S::Plastic || a.shader == S::PaintedPlastic)) ok = ParamNumbers(r, p, 1, &a.ks);
-    else if (p.name == "roughness" && (a.shader == S::Metal || a.shader == S::Plastic || a.shader == S::PaintedPlastic)) {
+    else if (p.name == "Kd" && a.shader != S::Constant && !metal) ok = ParamNumbers(r, p, 1, &a.kd);
+    else if (p.name == "Ks" && (metal || a.shader == S::Plastic || a.shader == S::PaintedPlastic)) ok = ParamNumbers(r, p, 1, &a.ks);
+    else if (p.name == "Kr" && a.shader == S::ShinyMetal) ok = ParamNumbers(r, p, 1, &a.kr);
+    else if (p.name == "texturename" && a.shader == S::ShinyMetal) ok = ParamString(r, p, &a.environmentName);
+    else if (p.name == "roughness" && (metal || a.shader == S::Plastic || a.shader == S::PaintedPlastic)) {
       ok = ParamNumbers(r, p, 1, &a.roughness);
       if (ok && !(a.roughness > 0)) return Fail(p.value->line, "Surface: roughness must be positive");
     } else if (p.name == "specularcolor" && (a.shader == S::Plastic || a.shader == S::PaintedPlastic)) {
@@ -350,12 +357,20 @@ bool RibParser::Option(const Request& r) {
   return true;
 }
 
-bool RibParser::MakeShadow(const Request& r) {
-  // MakeShadow picturename texturename: run before the frame renders (a depth map of an
-  // earlier frame becomes a shadow texture).
+bool RibParser::MakeTexture(const Request& r) {
+  // MakeShadow picturename texturename, MakeLatLongEnvironment picturename texturename
+  // filter swidth twidth: run before the frame renders (a depth map of an earlier frame
+  // becomes a shadow texture; an image of the surroundings an environment texture, filtered
+  // as OpenImageIO's maketx filters, whatever the request's filter). The texture is written
+  // to the working directory, as Display writes; a depth map is read from there (a frame
+  // wrote it), a lat-long image, which the scene brings, beside the scene file.
   std::string in, out;
   if (!StringArg(r, 0, &in) || !StringArg(r, 1, &out)) return false;
-  scene_.makeShadows.push_back({in, out, file_, r.line});
+  using K = SceneMakeTexture::Kind;
+  const K kind = r.name == "MakeShadow" ? K::Shadow : K::LatLong;
+  if (kind == K::LatLong && std::filesystem::path(in).is_relative())
+    in = (std::filesystem::path(file_).parent_path() / in).string();
+  scene_.makeTextures.push_back({kind, in, out, file_, r.line});
   return true;
 }
 

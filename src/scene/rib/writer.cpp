@@ -155,6 +155,12 @@ void Attributes(std::ostream& out, const Appearance& a) {
     case S::Constant: out << "Surface \"constant\"\n"; return;
     case S::Matte: out << "Surface \"matte\" \"Ka\" [" << a.ka << "] \"Kd\" [" << a.kd << "]\n"; return;
     case S::Metal: out << "Surface \"metal\" \"Ka\" [" << a.ka << "] \"Ks\" [" << a.ks << "] \"roughness\" [" << a.roughness << "]\n"; return;
+    case S::ShinyMetal:
+      out << "Surface \"shinymetal\" \"Ka\" [" << a.ka << "] \"Ks\" [" << a.ks << "] \"Kr\" [" << a.kr << "] \"roughness\" ["
+          << a.roughness << "]";
+      if (!a.environmentName.empty()) out << " \"texturename\" \"" << std::filesystem::absolute(a.environmentName).string() << '"';
+      out << '\n';
+      return;
     case S::Plastic:
     case S::PaintedPlastic:
       out << "Surface \"" << (a.shader == S::Plastic ? "plastic" : "paintedplastic") << "\" \"Ka\" [" << a.ka << "] \"Kd\" ["
