@@ -115,6 +115,11 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
                   "channel of an image file as a height along the normal, times AMPLITUDE (world "
                   "units, default 1); the normal is perturbed, the surface does not move")
       ->type_name("FILE[:AMPLITUDE]");
+  cmd->add_option("--normal-map", o->normalMap,
+                  "a tangent-space normal map for every surface (after any bump): RGB = (1 + n) / 2 "
+                  "in the frame of the surface's tangent along s, the tangent towards the image's top "
+                  "(-t: OpenGL's convention, green up) and the normal")
+      ->type_name("FILE");
   cmd->add_option("--environment", o->environment,
                   "an environment map (Blinn and Newell 1976) reflected by every metal, plastic and "
                   "default surface whose scene gives none: a lat-long image (+y up, as OpenEXR's; "

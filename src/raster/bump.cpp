@@ -1,5 +1,8 @@
 #include "raster/bump.h"
 
+#include <Eigen/LU>
+#include <cmath>
+
 namespace patchscan::raster {
 
 namespace {
@@ -37,6 +40,33 @@ Vec3 SurfaceGradient(const ScreenRows& screen, const Vec3& p, const Vec3& n, con
   // Within the tangent plane: along any tangent t, g . t is then the function's change (the
   // screen's change along t, weighted by the change per pixel), and nothing along n.
   return g - g.dot(n) * n;
+}
+
+bool TextureTangents(const ScreenRows& screen, const Vec3& p, const Vec3& n, const Vec2& duvdx, const Vec2& duvdy,
+                     Vec3* ps, Vec3* pt) {
+  const auto [dpdx, dpdy] = ScreenTangents(screen, p, n);
+  Eigen::Matrix2d footprint;  // columns d(s, t)/dx and d(s, t)/dy
+  footprint << duvdx, duvdy;
+  const double det = footprint.determinant();
+  if (!(std::abs(det) > 0.0) || dpdx.isZero()) return false;
+  // [P_s P_t] footprint = [dP/dx dP/dy]: the chain rule through (s, t).
+  const Eigen::Matrix2d inverse = footprint.inverse();
+  *ps = inverse(0, 0) * dpdx + inverse(1, 0) * dpdy;
+  *pt = inverse(0, 1) * dpdx + inverse(1, 1) * dpdy;
+  return ps->allFinite() && pt->allFinite();
+}
+
+Vec3 MappedNormal(const ScreenRows& screen, const Vec3& p, const Vec3& n, const Vec2& duvdx, const Vec2& duvdy,
+                  const Vec3& rgb) {
+  const Vec3 unit = n.normalized();
+  Vec3 ps, pt;
+  if (!TextureTangents(screen, p, unit, duvdx, duvdy, &ps, &pt)) return n;
+  const Vec3 t = (ps - ps.dot(unit) * unit).normalized();
+  const Vec3 up = -pt - (-pt).dot(unit) * unit - (-pt).dot(t) * t;
+  const Vec3 b = up.normalized();
+  const Vec3 m = 2.0 * rgb - Vec3::Ones();
+  const Vec3 mapped = m.x() * t + m.y() * b + m.z() * unit;
+  return mapped.allFinite() && mapped.squaredNorm() > 0.0 ? mapped : n;
 }
 
 Vec3 BumpedNormal(const ScreenRows& screen, const Vec3& p, const Vec3& n, const Vec2& heightGradient,

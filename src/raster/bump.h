@@ -47,6 +47,19 @@ Vec3 SurfaceGradient(const ScreenRows& screen, const Vec3& p, const Vec3& n, con
 // the screen rows are unknown, the point is behind the eye or the plane is seen edge-on.
 std::pair<Vec3, Vec3> ScreenTangents(const ScreenRows& screen, const Vec3& p, const Vec3& n);
 
+// The surface's tangents along the texture coordinates, P_s and P_t, at p (unit normal n):
+// the screen tangents (ScreenTangents) times the inverse of the texture footprint
+// d(s, t)/d(x, y). False where either is singular (an edge-on plane, a zero footprint).
+bool TextureTangents(const ScreenRows& screen, const Vec3& p, const Vec3& n, const Vec2& duvdx, const Vec2& duvdy,
+                     Vec3* ps, Vec3* pt);
+
+// The normal a tangent-space normal map gives (RGB in [0, 1] = (1 + n) / 2 in the frame T,
+// B, N; OpenGL's convention, green towards the image's top, which is -t): T is P_s made
+// orthogonal to the unit normal n, B is -P_t's part orthogonal to both. n where the
+// tangents are unknown.
+Vec3 MappedNormal(const ScreenRows& screen, const Vec3& p, const Vec3& n, const Vec2& duvdx, const Vec2& duvdy,
+                  const Vec3& rgb);
+
 // Blinn's perturbed normal at a point with normal n (any length; the result's length is
 // near 1 for a gentle bump): n / |n| less the surface gradient of the height, from its
 // derivatives (B_s, B_t) in the texture coordinates and the texture coordinates' change per

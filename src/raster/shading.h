@@ -66,6 +66,7 @@ struct Material {
   int checkerSquares = 0;      // > 0: modulate colour by a uv checker of this many squares
   ImageTexture* texture = nullptr;  // not owned; modulates colour when set
   BumpMap bump;                     // perturbs the shading normal when it has a height field
+  ImageTexture* normalMap = nullptr;  // not owned; a tangent-space normal map (raster/bump.h)
   // Reflected, times the colour the highlights take (metal: the surface's; else
   // specularColour), on every model but constant and matte.
   EnvironmentMap environment;

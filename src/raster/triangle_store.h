@@ -75,7 +75,7 @@ struct Member {
 };
 
 // The colour of a surface point: the material's (textured) colour lit by the rig, with
-// the normal its bump map perturbs. `shaded`, when given, receives the fragment as shaded
+// the normal its bump map and then its normal map perturb, and its environment reflected. `shaded`, when given, receives the fragment as shaded
 // (its normal bumped: what the normal AOV shows, as RenderMan's N after displacement).
 inline Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, std::atomic<bool>* failed,
                          Fragment* shaded = nullptr) {
@@ -86,6 +86,12 @@ inline Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, std::atomic
   if (m.bump.height) {
     if (const auto h = m.bump.height->LookupHeight(a.uv, a.duvdx, a.duvdy))
       normal = BumpedNormal(s.screen, a.position, a.normal, m.bump.amplitude * h->gradient, a.duvdx, a.duvdy);
+    else
+      *failed = true;
+  }
+  if (m.normalMap) {
+    if (const auto rgb = m.normalMap->Lookup(a.uv, a.duvdx, a.duvdy))
+      normal = MappedNormal(s.screen, a.position, normal, a.duvdx, a.duvdy, *rgb);
     else
       *failed = true;
   }

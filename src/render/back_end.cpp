@@ -162,6 +162,10 @@ Result<std::unique_ptr<BackEndSetup>> SetUpBackEnd(const RenderOptions& o, const
     if (!exists(bump->first)) return Failure{Outcome::BadOption, "--bump: no such file '" + bump->first + "'"};
     s.material.bump = {texture(bump->first), bump->second};
   }
+  if (!o.normalMap.empty()) {
+    if (!exists(o.normalMap)) return Failure{Outcome::BadOption, "--normal-map: no such file '" + o.normalMap + "'"};
+    s.material.normalMap = texture(o.normalMap);
+  }
   if (!o.environment.empty()) {
     const auto env = FileAndNumber(o.environment);
     if (!env) return Failure{Outcome::BadOption, "--environment: expected FILE or FILE:KR, not '" + o.environment + "'"};

@@ -83,6 +83,7 @@ struct RenderOptions {
   // An environment map reflected by every metal, plastic and default surface without its own:
   // "FILE" or "FILE:KR" (the share reflected, default 1); "": none.
   std::string environment;
+  std::string normalMap;  // a tangent-space normal map for every surface; "": none
   bool cullBackFaces = false;
   bool hiddenLine = false;
   double opacity = 1.0;

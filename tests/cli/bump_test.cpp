@@ -1,6 +1,6 @@
-// Bump mapping end to end (RenderMan's Displacement "bumpy", --bump): a plane with a
-// sinusoidal height texture, its rendered normals (the N AOV) against the analytic bumped
-// normal in every mode, and the same pixels for any thread count.
+// Bump mapping end to end (RenderMan's Displacement "bumpy", --bump, --normal-map): a plane
+// with a sinusoidal height texture, its rendered normals (the N AOV) against the analytic
+// bumped normal in every mode, and the same pixels for any thread count.
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
@@ -91,6 +91,36 @@ TEST(Bump, SinusoidalPlaneMatchesTheAnalyticNormalInEveryMode) {
   // Without the bump the normals are the plane's: the test sees the bump.
   ASSERT_EQ(dir.Run("render flat.rib -o f.exr --aov --aa 1"), 0) << dir.Err();
   EXPECT_GT(WorstNormal(Pixels((dir.path / "f.exr").string())).first, 0.05);
+}
+
+// A tangent-space normal map of the same bump (n = (-a B_s / 2, a B_t / 2, 1) normalised in
+// the frame P_s, -P_t, N: green towards the image's top) on the flat plane gives the bumped
+// normals: the map's frame is the surface's in every mode.
+TEST(Bump, NormalMapOfTheBumpGivesItsNormals) {
+  BumpScene dir;
+  std::vector<float> texels(kTexels * kTexels * 3);
+  for (int j = 0; j < kTexels; ++j)
+    for (int i = 0; i < kTexels; ++i) {
+      const auto [hs, ht] = HeightGradient((i + 0.5) / kTexels, (j + 0.5) / kTexels);
+      const double n[3] = {-kAmplitude * hs / 2, kAmplitude * ht / 2, 1.0};
+      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + 1.0);
+      for (int c = 0; c < 3; ++c)
+        texels[(static_cast<std::size_t>(j) * kTexels + i) * 3 + c] = static_cast<float>(0.5 + 0.5 * n[c] / len);
+    }
+  auto out = OIIO::ImageOutput::create("tif");
+  ASSERT_TRUE(out && out->open((dir.path / "n.tif").string(), OIIO::ImageSpec(kTexels, kTexels, 3, OIIO::TypeDesc::FLOAT)));
+  ASSERT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, texels.data()));
+  out->close();
+  for (const char* mode : {"exact", "theta", "tess"}) {
+    ASSERT_EQ(dir.Run(std::string("render flat.rib -o n.exr --aov --aa 1 --normal-map n.tif --mode ") + mode), 0)
+        << dir.Err();
+    const auto [worst, counted] = WorstNormal(Pixels((dir.path / "n.exr").string()));
+    std::cout << mode << ": normal map, largest normal error " << worst << " rad\n";
+    EXPECT_GT(counted, 5000) << mode;
+    EXPECT_LT(worst, 1e-3) << mode;
+  }
+  EXPECT_EQ(dir.Run("render flat.rib -o f.png --normal-map none.tif"), kExitUsage);
+  EXPECT_NE(dir.Err().find("--normal-map: no such file 'none.tif'"), std::string::npos) << dir.Err();
 }
 
 TEST(Bump, SamePixelsForAnyThreadCount) {
