@@ -238,6 +238,10 @@ void SilhouetteScan::AdvanceImpl(const ShapeT& shape, double yScan, const EdgeSc
        ++nextStationary_) {
     const Stationary& p = stationary_[nextStationary_];
     const double drop = yScan - p.y;  // how far h has fallen below the point
+    // A maximum on the line itself (to the trackers' tolerance: an orthographic sphere's top
+    // lies exactly on a sample row) is one point of it, where both seeds below coincide and
+    // the system is singular; its trackers are born on the next line.
+    if (p.kind == StationaryKind::StrictMaximum && drop <= kEdgeTolPx) break;
     ScreenDerivs d;
     EvaluateScreen(shape, map_, p.uv.x(), p.uv.y(), DerivOrder::First, &d);
     const Vec2 gx(d.dpdu.x(), d.dpdv.x());  // screen x gradient
