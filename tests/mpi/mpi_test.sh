@@ -63,7 +63,7 @@ case $case_name in
     echo "same image and a note: -n 2, --threads $(( $(nproc) + 1 ))" ;;
   rib)
     for n in 2 4; do
-      for scene in quadrics.rib polygons.rib trimmed.rib cages.rib curves.rib; do
+      for scene in quadrics.rib polygons.rib trimmed.rib cages.rib curves.rib shading.rib; do
         for mode in exact theta; do same_image "$n" exr "$surfaces/$scene" --size 160x100 --aa 2 --mode "$mode" --aov; done
       done
     done ;;
