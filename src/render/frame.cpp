@@ -5,7 +5,6 @@
 #include <filesystem>
 #include <memory>
 #include <ostream>
-#include <thread>
 #include <vector>
 
 #include "patch/tessellate.h"
@@ -88,7 +87,7 @@ FrontEnd DirectFrontEnd(const RenderOptions& o, const Scene& scene, const Camera
   } else {
     // A worker a thread the machine runs at once: more only split the surfaces finer, and
     // every batch waits for the most loaded (the image is the same for any number).
-    const int workers = traced ? 1 : std::min(threads, std::max(1, static_cast<int>(std::thread::hardware_concurrency())));
+    const int workers = traced ? 1 : std::min(threads, Cores());
     f.own = std::make_unique<PartitionedScan>(scene.surfaces, camera, xo, workers, threads);
   }
   if (!scene.polygons.empty()) f.polygons = std::make_unique<PolygonFeed>(*f.own, PolygonTriangles(scene, camera));

@@ -48,8 +48,10 @@ ExactScanOptions ScanOptionsFor(const RenderOptions& o, int aa) {
   return xo;
 }
 
+int Cores() { return std::max(1, static_cast<int>(std::thread::hardware_concurrency())); }
+
 int ThreadsFor(int threads) {
-  return threads > 0 ? threads : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  return threads > 0 ? threads : Cores();
 }
 
 }  // namespace patchscan::render

@@ -104,6 +104,9 @@ struct RenderOptions {
 // The scan options of a direct render at `aa` (θ steps and the slab height in sample rows).
 ExactScanOptions ScanOptionsFor(const RenderOptions& o, int aa);
 
+// The threads this machine runs at once (at least 1).
+int Cores();
+
 // The worker threads `threads` asks for: itself, or one per core when 0.
 int ThreadsFor(int threads);
 
