@@ -74,9 +74,10 @@ struct Member {
   Sample smp;
 };
 
-// The colour of a surface point: the material's (textured) colour lit by the rig, with
-// the normal its bump map and then its normal map perturb, and its environment reflected. `shaded`, when given, receives the fragment as shaded
-// (its normal bumped: what the normal AOV shows, as RenderMan's N after displacement).
+// The colour of a surface point: the material's (textured) colour lit by the rig, with the
+// normal its bump map and then its normal map perturb, and its environment reflected.
+// `shaded`, when given, receives the fragment as shaded (its normal bumped: what the normal
+// AOV shows, as RenderMan's N after displacement).
 inline Rgb ShadeFragment(const Fragment& a, const RenderSettings& s, std::atomic<bool>* failed,
                          Fragment* shaded = nullptr) {
   const Material& m = s.MaterialOf(a.surfaceId);
