@@ -38,47 +38,52 @@ void ImageTexture::Failed() {
   failed_ = true;
 }
 
-std::optional<Eigen::Vector3d> ImageTexture::Lookup(const Vec2& uv, const Vec2& duvdx, const Vec2& duvdy) {
-  if (failed_ || !Open()) return std::nullopt;
+template <class Call>
+bool ImageTexture::Looked(Call&& call) {
+  if (failed_ || !Open()) return false;
   ++nLookups_;
+  if (call(*impl_->texture)) return true;
+  Failed();
+  return false;
+}
+
+namespace {
+
+// The RGB of a lookup's first channels: a one-channel texture is grey.
+Eigen::Vector3d Colour(const float* rgb, int channels) {
+  return channels == 1 ? Eigen::Vector3d::Constant(rgb[0]) : Eigen::Vector3d(rgb[0], rgb[1], rgb[2]);
+}
+
+}  // namespace
+
+std::optional<Eigen::Vector3d> ImageTexture::Lookup(const Vec2& uv, const Vec2& duvdx, const Vec2& duvdy) {
   float rgb[3] = {0, 0, 0};
-  if (!impl_->texture->Lookup(static_cast<float>(uv.x()), static_cast<float>(uv.y()), static_cast<float>(duvdx.x()),
-                              static_cast<float>(duvdx.y()), static_cast<float>(duvdy.x()),
-                              static_cast<float>(duvdy.y()), rgb)) {
-    Failed();
+  const auto f = [](double v) { return static_cast<float>(v); };
+  if (!Looked([&](imageio::Texture& t) {
+        return t.Lookup(f(uv.x()), f(uv.y()), f(duvdx.x()), f(duvdx.y()), f(duvdy.x()), f(duvdy.y()), rgb);
+      }))
     return std::nullopt;
-  }
-  if (impl_->texture->Channels() == 1) rgb[1] = rgb[2] = rgb[0];
-  return Eigen::Vector3d(rgb[0], rgb[1], rgb[2]);
+  return Colour(rgb, impl_->texture->Channels());
 }
 
 std::optional<ImageTexture::Height> ImageTexture::LookupHeight(const Vec2& uv, const Vec2& duvdx,
                                                                const Vec2& duvdy) {
-  if (failed_ || !Open()) return std::nullopt;
-  ++nLookups_;
   float value = 0, dds = 0, ddt = 0;
-  if (!impl_->texture->LookupGradient(static_cast<float>(uv.x()), static_cast<float>(uv.y()),
-                                      static_cast<float>(duvdx.x()), static_cast<float>(duvdx.y()),
-                                      static_cast<float>(duvdy.x()), static_cast<float>(duvdy.y()), &value, &dds,
-                                      &ddt)) {
-    Failed();
+  const auto f = [](double v) { return static_cast<float>(v); };
+  if (!Looked([&](imageio::Texture& t) {
+        return t.LookupGradient(f(uv.x()), f(uv.y()), f(duvdx.x()), f(duvdx.y()), f(duvdy.x()), f(duvdy.y()), &value,
+                                &dds, &ddt);
+      }))
     return std::nullopt;
-  }
   return Height{value, Vec2(dds, ddt)};
 }
 
 std::optional<Eigen::Vector3d> ImageTexture::LookupEnvironment(const Vec3& r, const Vec3& drdx, const Vec3& drdy) {
-  if (failed_ || !Open()) return std::nullopt;
-  ++nLookups_;
-  const auto f = [](const Vec3& v) { return Eigen::Vector3f(v.cast<float>()); };
-  const Eigen::Vector3f fr = f(r), fx = f(drdx), fy = f(drdy);
   float rgb[3] = {0, 0, 0};
-  if (!impl_->texture->Environment(fr.data(), fx.data(), fy.data(), rgb)) {
-    Failed();
+  const Eigen::Vector3f fr = r.cast<float>(), fx = drdx.cast<float>(), fy = drdy.cast<float>();
+  if (!Looked([&](imageio::Texture& t) { return t.Environment(fr.data(), fx.data(), fy.data(), rgb); }))
     return std::nullopt;
-  }
-  if (impl_->texture->Channels() == 1) rgb[1] = rgb[2] = rgb[0];
-  return Eigen::Vector3d(rgb[0], rgb[1], rgb[2]);
+  return Colour(rgb, impl_->texture->Channels());
 }
 
 std::optional<std::string> MakeLatLongEnvironment(const std::string& input, const std::string& output) {

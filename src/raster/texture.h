@@ -47,6 +47,10 @@ class ImageTexture {
   bool Open();
   // After a lookup that failed: records why (the first failure only) and stops further ones.
   void Failed();
+  // Opens the texture if need be and makes one lookup, `call(texture)`, counted; false, with
+  // the texture failed, when it cannot be read or the lookup fails.
+  template <class Call>
+  bool Looked(Call&& call);
   std::string path_, error_;
   std::unique_ptr<Impl> impl_;
   std::once_flag opened_;
