@@ -19,7 +19,7 @@ CLI::App* AddConvertCommand(CLI::App* app, ConvertOptions* o) {
       "ReverseOrientation, Surface shader and parameters) as a Patch (bicubic patches in Bézier "
       "form), a NuPatch, its quadric or a SubdivisionMesh, and the polygons as PointsPolygons. "
       "The file is written to a temporary name and renamed into place.");
-  cmd->add_option("FILE", o->file, "scene file: .bpt, .rib or .obj")->type_name("FILE")->required();
+  cmd->add_option("FILE", o->file, "scene file: .bpt, .rib, .obj, .step, .stp, .iges, .igs or .brep")->type_name("FILE")->required();
   cmd->add_option("-o,--output", o->output, "the RIB file to write")->type_name("RIB")->required();
   cmd->add_option("--aa", o->aa, "PixelSamples to write, as the side of the grid (default: 3)")
       ->type_name("N")

@@ -158,6 +158,30 @@ Totals Count(const Scene& scene) {
   return t;
 }
 
+// A CAD file's facts (scene/cad_reader.h): its B-rep and how closely its faces meet.
+void PrintCad(const SceneCad& c, std::ostream& out) {
+  out << "CAD model: " << c.faces << " faces (";
+  for (std::size_t k = 0; k < c.faceKinds.size(); ++k) out << (k ? ", " : "") << c.faceKinds[k].first << ' ' << c.faceKinds[k].second;
+  out << "), " << c.edges << " edges, " << c.wires << " wires, " << c.instances << " placed parts, " << c.colours
+      << " colours; " << c.skipped << " faces skipped\n"
+      << "CAD tolerances (model units): largest edge tolerance " << c.largestTolerance << ", widest gap between faces "
+      << "along an edge " << c.largestGap << ", widest joint in a wire " << c.largestJoint << '\n';
+  out << "assembly:\n";
+  for (const std::string& line : c.tree) out << "  " << line << '\n';
+}
+
+void PrintCadJson(const SceneCad& c, std::ostream& out) {
+  out << ", \"cad\": {\"faces\": " << c.faces << ", \"face_kinds\": {";
+  for (std::size_t k = 0; k < c.faceKinds.size(); ++k)
+    out << (k ? ", " : "") << Quoted(c.faceKinds[k].first) << ": " << c.faceKinds[k].second;
+  out << "}, \"edges\": " << c.edges << ", \"wires\": " << c.wires << ", \"instances\": " << c.instances
+      << ", \"colours\": " << c.colours << ", \"skipped_faces\": " << c.skipped << ", \"largest_tolerance\": "
+      << Num(c.largestTolerance) << ", \"largest_gap\": " << Num(c.largestGap) << ", \"largest_joint\": "
+      << Num(c.largestJoint) << ", \"tree\": [";
+  for (std::size_t k = 0; k < c.tree.size(); ++k) out << (k ? ", " : "") << Quoted(c.tree[k]);
+  out << "]}";
+}
+
 void PrintJson(const Scene& scene, const render::LoadedScene& loaded, const std::vector<SurfaceFacts>& facts,
                std::ostream& out) {
   const Camera& camera = loaded.view.camera;
@@ -188,6 +212,7 @@ void PrintJson(const Scene& scene, const render::LoadedScene& loaded, const std:
   out << "], \"curve_segments\": " << t.curves << ", \"polygons\": {\"requests\": " << scene.polygons.size()
       << ", \"corners\": " << t.corners << ", \"triangles\": " << t.triangles << "}, \"trimmed_pieces\": " << t.trimmed
       << ", \"trim_sets\": " << t.trimSets << ", \"trim_loops\": " << t.loops << ", \"trim_segments\": " << t.segments;
+  if (scene.cad) PrintCadJson(*scene.cad, out);
   out << ", \"surface_list\": [";
   for (std::size_t i = 0; i < facts.size(); ++i) {
     const SurfaceFacts& f = facts[i];
@@ -207,9 +232,11 @@ CLI::App* AddInfoCommand(CLI::App* app, InfoOptions* o) {
       "info",
       "Describe a scene file: surface count, control points, world bounds, collapsed "
       "(degenerate) patch edges, the camera, and one line per surface with the file and line "
-      "that define it (the archive's, for a surface read from one), its bounds in world and "
-      "screen space and its kind.");
-  cmd->add_option("FILE", o->file, "scene file: .bpt, .rib or .obj")->type_name("FILE")->required();
+      "that define it (the archive's, for a surface read from one; a CAD file's face number), "
+      "its bounds in world and screen space and its kind. A CAD file's faces by surface type, "
+      "edges, wires, colours, assembly tree, largest edge tolerance and the widest gap "
+      "measured between two faces along an edge.");
+  cmd->add_option("FILE", o->file, "scene file: .bpt, .rib, .obj, .step, .stp, .iges, .igs or .brep")->type_name("FILE")->required();
   cmd->add_flag("--json", o->json,
                 "print the same facts as one JSON object (each surface with its file, line, kind, collapsed "
                 "edges and bounds; the camera; the cages, curves, polygons and trims) instead of text");
@@ -270,16 +297,18 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
   if (t.trimmed > 0)
     out << "trimmed NURBS pieces: " << t.trimmed << ", by " << t.trimSets << " trim curve sets of " << t.loops
         << " loops, " << t.segments << " Bézier segments\n";
+  if (scene.cad) PrintCad(*scene.cad, out);
 
   // Step 2: one line per surface: where it is defined (the line, with the file when it is
-  // not the scene's own: an archive), its bounds, and its kind, whole, last.
+  // not the scene's own: an archive; a CAD file's face number), its bounds, and its kind,
+  // whole, last.
   std::vector<std::string> where;
   std::size_t wide = 4;
   for (const SurfaceFacts& f : facts) {
     where.push_back((f.file == scene.source ? std::string() : f.file + ':') + std::to_string(f.line));
     wide = std::max(wide, where.back().size());
   }
-  out << "surface  " << std::left << std::setw(static_cast<int>(wide)) << "line" << std::right
+  out << "surface  " << std::left << std::setw(static_cast<int>(wide)) << (scene.cad ? "face" : "line") << std::right
       << "  collapsed  world bounds | screen bounds (x, y px) | kind\n";
   for (std::size_t i = 0; i < facts.size(); ++i) {
     const SurfaceFacts& f = facts[i];

@@ -27,7 +27,7 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
       "sRGB-encoded colour (PNG with straight alpha); 16-bit TIFF and half-float EXR the linear, "
       "premultiplied values. The image is written to a temporary file and renamed into place, "
       "so a failed render leaves no file.");
-  cmd->add_option("FILE", o->file, "scene file: .bpt (Bézier patches), .rib (RenderMan scene) or .obj (a subdivision cage)")
+  cmd->add_option("FILE", o->file, "scene file: .bpt (Bézier patches), .rib (RenderMan scene), .obj (a subdivision cage), or a CAD model: .step, .stp, .iges, .igs, .brep")
       ->type_name("FILE")
       ->required();
   cmd->add_option("-o,--output", o->output,

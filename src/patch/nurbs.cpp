@@ -259,3 +259,55 @@ std::vector<NurbsPiece> SplitNurbs(const NurbsSurface& in) {
 }
 
 }  // namespace patchscan
+
+namespace patchscan {
+
+NurbsSurface RepeatPeriods(const NurbsSurface& in, bool alongU, double lo, double hi, double closeTol) {
+  // Work along u: a v direction is the transposed surface's u.
+  NurbsSurface s = in;
+  if (!alongU) {
+    std::swap(s.nu, s.nv), std::swap(s.uorder, s.vorder), std::swap(s.uknot, s.vknot);
+    std::swap(s.umin, s.vmin), std::swap(s.umax, s.vmax);
+    for (int j = 0; j < in.nv; ++j)
+      for (int i = 0; i < in.nu; ++i)
+        s.pw[static_cast<std::size_t>(i * in.nv + j)] = in.pw[static_cast<std::size_t>(j * in.nu + i)];
+  }
+  const int p = s.uorder - 1, n = s.nu;
+  const auto& k = s.uknot;
+  if (p < 1 || n < 2 || k.size() != static_cast<std::size_t>(n + p + 1)) throw std::invalid_argument("not a NURBS surface");
+  const double d0 = k[static_cast<std::size_t>(p)], d1 = k[static_cast<std::size_t>(n)], period = d1 - d0;
+  if (!(period > 0.0) || k.front() != d0 || k.back() != d1)
+    throw std::invalid_argument("its knots are not clamped at the ends of its domain");
+  for (int j = 0; j < s.nv; ++j) {
+    const Vec4& a = s.pw[static_cast<std::size_t>(j * n)];
+    const Vec4& b = s.pw[static_cast<std::size_t>(j * n + n - 1)];
+    if ((a - b).norm() > closeTol) throw std::invalid_argument("it is not closed along the direction it is repeated in");
+  }
+  const double first = std::floor((lo - d0) / period), last = std::ceil((hi - d0) / period);
+  const int copies = static_cast<int>(std::max(1.0, last - first));
+  if (copies > 64) throw std::invalid_argument("its range spans more than 64 periods");
+  const double shift0 = first * period;
+  NurbsSurface out = s;
+  out.nu = copies * (n - 1) + 1;
+  out.uknot.assign(static_cast<std::size_t>(p + 1), d0 + shift0);
+  for (int c = 0; c < copies; ++c) {
+    const double shift = shift0 + c * period;
+    for (int i = p + 1; i < n; ++i) out.uknot.push_back(k[static_cast<std::size_t>(i)] + shift);
+    for (int r = 0; r < (c + 1 < copies ? p : p + 1); ++r) out.uknot.push_back(d1 + shift);
+  }
+  out.pw.clear();
+  for (int j = 0; j < s.nv; ++j)
+    for (int c = 0; c < copies; ++c)
+      for (int i = c == 0 ? 0 : 1; i < n; ++i) out.pw.push_back(s.pw[static_cast<std::size_t>(j * n + i)]);
+  out.umin = std::max(lo, out.uknot.front()), out.umax = std::min(hi, out.uknot.back());
+  if (alongU) return out;
+  NurbsSurface t = out;
+  std::swap(t.nu, t.nv), std::swap(t.uorder, t.vorder), std::swap(t.uknot, t.vknot);
+  std::swap(t.umin, t.vmin), std::swap(t.umax, t.vmax);
+  for (int j = 0; j < out.nv; ++j)
+    for (int i = 0; i < out.nu; ++i)
+      t.pw[static_cast<std::size_t>(i * out.nv + j)] = out.pw[static_cast<std::size_t>(j * out.nu + i)];
+  return t;
+}
+
+}  // namespace patchscan

@@ -72,6 +72,14 @@ class NurbsPiece {
 // a weight that is not positive, a point that is not finite.
 std::vector<NurbsPiece> SplitNurbs(const NurbsSurface& nurbs);
 
+// `nurbs` closed along u (alongU) or v, its parameter range there made [lo, hi] by joining
+// copies of it one period apart (a knot of multiplicity degree at each joint: the surface is
+// as smooth across it as its closed ends meet). A B-rep face on a periodic surface may reach
+// past one period, as a thread's face winds round a cylinder twice. Throws
+// std::invalid_argument unless the knots are clamped and the first and last rows of control
+// points (homogeneous) agree within closeTol; at most 64 periods.
+NurbsSurface RepeatPeriods(const NurbsSurface& nurbs, bool alongU, double lo, double hi, double closeTol);
+
 // The rational Bézier segments of a NURBS curve (a trim curve: homogeneous (u w, v w, w)
 // points) over [tmin, tmax], each as its degree + 1 control points. Throws
 // std::invalid_argument as SplitNurbs does for one direction.

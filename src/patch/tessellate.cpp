@@ -230,12 +230,17 @@ std::array<int, 6> RatesOf(const Surface& s, const Mat4& screenFromWorld, RateOf
   refineInner(&rates);
   // A trimmed NURBS piece keeps whole triangles (AppendPattern): its inner grid is made
   // fine enough on the screen for the cut edge to be a staircase of kTrimTessPx steps.
-  if (TrimOf(s))
+  // Its edges take the inner rates too: Bfr would stitch a coarser edge to the grid in
+  // slivers whose centroid the trim may keep though they run far outside it (a flat CAD
+  // face's rectangle, its edges of rate 1, drew its outline round its round trim).
+  if (TrimOf(s)) {
     for (int k = 0; k <= kInnerIsoLines; ++k) {
       const double c = double(k) / kInnerIsoLines;
       rates[4] = std::max(rates[4], LengthRate(IsoPoints(s, true, c), screenFromWorld, kTrimTessPx));
       rates[5] = std::max(rates[5], LengthRate(IsoPoints(s, false, c), screenFromWorld, kTrimTessPx));
     }
+    for (int e = 0; e < 4; ++e) rates[e] = std::max(rates[e], rates[e % 2 == 0 ? 4 : 5]);
+  }
   // A cone point: a collapsed edge whose normal turns along it (a cone's apex, unlike a
   // sphere's pole). Flat triangles there interpolate the normals of two directions over a
   // whole ring, a sawtooth of shading around the point; rings of kConePointRingPx keep it

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "scene/bpt_reader.h"
+#include "scene/cad_reader.h"
 #include "scene/obj_reader.h"
 #include "scene/rib/reader.h"
 
@@ -39,8 +40,10 @@ std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOp
   const std::string ext = p.extension().string();
   if (ext == ".rib" || (ext == ".gz" && p.stem().extension() == ".rib")) return ReadRib(path, options);
   if (ext == ".obj") return ReadObj(path, ObjOptions{options.objScheme});
+  if (IsCadExtension(ext)) return ReadCad(path);
   if (ext != ".bpt")
-    return SourceError{path, 0, "unknown scene format '" + ext + "' (known: .bpt, .rib, .rib.gz, .obj)"};
+    return SourceError{path, 0, "unknown scene format '" + ext +
+                                    "' (known: .bpt, .rib, .rib.gz, .obj, .step, .stp, .iges, .igs, .brep)"};
   auto read = ReadBpt(path);
   if (auto* e = std::get_if<SourceError>(&read)) return *e;
   Scene scene;

@@ -110,6 +110,20 @@ struct ScenePolygons {
   int line = 0;
 };
 
+// What a CAD file holds beyond its surfaces, for `patchscan info` (scene/cad_reader.h).
+// Counts are of the prepared shapes: a part placed several times counts once.
+struct SceneCad {
+  std::vector<std::pair<std::string, int>> faceKinds;  // faces by surface type, as in the file
+  int faces = 0, edges = 0, wires = 0;
+  int skipped = 0;                // faces that could not be converted (warnings say why)
+  int instances = 0;              // placed parts
+  double largestTolerance = 0.0;  // the largest edge tolerance the file states
+  double largestGap = 0.0;        // the widest gap measured between two faces along an edge
+  double largestJoint = 0.0;      // the widest joint between consecutive edges of a wire
+  int colours = 0;                // distinct colours of faces, solids, parts or instances
+  std::vector<std::string> tree;  // the assembly: one line per node, two spaces a level
+};
+
 struct Scene {
   std::string source;             // the file it was read from
   std::vector<Surface> surfaces;
@@ -125,6 +139,7 @@ struct Scene {
   // Polygons come after the surfaces in the surface ids: polygons[k] is surface id
   // surfaces.size() + k, and appearanceOf (when not empty) covers them after the surfaces.
   std::vector<ScenePolygons> polygons;
+  std::optional<SceneCad> cad;           // a CAD file's facts (none for other formats)
 
   // How many surface ids the scene has: its surfaces, then its polygon meshes.
   std::size_t Ids() const { return surfaces.size() + polygons.size(); }

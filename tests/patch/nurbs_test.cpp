@@ -80,6 +80,30 @@ TEST(Nurbs, PiecesAreTheNuPatchAtTheirParameters) {
   ExpectPiecesMatchDirect(part, 2, "a part of the sphere");
 }
 
+// A closed surface repeated past its period is the same surface at the parameter wrapped
+// into one period, in either direction; an open one is refused.
+TEST(Nurbs, RepeatedPeriodsAreTheSurfaceWrapped) {
+  const NurbsSurface sphere = test::NurbsSphere(1.5);
+  const auto wrapped = [](double t) { return t - std::floor(t); };
+  const NurbsSurface u = RepeatPeriods(sphere, true, -0.3, 2.2, 1e-12);
+  EXPECT_EQ(u.umin, -0.3);
+  EXPECT_EQ(u.umax, 2.2);
+  EXPECT_EQ(u.nu, 4 * (sphere.nu - 1) + 1);  // periods [-1, 0] to [2, 3]
+  for (double x : {-0.3, -0.01, 0.37, 1.0, 1.62, 2.2})
+    for (double y : {0.0, 0.3, 0.8}) EXPECT_LE((Direct(u, x, y) - Direct(sphere, wrapped(x), y)).norm(), kAgree) << x << ", " << y;
+  ExpectPiecesMatchDirect(u, 11 * 2, "sphere repeated along u");  // knots -0.25 to 2 cut the range in 11
+  // Along v: the sphere's circle in u becomes the closed direction of its transpose.
+  NurbsSurface t = sphere;
+  std::swap(t.nu, t.nv), std::swap(t.uorder, t.vorder), std::swap(t.uknot, t.vknot);
+  for (int j = 0; j < sphere.nv; ++j)
+    for (int i = 0; i < sphere.nu; ++i)
+      t.pw[static_cast<std::size_t>(i * sphere.nv + j)] = sphere.pw[static_cast<std::size_t>(j * sphere.nu + i)];
+  const NurbsSurface v = RepeatPeriods(t, false, 0.5, 1.75, 1e-12);
+  for (double y : {0.5, 0.99, 1.2, 1.75}) EXPECT_LE((Direct(v, 0.4, y) - Direct(t, 0.4, wrapped(y))).norm(), kAgree) << y;
+  // v runs pole to pole: not closed.
+  EXPECT_THROW(RepeatPeriods(sphere, false, 0.0, 1.5, 1e-12), std::invalid_argument);
+}
+
 TEST(Nurbs, TheRationalSphereIsTheSphere) {
   // On the unit sphere to rounding, with du x dv along the outward normal wherever it is
   // not collapsed (the poles: the first and last rows of pieces at v = 0 and v = 1).

@@ -1,0 +1,47 @@
+// One face of a B-rep (Open CASCADE's TopoDS_Face) as the trimmed NURBS pieces patchscan
+// scans: its surface as a NuPatch over the face's parameter box, its wires' pcurves as the
+// trim loops (RenderMan's TrimCurve, patch/trim.h). The face must already be a B-spline
+// face (BRepBuilderAPI_NurbsConvert makes every surface one and keeps its pcurves on it).
+//
+// A wire's edges come in the order BRepTools_WireExplorer connects them, each pcurve taken
+// the way the wire runs; a seam edge of a closed surface comes twice, once per side of the
+// parameter box, so the loop closes in (u, v) as the odd winding rule needs; a degenerate
+// edge (a pole, a cone's apex) has a pcurve and no 3D curve and closes the loop the same way.
+// B-rep edges meet only within a tolerance: where one pcurve ends and the next begins a few
+// ulps or a tolerance apart, both ends are moved to their midpoint (the gap, measured on the
+// surface, is reported).
+#pragma once
+
+#include <vector>
+
+#include "patch/nurbs.h"
+#include "patch/surface.h"
+
+class TopoDS_Face;
+class TopoDS_Shape;
+class gp_Trsf;
+
+namespace patchscan {
+
+struct CadFace {
+  std::vector<NurbsPiece> pieces;  // object space: the face's surface without its location
+  Affine3 location = Affine3::Identity();  // the face's own location in its shape
+  bool reversed = false;           // the face's normal is the surface's P_u x P_v reversed
+  double largestGap = 0.0;         // the widest joint between consecutive edges of a wire,
+                                   // on the surface (model units)
+};
+
+// Throws std::runtime_error saying what is wrong: a surface that is not a B-spline, a wire
+// whose pcurves are missing or do not close, a NuPatch the pieces refuse (nurbs.h).
+CadFace ConvertFace(const TopoDS_Face& face);
+
+// Open CASCADE's transformation (rotation, scale, translation) as an affine map.
+Affine3 AffineOf(const gp_Trsf& t);
+
+// The widest gap between two faces of `shape` along an edge they share: each face's pcurve of
+// the edge mapped through its surface at `samples` points of the edge's range, the largest
+// distance between the faces' points (model units). The scans render the faces' own
+// surfaces, so this is the crack they could open.
+double LargestEdgeGap(const TopoDS_Shape& shape, int samples);
+
+}  // namespace patchscan

@@ -1,0 +1,352 @@
+#include "scene/cad_reader.h"
+
+#include <BRepAdaptor_Surface.hxx>
+#include <BRepBuilderAPI_NurbsConvert.hxx>
+#include <BRepTools.hxx>
+#include <BRep_Builder.hxx>
+#include <BRep_Tool.hxx>
+#include <IGESCAFControl_Reader.hxx>
+#include <Message.hxx>
+#include <Message_Messenger.hxx>
+#include <NCollection_DataMap.hxx>
+#include <Quantity_Color.hxx>
+#include <STEPCAFControl_Reader.hxx>
+#include <Standard_Failure.hxx>
+#include <TDF_Tool.hxx>
+#include <TDataStd_Name.hxx>
+#include <TDocStd_Document.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedMapOfShape.hxx>
+#include <TopTools_ShapeMapHasher.hxx>
+#include <TopoDS.hxx>
+#include <XCAFApp_Application.hxx>
+#include <XCAFDoc_ColorTool.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+
+#include "scene/cad_face.h"
+
+namespace patchscan {
+namespace {
+
+// How many points along each shared edge the gap between its faces is measured at.
+constexpr int kGapSamples = 9;
+// Lines of the assembly tree kept for `info`; a larger tree ends with a count.
+constexpr std::size_t kTreeLines = 200;
+// Faces whose conversion failed named one by one in the warnings; the rest are counted.
+constexpr int kNamedSkips = 5;
+
+std::string Lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+// Open CASCADE's default messenger prints to stdout: quiet while a file is read.
+class QuietOcct {
+ public:
+  QuietOcct() : messenger_(Message::DefaultMessenger()), saved_(messenger_->Printers()) {
+    messenger_->ChangePrinters().Clear();
+  }
+  ~QuietOcct() { messenger_->ChangePrinters() = saved_; }
+  QuietOcct(const QuietOcct&) = delete;
+  QuietOcct& operator=(const QuietOcct&) = delete;
+
+ private:
+  Handle(Message_Messenger) messenger_;
+  Message_SequenceOfPrinters saved_;
+};
+
+// std::cout held back for a scope.
+class HeldCout {
+ public:
+  HeldCout() : saved_(std::cout.rdbuf(held_.rdbuf())) {}
+  ~HeldCout() { std::cout.rdbuf(saved_); }
+  HeldCout(const HeldCout&) = delete;
+  HeldCout& operator=(const HeldCout&) = delete;
+
+ private:
+  std::ostringstream held_;
+  std::streambuf* saved_;
+};
+
+// A part as read, prepared once however many times it is placed.
+struct Prototype {
+  TopoDS_Shape shape;
+  std::vector<std::pair<TopoDS_Shape, Vec3>> colouredParts;  // its faces and solids XDE colours
+};
+
+struct Instance {
+  int prototype = 0;
+  gp_Trsf placement;
+  std::optional<Vec3> colour;  // the part's, else its instance's or assembly's
+};
+
+struct Model {
+  std::vector<Prototype> prototypes;
+  std::vector<Instance> instances;
+  std::vector<std::string> tree;
+  std::set<std::array<double, 3>> colours;
+};
+
+// The XDE document's assembly walked into prototypes and their placed instances.
+class XdeWalk {
+ public:
+  XdeWalk(const Handle(TDocStd_Document)& doc, Model* model)
+      : shapes_(XCAFDoc_DocumentTool::ShapeTool(doc->Main())), colours_(XCAFDoc_DocumentTool::ColorTool(doc->Main())),
+        model_(model) {}
+
+  void Run() {
+    TDF_LabelSequence roots;
+    shapes_->GetFreeShapes(roots);
+    for (const TDF_Label& root : roots) Walk(root, gp_Trsf(), std::nullopt, 0);
+  }
+
+ private:
+  std::optional<Vec3> ColourOf(const TDF_Label& label) {
+    Quantity_Color c;
+    if (!colours_->GetColor(label, XCAFDoc_ColorSurf, c) && !colours_->GetColor(label, XCAFDoc_ColorGen, c)) return std::nullopt;
+    model_->colours.insert({c.Red(), c.Green(), c.Blue()});
+    return Vec3(c.Red(), c.Green(), c.Blue());
+  }
+
+  static std::string NameOf(const TDF_Label& label) {
+    Handle(TDataStd_Name) name;
+    if (label.FindAttribute(TDataStd_Name::GetID(), name)) return TCollection_AsciiString(name->Get()).ToCString();
+    TCollection_AsciiString entry;
+    TDF_Tool::Entry(label, entry);
+    return entry.ToCString();
+  }
+
+  void Line(int depth, const std::string& text) {
+    if (model_->tree.size() < kTreeLines) model_->tree.push_back(std::string(static_cast<std::size_t>(2 * depth), ' ') + text);
+    else ++treeLeftOut_;
+  }
+
+  void Walk(const TDF_Label& label, const gp_Trsf& placement, std::optional<Vec3> colour, int depth) {
+    if (auto c = ColourOf(label)) colour = c;
+    if (XCAFDoc_ShapeTool::IsReference(label)) {
+      TDF_Label referred;
+      if (!XCAFDoc_ShapeTool::GetReferredShape(label, referred)) return;
+      Walk(referred, placement * XCAFDoc_ShapeTool::GetLocation(label).Transformation(), colour, depth);
+      return;
+    }
+    if (XCAFDoc_ShapeTool::IsAssembly(label)) {
+      Line(depth, NameOf(label) + " (assembly)");
+      TDF_LabelSequence components;
+      XCAFDoc_ShapeTool::GetComponents(label, components);
+      for (const TDF_Label& c : components) Walk(c, placement, colour, depth + 1);
+      return;
+    }
+    const TopoDS_Shape shape = XCAFDoc_ShapeTool::GetShape(label);
+    if (shape.IsNull()) return;
+    TCollection_AsciiString entry;
+    TDF_Tool::Entry(label, entry);
+    auto [at, fresh] = prototypeOf_.try_emplace(entry.ToCString(), static_cast<int>(model_->prototypes.size()));
+    if (fresh) {
+      Prototype p{shape, {}};
+      TDF_LabelSequence subs;
+      XCAFDoc_ShapeTool::GetSubShapes(label, subs);
+      for (const TDF_Label& s : subs)
+        if (auto c = ColourOf(s)) p.colouredParts.emplace_back(XCAFDoc_ShapeTool::GetShape(s), *c);
+      model_->prototypes.push_back(std::move(p));
+    }
+    int faces = 0;
+    for (TopExp_Explorer f(shape, TopAbs_FACE); f.More(); f.Next()) ++faces;
+    Line(depth, NameOf(label) + " (part, " + std::to_string(faces) + " faces)");
+    model_->instances.push_back(Instance{at->second, placement, colour});
+  }
+
+ public:
+  std::size_t treeLeftOut_ = 0;
+
+ private:
+  Handle(XCAFDoc_ShapeTool) shapes_;
+  Handle(XCAFDoc_ColorTool) colours_;
+  Model* model_;
+  std::map<std::string, int> prototypeOf_;
+};
+
+// The file read into a model; throws std::runtime_error saying why it cannot be.
+Model ReadModel(const std::string& path, const std::string& ext) {
+  Model model;
+  if (ext == ".brep") {
+    TopoDS_Shape shape;
+    BRep_Builder builder;
+    bool read = false;
+    {
+      HeldCout held;  // BRepTools::Read writes its complaints to std::cout itself
+      read = BRepTools::Read(shape, path.c_str(), builder);
+    }
+    if (!read || shape.IsNull())
+      throw std::runtime_error("not a B-rep file Open CASCADE can read");
+    model.prototypes.push_back(Prototype{shape, {}});
+    model.instances.push_back(Instance{0, gp_Trsf(), std::nullopt});
+    model.tree.push_back(std::filesystem::path(path).filename().string() + " (part)");
+    return model;
+  }
+  Handle(TDocStd_Document) doc;
+  Handle(XCAFApp_Application) app = XCAFApp_Application::GetApplication();
+  app->NewDocument("MDTV-XCAF", doc);
+  const bool step = ext == ".step" || ext == ".stp";
+  bool read = false;
+  if (step) {
+    STEPCAFControl_Reader reader;
+    reader.SetColorMode(true), reader.SetNameMode(true), reader.SetLayerMode(false);
+    if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) throw std::runtime_error("not a STEP file Open CASCADE can read");
+    read = reader.Transfer(doc);
+  } else {
+    IGESCAFControl_Reader reader;
+    reader.SetColorMode(true), reader.SetNameMode(true), reader.SetLayerMode(false);
+    if (reader.ReadFile(path.c_str()) != IFSelect_RetDone) throw std::runtime_error("not an IGES file Open CASCADE can read");
+    read = reader.Transfer(doc);
+  }
+  if (!read) throw std::runtime_error("Open CASCADE could not translate its entities into shapes");
+  XdeWalk walk(doc, &model);
+  walk.Run();
+  if (walk.treeLeftOut_) model.tree.push_back("... " + std::to_string(walk.treeLeftOut_) + " more");
+  app->Close(doc);
+  if (model.instances.empty())
+    throw std::runtime_error(std::string("it holds no B-rep shape") + (step ? " (a tessellated-only STEP file?)" : ""));
+  return model;
+}
+
+std::string KindName(GeomAbs_SurfaceType t) {
+  switch (t) {
+    case GeomAbs_Plane: return "plane";
+    case GeomAbs_Cylinder: return "cylinder";
+    case GeomAbs_Cone: return "cone";
+    case GeomAbs_Sphere: return "sphere";
+    case GeomAbs_Torus: return "torus";
+    case GeomAbs_BezierSurface: return "Bezier";
+    case GeomAbs_BSplineSurface: return "B-spline";
+    case GeomAbs_SurfaceOfRevolution: return "revolution";
+    case GeomAbs_SurfaceOfExtrusion: return "extrusion";
+    case GeomAbs_OffsetSurface: return "offset";
+    default: return "other";
+  }
+}
+
+// One prototype's faces converted, each with its colour (none: the instance's) and number.
+struct PreparedFace {
+  CadFace face;
+  std::optional<Vec3> colour;
+  int number = 0;
+};
+
+std::vector<PreparedFace> Prepare(const Prototype& p, SceneCad* cad, std::map<std::string, int>* kinds,
+                                  std::vector<std::string>* warnings, const std::string& path) {
+  TopTools_IndexedMapOfShape faces, edges, wires;
+  TopExp::MapShapes(p.shape, TopAbs_FACE, faces);
+  TopExp::MapShapes(p.shape, TopAbs_EDGE, edges);
+  TopExp::MapShapes(p.shape, TopAbs_WIRE, wires);
+  cad->faces += faces.Extent(), cad->edges += edges.Extent(), cad->wires += wires.Extent();
+  for (int i = 1; i <= edges.Extent(); ++i)
+    cad->largestTolerance = std::max(cad->largestTolerance, BRep_Tool::Tolerance(TopoDS::Edge(edges(i))));
+  std::vector<std::optional<Vec3>> colour(static_cast<std::size_t>(faces.Extent()) + 1);
+  auto coloured = p.colouredParts;  // solids first, so that a face's own colour wins
+  std::stable_sort(coloured.begin(), coloured.end(), [](const auto& a, const auto& b) { return a.first.ShapeType() < b.first.ShapeType(); });
+  for (const auto& [shape, c] : coloured)
+    for (TopExp_Explorer f(shape, TopAbs_FACE); f.More(); f.Next())
+      if (const int i = faces.FindIndex(f.Current()); i > 0) colour[static_cast<std::size_t>(i)] = c;
+  for (int i = 1; i <= faces.Extent(); ++i) ++(*kinds)[KindName(BRepAdaptor_Surface(TopoDS::Face(faces(i)), false).GetType())];
+
+  BRepBuilderAPI_NurbsConvert convert(p.shape, Standard_True);
+  const TopoDS_Shape converted = convert.Shape();
+  NCollection_DataMap<TopoDS_Shape, int, TopTools_ShapeMapHasher> original;
+  for (int i = 1; i <= faces.Extent(); ++i) original.Bind(convert.ModifiedShape(faces(i)), i);
+  cad->largestGap = std::max(cad->largestGap, LargestEdgeGap(converted, kGapSamples));
+
+  std::vector<PreparedFace> out;
+  TopTools_IndexedMapOfShape seen;
+  for (TopExp_Explorer f(converted, TopAbs_FACE); f.More(); f.Next()) {
+    if (seen.Add(f.Current()) != seen.Extent()) continue;  // a face shared by two shells: once
+    const int* number = original.Seek(f.Current());
+    const int n = number ? *number : seen.Extent();
+    try {
+      PreparedFace pf{ConvertFace(TopoDS::Face(f.Current())), number ? colour[static_cast<std::size_t>(*number)] : std::nullopt, n};
+      cad->largestJoint = std::max(cad->largestJoint, pf.face.largestGap);
+      out.push_back(std::move(pf));
+    } catch (const std::exception& e) {
+      if (++cad->skipped <= kNamedSkips) warnings->push_back(path + ": face " + std::to_string(n) + " skipped: " + e.what());
+    } catch (const Standard_Failure& e) {
+      if (++cad->skipped <= kNamedSkips)
+        warnings->push_back(path + ": face " + std::to_string(n) + " skipped: Open CASCADE: " + e.GetMessageString());
+    }
+  }
+  return out;
+}
+
+// The model's instances as the scene's surfaces, one appearance per colour and side.
+Scene Build(const Model& model, const std::string& path) {
+  Scene scene;
+  scene.source = path;
+  SceneCad cad;
+  std::map<std::string, int> kinds;
+  std::vector<std::vector<PreparedFace>> prepared;
+  for (const Prototype& p : model.prototypes) prepared.push_back(Prepare(p, &cad, &kinds, &scene.warnings, path));
+  if (cad.skipped > kNamedSkips)
+    scene.warnings.push_back(path + ": " + std::to_string(cad.skipped - kNamedSkips) + " more faces skipped");
+  std::map<std::pair<std::array<double, 3>, bool>, std::uint32_t> appearanceOf;
+  for (const Instance& inst : model.instances) {
+    const Affine3 placement = AffineOf(inst.placement);
+    const bool mirrored = inst.placement.IsNegative();
+    for (const PreparedFace& pf : prepared[static_cast<std::size_t>(inst.prototype)]) {
+      Appearance a;
+      if (const auto c = pf.colour ? pf.colour : inst.colour) a.colour = *c;
+      a.reversed = pf.face.reversed != mirrored;
+      const auto key = std::make_pair(std::array<double, 3>{a.colour.x(), a.colour.y(), a.colour.z()}, a.reversed);
+      const auto [at, fresh] = appearanceOf.try_emplace(key, static_cast<std::uint32_t>(scene.appearances.size()));
+      if (fresh) scene.appearances.push_back(a);
+      scene.ReserveSurfaces(pf.face.pieces.size(), true);
+      for (const NurbsPiece& piece : pf.face.pieces) {
+        scene.surfaces.push_back(Surface{piece, placement * pf.face.location});
+        scene.sourceLines.push_back(pf.number);
+        scene.sourceFiles.push_back(path);
+        scene.appearanceOf.push_back(at->second);
+      }
+    }
+  }
+  cad.faceKinds.assign(kinds.begin(), kinds.end());
+  cad.instances = static_cast<int>(model.instances.size());
+  cad.colours = static_cast<int>(model.colours.size());
+  cad.tree = model.tree;
+  scene.cad = std::move(cad);
+  return scene;
+}
+
+}  // namespace
+
+bool IsCadExtension(const std::string& extension) {
+  const std::string e = Lower(extension);
+  return e == ".step" || e == ".stp" || e == ".iges" || e == ".igs" || e == ".brep";
+}
+
+std::variant<Scene, SourceError> ReadCad(const std::string& path) {
+  if (!std::ifstream(path)) return SourceError{path, 0, "cannot open the file"};
+  const std::string ext = Lower(std::filesystem::path(path).extension().string());
+  QuietOcct quiet;
+  try {
+    Scene scene = Build(ReadModel(path, ext), path);
+    if (scene.surfaces.empty()) return SourceError{path, 0, "no face of the model could be converted"};
+    return scene;
+  } catch (const std::runtime_error& e) {
+    return SourceError{path, 0, e.what()};
+  } catch (const Standard_Failure& e) {
+    return SourceError{path, 0, std::string("Open CASCADE: ") + e.GetMessageString()};
+  }
+}
+
+}  // namespace patchscan

@@ -1,0 +1,29 @@
+// CAD models read through Open CASCADE Technology: STEP (.step, .stp: AP203, AP214, AP242
+// B-rep), IGES (.iges, .igs) and OCCT's own .brep. Every B-rep face becomes trimmed NURBS
+// pieces (scene/cad_face.h) that the scans render directly, after
+// BRepBuilderAPI_NurbsConvert has made each surface a B-spline with its pcurves on it.
+//
+// STEP and IGES go through OCCT's XDE document: an assembly's parts are instances of one
+// prepared shape each (a part placed five times is converted once), and a face takes the
+// colour XDE gives it, else its solid's or part's, else its instance's, else the renderer's
+// default material. Coordinates are OCCT's: millimetres.
+//
+// Errors name the file: one that cannot be read or parsed, a STEP with no B-rep (AP242
+// tessellated-only files give OCCT a null shape). A face that cannot be converted (no
+// B-spline, no pcurves, wires that do not close) is skipped, counted in a warning naming
+// its number and reason.
+#pragma once
+
+#include <string>
+#include <variant>
+
+#include "scene/scene.h"
+
+namespace patchscan {
+
+// Whether `extension` (with its dot, any case) names a CAD file ReadCad reads.
+bool IsCadExtension(const std::string& extension);
+
+std::variant<Scene, SourceError> ReadCad(const std::string& path);
+
+}  // namespace patchscan

@@ -1,0 +1,101 @@
+// Small CAD models made with Open CASCADE and written as STEP, IGES or BRep files, for the
+// CAD reader's tests: a box, a cylinder, a sphere, a torus, a box with a hole, a coloured
+// box and an assembly of two placed boxes.
+#pragma once
+
+#include <BRepAlgoAPI_Cut.hxx>
+#include <BRepPrimAPI_MakeBox.hxx>
+#include <BRepPrimAPI_MakeCylinder.hxx>
+#include <BRepPrimAPI_MakeSphere.hxx>
+#include <BRepPrimAPI_MakeTorus.hxx>
+#include <BRepTools.hxx>
+#include <IGESControl_Writer.hxx>
+#include <Interface_Static.hxx>
+#include <Message.hxx>
+#include <Message_Messenger.hxx>
+#include <Quantity_Color.hxx>
+#include <STEPCAFControl_Writer.hxx>
+#include <STEPControl_Writer.hxx>
+#include <TDocStd_Document.hxx>
+#include <TopExp_Explorer.hxx>
+#include <XCAFApp_Application.hxx>
+#include <XCAFDoc_ColorTool.hxx>
+#include <XCAFDoc_DocumentTool.hxx>
+#include <XCAFDoc_ShapeTool.hxx>
+#include <gp_Ax2.hxx>
+
+#include <string>
+
+namespace cad_models {
+
+// Open CASCADE's writers print to stdout: quiet for the tests.
+inline void Quiet() { Message::DefaultMessenger()->ChangePrinters().Clear(); }
+
+inline TopoDS_Shape Box() { return BRepPrimAPI_MakeBox(gp_Pnt(1, 2, 3), 4, 5, 6).Shape(); }
+// Axis +z through (0,0,0), radius 2, height 5.
+inline TopoDS_Shape Cylinder() { return BRepPrimAPI_MakeCylinder(2.0, 5.0).Shape(); }
+inline TopoDS_Shape Sphere() { return BRepPrimAPI_MakeSphere(gp_Pnt(1, 1, 1), 3.0).Shape(); }
+// Axis +z through the origin, radii 4 and 1.
+inline TopoDS_Shape Torus() { return BRepPrimAPI_MakeTorus(4.0, 1.0).Shape(); }
+// A 10 x 10 x 4 box with a hole of radius 2 through it, along z at (5, 5).
+inline TopoDS_Shape BoxWithHole() {
+  const TopoDS_Shape box = BRepPrimAPI_MakeBox(10, 10, 4).Shape();
+  const TopoDS_Shape hole = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(5, 5, -1), gp_Dir(0, 0, 1)), 2.0, 6.0).Shape();
+  return BRepAlgoAPI_Cut(box, hole).Shape();
+}
+
+inline bool WriteStep(const TopoDS_Shape& shape, const std::string& path) {
+  Quiet();
+  STEPControl_Writer w;
+  return w.Transfer(shape, STEPControl_AsIs) == IFSelect_RetDone && w.Write(path.c_str()) == IFSelect_RetDone;
+}
+
+inline bool WriteIges(const TopoDS_Shape& shape, const std::string& path) {
+  Quiet();
+  IGESControl_Writer w("MM", 1);  // B-rep mode
+  return w.AddShape(shape) && w.Write(path.c_str());
+}
+
+inline bool WriteBrep(const TopoDS_Shape& shape, const std::string& path) {
+  return BRepTools::Write(shape, path.c_str());
+}
+
+// Writes the XDE document of `fill` (given the shape and colour tools) as STEP.
+template <class Fill>
+bool WriteXdeStep(const std::string& path, Fill&& fill) {
+  Quiet();
+  Handle(TDocStd_Document) doc;
+  Handle(XCAFApp_Application) app = XCAFApp_Application::GetApplication();
+  app->NewDocument("MDTV-XCAF", doc);
+  fill(XCAFDoc_DocumentTool::ShapeTool(doc->Main()), XCAFDoc_DocumentTool::ColorTool(doc->Main()));
+  STEPCAFControl_Writer w;
+  const bool ok = w.Transfer(doc, STEPControl_AsIs) && w.Write(path.c_str()) == IFSelect_RetDone;
+  app->Close(doc);
+  return ok;
+}
+
+// Box() in red, its first face (x = 1) in blue.
+inline bool WriteColouredBox(const std::string& path) {
+  return WriteXdeStep(path, [](const Handle(XCAFDoc_ShapeTool)& shapes, const Handle(XCAFDoc_ColorTool)& colours) {
+    const TopoDS_Shape box = Box();
+    const TDF_Label part = shapes->AddShape(box, false);
+    colours->SetColor(part, Quantity_Color(1, 0, 0, Quantity_TOC_RGB), XCAFDoc_ColorSurf);
+    const TopoDS_Shape face = TopExp_Explorer(box, TopAbs_FACE).Current();
+    colours->SetColor(shapes->AddSubShape(part, face), Quantity_Color(0, 0, 1, Quantity_TOC_RGB), XCAFDoc_ColorSurf);
+  });
+}
+
+// One part, Box(), placed twice: as it is and moved by (20, 0, 0).
+inline bool WriteAssembly(const std::string& path) {
+  return WriteXdeStep(path, [](const Handle(XCAFDoc_ShapeTool)& shapes, const Handle(XCAFDoc_ColorTool)&) {
+    const TDF_Label part = shapes->AddShape(Box(), false);
+    const TDF_Label assembly = shapes->NewShape();
+    gp_Trsf moved;
+    moved.SetTranslation(gp_Vec(20, 0, 0));
+    shapes->AddComponent(assembly, part, TopLoc_Location());
+    shapes->AddComponent(assembly, part, TopLoc_Location(moved));
+    shapes->UpdateAssemblies();
+  });
+}
+
+}  // namespace cad_models

@@ -1,0 +1,216 @@
+// CAD models through Open CASCADE: small models made here and written as STEP, IGES and
+// BRep (tests/scene/cad_models.h) read back as trimmed NURBS pieces, checked point for point
+// against the analytic shapes they are; colours, assemblies, the facts `info` reports, the
+// sample models Debian's occt-misc installs, and files that must be refused.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <unistd.h>
+#include <variant>
+
+#include "scene/cad_models.h"
+#include "scene/cad_reader.h"
+#include "patch/surface.h"
+#include "patch/trim.h"
+
+namespace patchscan {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The models' rational B-splines represent planes, circles and spheres exactly: their points
+// lie on the analytic shape to rounding (of coordinates of size ~10).
+constexpr double kOnShapeTol = 1e-9;
+
+struct TempDir {
+  TempDir() : path(fs::temp_directory_path() / ("patchscan_cad_" + std::to_string(::getpid()))) {
+    fs::create_directories(path);
+  }
+  ~TempDir() { fs::remove_all(path); }
+  std::string File(const std::string& name) const { return (path / name).string(); }
+  fs::path path;
+};
+
+Scene Read(const std::string& path) {
+  auto r = ReadCad(path);
+  if (const auto* e = std::get_if<SourceError>(&r)) {
+    ADD_FAILURE() << e->What();
+    return Scene{};
+  }
+  return std::get<Scene>(std::move(r));
+}
+
+std::string Refused(const std::string& path) {
+  const auto r = ReadCad(path);
+  return std::holds_alternative<SourceError>(r) ? std::get<SourceError>(r).What() : std::string("read");
+}
+
+// Calls f(world point) at a grid of each surface's points that its trim keeps; returns how
+// many.
+int ForKeptPoints(const Scene& scene, const std::function<void(const Vec3&)>& f) {
+  int n = 0;
+  for (const Surface& s : scene.surfaces)
+    for (int i = 0; i <= 8; ++i)
+      for (int j = 0; j <= 8; ++j) {
+        const Vec2 st(i / 8.0, j / 8.0);
+        if (const PieceTrim* t = TrimOf(s); t && !t->Kept(st)) continue;
+        SurfaceDerivs d;
+        EvaluateObject(s, st.x(), st.y(), DerivOrder::Position, &d);
+        f(s.worldFromObject * d.p);
+        ++n;
+      }
+  return n;
+}
+
+int Kind(const Scene& scene, const std::string& kind) {
+  for (const auto& [k, n] : scene.cad->faceKinds)
+    if (k == kind) return n;
+  return 0;
+}
+
+TEST(CadReader, ABoxFromStepIgesAndBrep) {
+  TempDir dir;
+  ASSERT_TRUE(cad_models::WriteStep(cad_models::Box(), dir.File("box.step")));
+  ASSERT_TRUE(cad_models::WriteIges(cad_models::Box(), dir.File("box.igs")));
+  ASSERT_TRUE(cad_models::WriteBrep(cad_models::Box(), dir.File("box.brep")));
+  for (const char* name : {"box.step", "box.igs", "box.brep"}) {
+    SCOPED_TRACE(name);
+    const Scene scene = Read(dir.File(name));
+    ASSERT_TRUE(scene.cad);
+    EXPECT_EQ(scene.cad->faces, 6);
+    EXPECT_EQ(Kind(scene, "plane"), 6);
+    EXPECT_EQ(scene.cad->skipped, 0);
+    const Bounds3 b = scene.WorldBounds();
+    EXPECT_LT((b.lo - Vec3(1, 2, 3)).norm(), kOnShapeTol);
+    EXPECT_LT((b.hi - Vec3(5, 7, 9)).norm(), kOnShapeTol);
+    // Every point lies on one of the six planes.
+    const int n = ForKeptPoints(scene, [](const Vec3& p) {
+      const double d = std::min({std::abs(p.x() - 1), std::abs(p.x() - 5), std::abs(p.y() - 2), std::abs(p.y() - 7),
+                                 std::abs(p.z() - 3), std::abs(p.z() - 9)});
+      EXPECT_LT(d, kOnShapeTol) << p.transpose();
+    });
+    EXPECT_GT(n, 6 * 60);
+  }
+  EXPECT_EQ(Read(dir.File("box.step")).cad->edges, 12);
+}
+
+TEST(CadReader, QuadricFacesLieOnTheirQuadrics) {
+  TempDir dir;
+  ASSERT_TRUE(cad_models::WriteStep(cad_models::Cylinder(), dir.File("cylinder.step")));
+  ASSERT_TRUE(cad_models::WriteStep(cad_models::Sphere(), dir.File("sphere.stp")));
+  ASSERT_TRUE(cad_models::WriteBrep(cad_models::Torus(), dir.File("torus.brep")));
+  const Scene cylinder = Read(dir.File("cylinder.step"));
+  EXPECT_EQ(Kind(cylinder, "cylinder"), 1);
+  EXPECT_EQ(Kind(cylinder, "plane"), 2);
+  ForKeptPoints(cylinder, [](const Vec3& p) {
+    const double r = std::hypot(p.x(), p.y());
+    const bool onSide = std::abs(r - 2) < kOnShapeTol && p.z() > -kOnShapeTol && p.z() < 5 + kOnShapeTol;
+    const bool onCap = r < 2 + kOnShapeTol && (std::abs(p.z()) < kOnShapeTol || std::abs(p.z() - 5) < kOnShapeTol);
+    EXPECT_TRUE(onSide || onCap) << p.transpose();
+  });
+  const Scene sphere = Read(dir.File("sphere.stp"));
+  EXPECT_EQ(Kind(sphere, "sphere"), 1);
+  const int n = ForKeptPoints(sphere, [](const Vec3& p) { EXPECT_NEAR((p - Vec3(1, 1, 1)).norm(), 3, kOnShapeTol); });
+  EXPECT_GT(n, 60);
+  const Scene torus = Read(dir.File("torus.brep"));
+  EXPECT_EQ(Kind(torus, "torus"), 1);
+  ForKeptPoints(torus, [](const Vec3& p) { EXPECT_NEAR(std::hypot(std::hypot(p.x(), p.y()) - 4, p.z()), 1, kOnShapeTol); });
+}
+
+TEST(CadReader, AHoleIsCutByTheFacesInnerWire) {
+  TempDir dir;
+  ASSERT_TRUE(cad_models::WriteStep(cad_models::BoxWithHole(), dir.File("holed.step")));
+  const Scene scene = Read(dir.File("holed.step"));
+  EXPECT_EQ(scene.cad->faces, 7);
+  EXPECT_EQ(Kind(scene, "cylinder"), 1);
+  // The top and bottom faces keep nothing inside the hole, and their points outside it.
+  int inHole = 0, capPoints = 0;
+  ForKeptPoints(scene, [&](const Vec3& p) {
+    const double r = std::hypot(p.x() - 5, p.y() - 5);
+    if (std::abs(p.z()) < kOnShapeTol || std::abs(p.z() - 4) < kOnShapeTol) {
+      ++capPoints;
+      if (r < 2 - kOnShapeTol) ++inHole;
+    }
+  });
+  EXPECT_EQ(inHole, 0);
+  EXPECT_GT(capPoints, 50);
+  EXPECT_EQ(scene.cad->wires, 9);  // six faces' outer wires, two inner ones round the hole, the hole's
+}
+
+TEST(CadReader, ColoursOfFacesAndParts) {
+  TempDir dir;
+  ASSERT_TRUE(cad_models::WriteColouredBox(dir.File("coloured.step")));
+  const Scene scene = Read(dir.File("coloured.step"));
+  ASSERT_EQ(scene.appearanceOf.size(), scene.surfaces.size());
+  int red = 0, blue = 0;
+  for (std::uint32_t a : scene.appearanceOf) {
+    const Vec3& c = scene.appearances[a].colour;
+    red += c.isApprox(Vec3(1, 0, 0)) ? 1 : 0;
+    blue += c.isApprox(Vec3(0, 0, 1)) ? 1 : 0;
+  }
+  EXPECT_EQ(red + blue, static_cast<int>(scene.surfaces.size()));
+  EXPECT_GT(red, 0);
+  EXPECT_GT(blue, 0);
+  EXPECT_EQ(scene.cad->colours, 2);
+}
+
+TEST(CadReader, AnAssemblyPlacesOnePartTwice) {
+  TempDir dir;
+  ASSERT_TRUE(cad_models::WriteAssembly(dir.File("assembly.step")));
+  const Scene scene = Read(dir.File("assembly.step"));
+  EXPECT_EQ(scene.cad->instances, 2);
+  EXPECT_EQ(scene.cad->faces, 6);  // prepared once
+  EXPECT_NEAR(scene.WorldBounds().lo.x(), 1, kOnShapeTol);
+  EXPECT_NEAR(scene.WorldBounds().hi.x(), 25, kOnShapeTol);
+  ASSERT_GE(scene.cad->tree.size(), 3u);
+  EXPECT_NE(scene.cad->tree[0].find("(assembly)"), std::string::npos);
+  EXPECT_NE(scene.cad->tree[1].find("  "), std::string::npos);
+}
+
+TEST(CadReader, SampleModelsReadWithEveryFace) {
+  const fs::path data = "/usr/share/opencascade/data";
+  if (!fs::exists(data)) GTEST_SKIP() << "occt-misc is not installed";
+  for (const char* name : {"step/screw.step", "iges/hammer.iges", "occ/Pump_Nut.brep", "occ/CrankArm.brep"}) {
+    SCOPED_TRACE(name);
+    const Scene scene = Read((data / name).string());
+    ASSERT_TRUE(scene.cad);
+    EXPECT_GT(scene.cad->faces, 5);
+    EXPECT_EQ(scene.cad->skipped, 0);
+    EXPECT_GE(scene.surfaces.size(), static_cast<std::size_t>(scene.cad->faces));
+    EXPECT_TRUE(scene.warnings.empty()) << scene.warnings.front();
+  }
+}
+
+TEST(CadReader, FilesThatCannotBeReadAreRefusedByName) {
+  TempDir dir;
+  EXPECT_EQ(Refused(dir.File("missing.step")), dir.File("missing.step") + ": cannot open the file");
+  std::ofstream(dir.File("garbage.step")) << "this is not STEP\n";
+  EXPECT_NE(Refused(dir.File("garbage.step")).find("not a STEP file"), std::string::npos);
+  std::ofstream(dir.File("garbage.igs")) << "this is not IGES either\n";
+  EXPECT_NE(Refused(dir.File("garbage.igs")).find(dir.File("garbage.igs") + ": "), std::string::npos);
+  std::ofstream(dir.File("garbage.brep")) << "DBRep_DrawableShape\nnonsense\n";
+  EXPECT_NE(Refused(dir.File("garbage.brep")).find("not a B-rep file"), std::string::npos);
+  // A STEP file whose data section holds no shape.
+  std::ofstream(dir.File("empty.step")) << "ISO-10303-21;\nHEADER;\nFILE_DESCRIPTION((''),'2;1');\n"
+                                        << "FILE_NAME('empty','',(''),(''),'','','');\n"
+                                        << "FILE_SCHEMA(('AUTOMOTIVE_DESIGN'));\nENDSEC;\nDATA;\nENDSEC;\n"
+                                        << "END-ISO-10303-21;\n";
+  EXPECT_NE(Refused(dir.File("empty.step")).find(dir.File("empty.step") + ": "), std::string::npos);
+  // A file cut short: the first half of a real one.
+  ASSERT_TRUE(cad_models::WriteStep(cad_models::BoxWithHole(), dir.File("whole.step")));
+  std::ifstream whole(dir.File("whole.step"));
+  const std::string text((std::istreambuf_iterator<char>(whole)), std::istreambuf_iterator<char>());
+  std::ofstream(dir.File("cut.step")) << text.substr(0, text.size() / 2);
+  const auto cut = ReadCad(dir.File("cut.step"));
+  if (const auto* e = std::get_if<SourceError>(&cut)) {
+    EXPECT_EQ(e->file, dir.File("cut.step"));
+  }
+  EXPECT_TRUE(IsCadExtension(".STEP") && IsCadExtension(".igs") && !IsCadExtension(".rib"));
+}
+
+}  // namespace
+}  // namespace patchscan
