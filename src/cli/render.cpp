@@ -78,7 +78,8 @@ CLI::App* AddRenderCommand(CLI::App* app, RenderCommand* command) {
   auto* tessError = cmd->add_option("--tess-error", o->tessError,
                                     "tess mode (the default tessellation): rates chosen per surface from the "
                                     "screen so that no triangle lies more than about this many pixels from "
-                                    "the surface (chord error; equal rates on shared edges)")
+                                    "the surface (chord error; equal rates on shared edges); a CAD file is meshed by Open "
+                                    "CASCADE with this chord deviation where the model comes nearest")
                          ->type_name("PX")
                          ->check(Number(0.01, 1e6))
                          ->capture_default_str();

@@ -44,11 +44,37 @@ std::string ModeConflict(const RenderOptions& o) {
   return {};
 }
 
-// The tessellated mode's mesh, tessellated on `threads` threads (nullopt: interrupted).
+// The chord deviation in world units that is `px` pixels on the screen where the scene comes
+// nearest the eye: the smallest over its box's corners and centre in front of the eye of the
+// world length one pixel spans there (by the screen's derivative along each axis).
+double WorldPerPixels(const Scene& scene, const Camera& camera, double px) {
+  const Mat4 m = ScreenFromWorld(camera);
+  const Bounds3 b = scene.WorldBounds();
+  const double step = 1e-6 * std::max(b.Diagonal().norm(), 1e-300);
+  double most = 0.0;  // pixels a world unit spans, at most
+  for (int k = 0; k < 9; ++k) {
+    const Vec3 p = k == 8 ? b.Centre() : Vec3(k & 1 ? b.hi.x() : b.lo.x(), k & 2 ? b.hi.y() : b.lo.y(), k & 4 ? b.hi.z() : b.lo.z());
+    const Vec4 h = m * p.homogeneous();
+    if (!(h.w() > 0.0)) continue;
+    for (int axis = 0; axis < 3; ++axis) {
+      const Vec4 g = m * (p + step * Vec3::Unit(axis)).homogeneous();
+      if (g.w() > 0.0) most = std::max(most, (g.head<2>() / g.w() - h.head<2>() / h.w()).norm() / step);
+    }
+  }
+  return most > 0.0 ? px / most : px * b.Diagonal().norm() / std::max(camera.width, camera.height);
+}
+
+// The tessellated mode's mesh, tessellated on `threads` threads (nullopt: interrupted). A
+// CAD file at the default --tess-error is meshed by Open CASCADE as CAD viewers mesh it, its
+// chord deviation that many pixels where the model comes nearest; its pieces otherwise.
 std::optional<raster::TriangleMesh> TessellatedMesh(const RenderOptions& o, const Scene& scene, const Camera& camera,
                                                     int threads) {
-  auto tess = TessellateScene(scene.surfaces, camera, TessSettings{o.tessRate, o.tessPixels, o.tessError}, threads,
-                              [] { return gInterrupted != 0; });
+  std::optional<TessMesh> tess;
+  if (scene.cad && scene.cad->mesh && o.tessRate == 0 && o.tessPixels == 0.0)
+    tess = scene.cad->mesh(WorldPerPixels(scene, camera, o.tessError));
+  else
+    tess = TessellateScene(scene.surfaces, camera, TessSettings{o.tessRate, o.tessPixels, o.tessError}, threads,
+                           [] { return gInterrupted != 0; });
   if (!tess) return std::nullopt;
   WeldBoundaryVertices(&*tess, kWeldRelTol * scene.WorldBounds().Diagonal().norm());
   raster::TriangleMesh mesh = ToRasterMesh(*tess, camera);

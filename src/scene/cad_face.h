@@ -12,10 +12,13 @@
 // surface, is reported).
 #pragma once
 
+#include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "patch/nurbs.h"
 #include "patch/surface.h"
+#include "patch/tessellate.h"
 
 class TopoDS_Face;
 class TopoDS_Shape;
@@ -43,5 +46,23 @@ Affine3 AffineOf(const gp_Trsf& t);
 // distance between the faces' points (model units). The scans render the faces' own
 // surfaces, so this is the crack they could open.
 double LargestEdgeGap(const TopoDS_Shape& shape, int samples);
+
+// One placed part for MeshCad: the part (an index into its parts), where it is placed, and
+// its faces rendered: (the face's number in TopExp::MapShapes order, from 1; the surface id
+// its triangles take).
+struct CadPlacedPart {
+  std::size_t part = 0;
+  Affine3 placement = Affine3::Identity();
+  std::vector<std::pair<int, std::uint32_t>> faces;
+};
+
+// The placed parts' faces as Open CASCADE's BRepMesh_IncrementalMesh meshes them (what a
+// CAD viewer shows) with a chord deviation of at most `deflection` (model units) and the
+// angular deflection kCadMeshAngleRad, in world space: positions from the mesh, normals from
+// each face's surface at the nodes' (u, v) (P_u x P_v, as the direct modes give them: a
+// reversed face's appearance says which side is its front), a node where the surface's
+// normal vanishes (a pole) taking its triangles' mean. Each part's earlier mesh is removed
+// first.
+TessMesh MeshCad(const std::vector<TopoDS_Shape>& parts, const std::vector<CadPlacedPart>& placed, double deflection);
 
 }  // namespace patchscan

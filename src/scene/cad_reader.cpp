@@ -1,5 +1,10 @@
 #include "scene/cad_reader.h"
 
+// Open CASCADE's OCC_CATCH_SIGNALS turns a signal raised inside it into an exception (its
+// libraries are built with this on Linux): its parsers crash on some malformed files.
+#define OCC_CONVERT_SIGNALS
+#include <csignal>
+
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepBuilderAPI_NurbsConvert.hxx>
 #include <BRepTools.hxx>
@@ -9,8 +14,10 @@
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
 #include <NCollection_DataMap.hxx>
+#include <OSD.hxx>
 #include <Quantity_Color.hxx>
 #include <STEPCAFControl_Reader.hxx>
+#include <Standard_ErrorHandler.hxx>
 #include <Standard_Failure.hxx>
 #include <TDF_Tool.hxx>
 #include <TDataStd_Name.hxx>
@@ -33,6 +40,7 @@
 #include <iostream>
 #include <sstream>
 #include <map>
+#include <memory>
 #include <optional>
 #include <set>
 #include <stdexcept>
@@ -67,6 +75,27 @@ class QuietOcct {
  private:
   Handle(Message_Messenger) messenger_;
   Message_SequenceOfPrinters saved_;
+};
+
+// Open CASCADE's signal handlers for a scope (OSD::SetSignal), the process's own restored
+// after it: a crash inside OCCT then unwinds to the nearest OCC_CATCH_SIGNALS as a
+// Standard_Failure, and the program's handlers (an interrupt's, a sanitizer's) stay its own.
+class OcctSignals {
+ public:
+  OcctSignals() {
+    for (std::size_t k = 0; k < kSignals.size(); ++k) sigaction(kSignals[k], nullptr, &saved_[k]);
+    OSD::SetSignal(OSD_SignalMode_Set, Standard_False);
+  }
+  ~OcctSignals() {
+    for (std::size_t k = 0; k < kSignals.size(); ++k) sigaction(kSignals[k], &saved_[k], nullptr);
+  }
+  OcctSignals(const OcctSignals&) = delete;
+  OcctSignals& operator=(const OcctSignals&) = delete;
+
+ private:
+  // The signals OSD::SetSignal sets on Linux.
+  static constexpr std::array<int, 9> kSignals = {SIGHUP, SIGINT, SIGQUIT, SIGILL, SIGBUS, SIGSEGV, SIGSYS, SIGFPE, SIGTERM};
+  std::array<struct sigaction, 9> saved_{};
 };
 
 // std::cout held back for a scope.
@@ -243,7 +272,8 @@ std::string KindName(GeomAbs_SurfaceType t) {
 struct PreparedFace {
   CadFace face;
   std::optional<Vec3> colour;
-  int number = 0;
+  int number = 0;         // in the part's TopExp::MapShapes order, from 1
+  bool original = false;  // number is the face's as read (NurbsConvert says which it was)
 };
 
 std::vector<PreparedFace> Prepare(const Prototype& p, SceneCad* cad, std::map<std::string, int>* kinds,
@@ -276,7 +306,8 @@ std::vector<PreparedFace> Prepare(const Prototype& p, SceneCad* cad, std::map<st
     const int* number = original.Seek(f.Current());
     const int n = number ? *number : seen.Extent();
     try {
-      PreparedFace pf{ConvertFace(TopoDS::Face(f.Current())), number ? colour[static_cast<std::size_t>(*number)] : std::nullopt, n};
+      PreparedFace pf{ConvertFace(TopoDS::Face(f.Current())), number ? colour[static_cast<std::size_t>(*number)] : std::nullopt, n,
+                      number != nullptr};
       cad->largestJoint = std::max(cad->largestJoint, pf.face.largestGap);
       out.push_back(std::move(pf));
     } catch (const std::exception& e) {
@@ -300,10 +331,16 @@ Scene Build(const Model& model, const std::string& path) {
   if (cad.skipped > kNamedSkips)
     scene.warnings.push_back(path + ": " + std::to_string(cad.skipped - kNamedSkips) + " more faces skipped");
   std::map<std::pair<std::array<double, 3>, bool>, std::uint32_t> appearanceOf;
+  auto parts = std::make_shared<std::vector<TopoDS_Shape>>();
+  for (const Prototype& p : model.prototypes) parts->push_back(p.shape);
+  auto placed = std::make_shared<std::vector<CadPlacedPart>>();
   for (const Instance& inst : model.instances) {
     const Affine3 placement = AffineOf(inst.placement);
     const bool mirrored = inst.placement.IsNegative();
+    placed->push_back(CadPlacedPart{static_cast<std::size_t>(inst.prototype), placement, {}});
     for (const PreparedFace& pf : prepared[static_cast<std::size_t>(inst.prototype)]) {
+      if (pf.original && !pf.face.pieces.empty())
+        placed->back().faces.emplace_back(pf.number, static_cast<std::uint32_t>(scene.surfaces.size()));
       Appearance a;
       if (const auto c = pf.colour ? pf.colour : inst.colour) a.colour = *c;
       a.reversed = pf.face.reversed != mirrored;
@@ -323,6 +360,7 @@ Scene Build(const Model& model, const std::string& path) {
   cad.instances = static_cast<int>(model.instances.size());
   cad.colours = static_cast<int>(model.colours.size());
   cad.tree = model.tree;
+  cad.mesh = [parts, placed](double deflection) { return MeshCad(*parts, *placed, deflection); };
   scene.cad = std::move(cad);
   return scene;
 }
@@ -338,15 +376,43 @@ std::variant<Scene, SourceError> ReadCad(const std::string& path) {
   if (!std::ifstream(path)) return SourceError{path, 0, "cannot open the file"};
   const std::string ext = Lower(std::filesystem::path(path).extension().string());
   QuietOcct quiet;
+  OcctSignals signals;
   try {
+    OCC_CATCH_SIGNALS
     Scene scene = Build(ReadModel(path, ext), path);
     if (scene.surfaces.empty()) return SourceError{path, 0, "no face of the model could be converted"};
     return scene;
   } catch (const std::runtime_error& e) {
     return SourceError{path, 0, e.what()};
   } catch (const Standard_Failure& e) {
-    return SourceError{path, 0, std::string("Open CASCADE: ") + e.GetMessageString()};
+    return SourceError{path, 0, std::string("Open CASCADE failed reading it: ") + e.DynamicType()->Name() + ": " +
+                                    e.GetMessageString()};
   }
 }
 
 }  // namespace patchscan
+
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define PATCHSCAN_ADDRESS_SANITIZER 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__) || defined(PATCHSCAN_ADDRESS_SANITIZER)
+// LeakSanitizer's suppressions for a build under the sanitizers. Open CASCADE's data exchange
+// registers its controllers, editors and static parameters once per process, on the first
+// reader or writer made, and never frees them; its XDE application and driver table are
+// process-wide singletons; its STEP writer (the tests' models) leaves its default axis in a
+// reference cycle. Only these are named: a reader, document or shape that outlives its use is
+// still reported. OCCT is built without frame pointers: the names show in a leak's stack
+// with ASAN_OPTIONS=fast_unwind_on_malloc=0 (tests/CMakeLists.txt, .ci/fuzz).
+extern "C" const char* __lsan_default_suppressions() {
+  return "leak:STEPControl_Controller::Init\n"
+         "leak:STEPCAFControl_Controller::Init\n"
+         "leak:IGESControl_Controller::Init\n"
+         "leak:IGESCAFControl_Controller::Init\n"
+         "leak:XSAlgo::Init\n"
+         "leak:XCAFApp_Application::GetApplication\n"
+         "leak:TPrsStd_DriverTable::Get\n"
+         "leak:STEPConstruct_ContextTool::GetDefaultAxis\n";
+}
+#endif

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -13,6 +14,7 @@
 #include "patch/polygon.h"
 #include "scene/source_error.h"
 #include "patch/surface.h"
+#include "patch/tessellate.h"
 
 namespace patchscan {
 
@@ -122,6 +124,10 @@ struct SceneCad {
   double largestJoint = 0.0;      // the widest joint between consecutive edges of a wire
   int colours = 0;                // distinct colours of faces, solids, parts or instances
   std::vector<std::string> tree;  // the assembly: one line per node, two spaces a level
+  // The model meshed by Open CASCADE (BRepMesh) with a chord deviation of at most the
+  // argument (model units), in world space, each face's triangles taking the surface id of
+  // its first piece: what --mode tess renders of a CAD file.
+  std::function<TessMesh(double deflection)> mesh;
 };
 
 struct Scene {

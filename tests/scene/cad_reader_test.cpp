@@ -4,6 +4,7 @@
 // sample models Debian's occt-misc installs, and files that must be refused.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -11,6 +12,10 @@
 #include <string>
 #include <unistd.h>
 #include <variant>
+
+#ifdef PATCHSCAN_SANITIZED
+#include <sanitizer/lsan_interface.h>
+#endif
 
 #include "scene/cad_models.h"
 #include "scene/cad_reader.h"
@@ -121,6 +126,39 @@ TEST(CadReader, QuadricFacesLieOnTheirQuadrics) {
   ForKeptPoints(torus, [](const Vec3& p) { EXPECT_NEAR(std::hypot(std::hypot(p.x(), p.y()) - 4, p.z()), 1, kOnShapeTol); });
 }
 
+// What --mode tess renders of a CAD file: Open CASCADE's mesh at the deflection asked, its
+// nodes on the surface, its facets within the deflection of it, normals the surface's.
+TEST(CadReader, OpenCascadesMeshIsWithinItsDeflection) {
+  TempDir dir;
+  ASSERT_TRUE(cad_models::WriteStep(cad_models::Cylinder(), dir.File("cylinder.step")));
+  const Scene scene = Read(dir.File("cylinder.step"));
+  ASSERT_TRUE(scene.cad && scene.cad->mesh);
+  for (double deflection : {0.1, 0.01}) {
+    SCOPED_TRACE(deflection);
+    const TessMesh mesh = scene.cad->mesh(deflection);
+    ASSERT_EQ(mesh.surfaceOf.size(), mesh.triangles.size());
+    for (std::uint32_t id : mesh.surfaceOf) EXPECT_LT(id, scene.surfaces.size());
+    int side = 0;
+    for (const auto& t : mesh.triangles) {
+      const Vec3 c = (mesh.vertices[t[0]].position + mesh.vertices[t[1]].position + mesh.vertices[t[2]].position) / 3;
+      const double r = std::hypot(c.x(), c.y());
+      const auto onCap = [&](double z) {
+        return std::all_of(t.begin(), t.end(), [&](std::uint32_t i) { return std::abs(mesh.vertices[i].position.z() - z) < kOnShapeTol; });
+      };
+      if (onCap(0) || onCap(5)) continue;
+      ++side;
+      EXPECT_GT(r, 2 - deflection * (1 + 1e-9));  // the chord's deviation
+      for (std::uint32_t i : t) {
+        const TessVertex& v = mesh.vertices[i];
+        EXPECT_NEAR(std::hypot(v.position.x(), v.position.y()), 2, kOnShapeTol);
+        EXPECT_LT((v.normal - Vec3(v.position.x(), v.position.y(), 0) / 2).norm(), kOnShapeTol);
+      }
+    }
+    EXPECT_GT(side, 8);
+  }
+  EXPECT_GT(scene.cad->mesh(0.001).triangles.size(), scene.cad->mesh(0.1).triangles.size());
+}
+
 TEST(CadReader, AHoleIsCutByTheFacesInnerWire) {
   TempDir dir;
   ASSERT_TRUE(cad_models::WriteStep(cad_models::BoxWithHole(), dir.File("holed.step")));
@@ -210,6 +248,24 @@ TEST(CadReader, FilesThatCannotBeReadAreRefusedByName) {
     EXPECT_EQ(e->file, dir.File("cut.step"));
   }
   EXPECT_TRUE(IsCadExtension(".STEP") && IsCadExtension(".igs") && !IsCadExtension(".rib"));
+}
+
+// A trimmed curve whose basis curve is of no known type: OCCT's parser dereferences the null
+// curve, a crash without the reader's signal guard. The long jump out of the crash skips
+// OCCT's destructors: what they would have freed is not a leak of the reader's.
+TEST(CadReader, ACrashInsideOpenCascadesParserIsAnError) {
+  TempDir dir;
+  std::ofstream(dir.File("null.brep")) << "DBRep_DrawableShape\n\nCASCADE Topology V1, (c) Matra-Datavision\n"
+                                          "Locations 0\nCurve2ds 0\nCurves 1\n8 0 1\n99 0 0 0\nPolygon3D 0\n"
+                                          "PolygonOnTriangulations 0\nSurfaces 0\nTriangulations 0\n\nTShapes 0\n\n+0 0 \n";
+#ifdef PATCHSCAN_SANITIZED
+  __lsan_disable();
+#endif
+  const std::string refused = Refused(dir.File("null.brep"));
+#ifdef PATCHSCAN_SANITIZED
+  __lsan_enable();
+#endif
+  EXPECT_EQ(refused.rfind(dir.File("null.brep") + ": ", 0), 0u) << refused;
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // A CAD model rendered against the same shape given independently: a STEP cylinder (its side
-// a rational B-spline with its caps' circles as trim curves) against RenderMan's Cylinder and
-// two Disks of the same pose, in every mode; and a CAD file through `info` and `convert`.
+// a rational B-spline with its caps' circles as trim curves; in tess mode Open CASCADE's
+// mesh) against RenderMan's Cylinder and two Disks of the same pose, in every mode; and a CAD
+// file through `info` and `convert`.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -55,9 +56,10 @@ TEST(CadRender, AStepCylinderIsRenderManCylinderAndDisks) {
               << g.worstNormalRad << " rad over " << g.whole << " pixels\n";
     EXPECT_GT(g.whole, 3000);
     if (std::string(mode) == "tess") {
-      // Two tessellations of the same shape, each within its error of it (--tess-error,
-      // half a pixel): they differ along the outline by less than a pixel's width.
-      EXPECT_LT(g.meanCoverage, 5e-3);
+      // Open CASCADE's mesh of the STEP file against Bfr's of the quadrics, each within 0.4 px
+      // (--tess-error) of the shape: they differ along the outline by less than a pixel's
+      // width (measured: a mean of 5.6e-4).
+      EXPECT_LT(g.meanCoverage, 2e-3);
       continue;
     }
     // One sample of 9 at a pixel's edge of the shape may fall either way where the two
