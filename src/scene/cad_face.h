@@ -62,7 +62,7 @@ struct CadPlacedPart {
 // each face's surface at the nodes' (u, v) (P_u x P_v, as the direct modes give them: a
 // reversed face's appearance says which side is its front), a node where the surface's
 // normal vanishes (a pole) taking its triangles' mean. Each part's earlier mesh is removed
-// first.
+// first. Throws std::runtime_error, naming the part, where the mesher fails.
 TessMesh MeshCad(const std::vector<TopoDS_Shape>& parts, const std::vector<CadPlacedPart>& placed, double deflection);
 
 }  // namespace patchscan

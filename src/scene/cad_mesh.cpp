@@ -3,10 +3,14 @@
 #include <BRep_Tool.hxx>
 #include <Geom_Surface.hxx>
 #include <Poly_Triangulation.hxx>
+#include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
 #include <TopoDS_Face.hxx>
+
+#include <stdexcept>
+#include <string>
 
 #include "scene/cad_face.h"
 
@@ -69,8 +73,13 @@ void AppendFace(const TopoDS_Face& face, const Affine3& placement, std::uint32_t
 TessMesh MeshCad(const std::vector<TopoDS_Shape>& parts, const std::vector<CadPlacedPart>& placed, double deflection) {
   std::vector<TopTools_IndexedMapOfShape> faces(parts.size());
   for (std::size_t k = 0; k < parts.size(); ++k) {
-    BRepTools::Clean(parts[k]);
-    BRepMesh_IncrementalMesh(parts[k], deflection, Standard_False, kCadMeshAngleRad, Standard_False);
+    try {
+      BRepTools::Clean(parts[k]);
+      BRepMesh_IncrementalMesh(parts[k], deflection, Standard_False, kCadMeshAngleRad, Standard_False);
+    } catch (const Standard_Failure& e) {  // not a std::exception: the caller's handlers would miss it
+      throw std::runtime_error("Open CASCADE's mesher failed on part " + std::to_string(k + 1) + " of " +
+                               std::to_string(parts.size()) + ": " + e.GetMessageString());
+    }
     TopExp::MapShapes(parts[k], TopAbs_FACE, faces[k]);
   }
   TessMesh out;

@@ -217,7 +217,17 @@ Model ReadModel(const std::string& path, const std::string& ext) {
     bool read = false;
     {
       HeldCout held;  // BRepTools::Read writes its complaints to std::cout itself
-      read = BRepTools::Read(shape, path.c_str(), builder);
+      // OCCT's .brep parser does not check its stream: a count past the end of a truncated
+      // or damaged file loops on a failed stream (for hours, with a count of 10^9). A stream
+      // that throws on its first failed read ends that; valid files never fail a read.
+      std::ifstream in(path, std::ios::binary);
+      in.exceptions(std::ios::failbit | std::ios::badbit);
+      try {
+        BRepTools::Read(shape, in, builder);
+        read = true;
+      } catch (const std::ios_base::failure&) {
+        throw std::runtime_error("not a B-rep file Open CASCADE can read (a value is missing or malformed)");
+      }
     }
     if (!read || shape.IsNull())
       throw std::runtime_error("not a B-rep file Open CASCADE can read");

@@ -67,6 +67,12 @@ case $case_name in
         for mode in exact theta; do same_image "$n" exr "$surfaces/$scene" --size 160x100 --aa 2 --mode "$mode" --aov; done
       done
     done ;;
+  cad)
+    # A STEP assembly of Open CASCADE's sample data (occt-misc): its parts' trimmed pieces in
+    # the direct modes, Open CASCADE's own mesh in tess mode.
+    model=/usr/share/opencascade/data/step/linkrods.step
+    [ -f "$model" ] || { echo "occt-misc is not installed: no CAD model"; exit 0; }
+    for mode in exact theta tess; do same_image 3 exr "$model" --size 160x100 --aa 2 --mode "$mode" --aov; done ;;
   frames)
     # Every frame of a production scene (a shadow map, then the picture through it).
     mkdir one many

@@ -30,6 +30,11 @@ namespace fs = std::filesystem;
 // The models' rational B-splines represent planes, circles and spheres exactly: their points
 // lie on the analytic shape to rounding (of coordinates of size ~10).
 constexpr double kOnShapeTol = 1e-9;
+// Their normals, P_u x P_v of the same exact representations, are the shapes' to rounding
+// too: the 1e-6 rad a CAD face's normal must keep against the analytic shape's, with room.
+// (A render's normal is further limited by the solve of each sample's (u, v):
+// tests/scene/cad_render_test.cpp.)
+constexpr double kNormalTolRad = 1e-7;
 
 struct TempDir {
   TempDir() : path(fs::temp_directory_path() / ("patchscan_cad_" + std::to_string(::getpid()))) {
@@ -54,9 +59,11 @@ std::string Refused(const std::string& path) {
   return std::holds_alternative<SourceError>(r) ? std::get<SourceError>(r).What() : std::string("read");
 }
 
-// Calls f(world point) at a grid of each surface's points that its trim keeps; returns how
-// many.
-int ForKeptPoints(const Scene& scene, const std::function<void(const Vec3&)>& f) {
+// Calls f(world point, world unit normal) at a grid of each surface's points that its trim
+// keeps, the normal zero where P_u x P_v nearly vanishes (a pole: the sphere's rows of
+// points along its collapsed edges); returns how many.
+constexpr double kDefinedNormal = 1e-3;
+int ForKeptPoints(const Scene& scene, const std::function<void(const Vec3&, const Vec3&)>& f) {
   int n = 0;
   for (const Surface& s : scene.surfaces)
     for (int i = 0; i <= 8; ++i)
@@ -64,8 +71,10 @@ int ForKeptPoints(const Scene& scene, const std::function<void(const Vec3&)>& f)
         const Vec2 st(i / 8.0, j / 8.0);
         if (const PieceTrim* t = TrimOf(s); t && !t->Kept(st)) continue;
         SurfaceDerivs d;
-        EvaluateObject(s, st.x(), st.y(), DerivOrder::Position, &d);
-        f(s.worldFromObject * d.p);
+        EvaluateObject(s, st.x(), st.y(), DerivOrder::First, &d);
+        const Vec3 normal = s.worldFromObject.linear().inverse().transpose() * d.dpdu.cross(d.dpdv);
+        const bool defined = d.dpdu.cross(d.dpdv).norm() > kDefinedNormal * d.dpdu.norm() * d.dpdv.norm();
+        f(s.worldFromObject * d.p, defined ? normal.normalized() : Vec3::Zero());
         ++n;
       }
   return n;
@@ -93,7 +102,7 @@ TEST(CadReader, ABoxFromStepIgesAndBrep) {
     EXPECT_LT((b.lo - Vec3(1, 2, 3)).norm(), kOnShapeTol);
     EXPECT_LT((b.hi - Vec3(5, 7, 9)).norm(), kOnShapeTol);
     // Every point lies on one of the six planes.
-    const int n = ForKeptPoints(scene, [](const Vec3& p) {
+    const int n = ForKeptPoints(scene, [](const Vec3& p, const Vec3&) {
       const double d = std::min({std::abs(p.x() - 1), std::abs(p.x() - 5), std::abs(p.y() - 2), std::abs(p.y() - 7),
                                  std::abs(p.z() - 3), std::abs(p.z() - 9)});
       EXPECT_LT(d, kOnShapeTol) << p.transpose();
@@ -111,19 +120,33 @@ TEST(CadReader, QuadricFacesLieOnTheirQuadrics) {
   const Scene cylinder = Read(dir.File("cylinder.step"));
   EXPECT_EQ(Kind(cylinder, "cylinder"), 1);
   EXPECT_EQ(Kind(cylinder, "plane"), 2);
-  ForKeptPoints(cylinder, [](const Vec3& p) {
+  // The normals are the shapes' own (the sense of each is the face's business, as in RIB).
+  const auto along = [](const Vec3& n, const Vec3& want) {
+    return n.isZero() ? 0.0 : std::acos(std::min(1.0, std::abs(n.dot(want.normalized()))));
+  };
+  ForKeptPoints(cylinder, [&](const Vec3& p, const Vec3& n) {
     const double r = std::hypot(p.x(), p.y());
     const bool onSide = std::abs(r - 2) < kOnShapeTol && p.z() > -kOnShapeTol && p.z() < 5 + kOnShapeTol;
     const bool onCap = r < 2 + kOnShapeTol && (std::abs(p.z()) < kOnShapeTol || std::abs(p.z() - 5) < kOnShapeTol);
     EXPECT_TRUE(onSide || onCap) << p.transpose();
+    // (A point of a cap's rim lies on the side too.)
+    EXPECT_LT(std::min(onSide ? along(n, Vec3(p.x(), p.y(), 0)) : 9.0, onCap ? along(n, Vec3(0, 0, 1)) : 9.0), kNormalTolRad)
+        << p.transpose();
   });
   const Scene sphere = Read(dir.File("sphere.stp"));
   EXPECT_EQ(Kind(sphere, "sphere"), 1);
-  const int n = ForKeptPoints(sphere, [](const Vec3& p) { EXPECT_NEAR((p - Vec3(1, 1, 1)).norm(), 3, kOnShapeTol); });
+  const int n = ForKeptPoints(sphere, [&](const Vec3& p, const Vec3& normal) {
+    EXPECT_NEAR((p - Vec3(1, 1, 1)).norm(), 3, kOnShapeTol);
+    EXPECT_LT(along(normal, p - Vec3(1, 1, 1)), kNormalTolRad) << p.transpose();
+  });
   EXPECT_GT(n, 60);
   const Scene torus = Read(dir.File("torus.brep"));
   EXPECT_EQ(Kind(torus, "torus"), 1);
-  ForKeptPoints(torus, [](const Vec3& p) { EXPECT_NEAR(std::hypot(std::hypot(p.x(), p.y()) - 4, p.z()), 1, kOnShapeTol); });
+  ForKeptPoints(torus, [&](const Vec3& p, const Vec3& normal) {
+    EXPECT_NEAR(std::hypot(std::hypot(p.x(), p.y()) - 4, p.z()), 1, kOnShapeTol);
+    const Vec3 ring = 4 * Vec3(p.x(), p.y(), 0).normalized();  // the tube's centre nearest p
+    EXPECT_LT(along(normal, p - ring), kNormalTolRad) << p.transpose();
+  });
 }
 
 // What --mode tess renders of a CAD file: Open CASCADE's mesh at the deflection asked, its
@@ -167,7 +190,7 @@ TEST(CadReader, AHoleIsCutByTheFacesInnerWire) {
   EXPECT_EQ(Kind(scene, "cylinder"), 1);
   // The top and bottom faces keep nothing inside the hole, and their points outside it.
   int inHole = 0, capPoints = 0;
-  ForKeptPoints(scene, [&](const Vec3& p) {
+  ForKeptPoints(scene, [&](const Vec3& p, const Vec3&) {
     const double r = std::hypot(p.x() - 5, p.y() - 5);
     if (std::abs(p.z()) < kOnShapeTol || std::abs(p.z() - 4) < kOnShapeTol) {
       ++capPoints;
@@ -248,6 +271,17 @@ TEST(CadReader, FilesThatCannotBeReadAreRefusedByName) {
     EXPECT_EQ(e->file, dir.File("cut.step"));
   }
   EXPECT_TRUE(IsCadExtension(".STEP") && IsCadExtension(".igs") && !IsCadExtension(".rib"));
+}
+
+// A count past the end of a .brep file: OCCT's parser, reading on from its failed stream,
+// looped for as many rounds as the count says (fuzz_cad found it); the reader's stream ends
+// the read at the first failed extraction.
+TEST(CadReader, ACountPastTheEndOfABrepFileIsAnErrorNotAHang) {
+  TempDir dir;
+  std::ofstream(dir.File("cut.brep")) << "DBRep_DrawableShape\n\nCASCADE Topology V1, (c) Matra-Datavision\n"
+                                         "Locations 0\nCurve2ds 2000000000\n1 0 0 1 0\n";
+  const std::string refused = Refused(dir.File("cut.brep"));
+  EXPECT_EQ(refused, dir.File("cut.brep") + ": not a B-rep file Open CASCADE can read (a value is missing or malformed)");
 }
 
 // A trimmed curve whose basis curve is of no known type: OCCT's parser dereferences the null

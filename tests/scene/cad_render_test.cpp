@@ -1,7 +1,7 @@
 // A CAD model rendered against the same shape given independently: a STEP cylinder (its side
 // a rational B-spline with its caps' circles as trim curves; in tess mode Open CASCADE's
 // mesh) against RenderMan's Cylinder and two Disks of the same pose, in every mode; and a CAD
-// file through `info` and `convert`.
+// file through `info` and `convert`; the same pixels for any number of threads.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -78,6 +78,25 @@ TEST(CadRender, AStepCylinderIsRenderManCylinderAndDisks) {
   // surfaces in their own parameters: their points differ by that, the normals by 1e-4 rad
   // on this cylinder of 40 px radius (measured: 8.6e-5).
   EXPECT_LT(g.worstNormalRad, 2e-4);
+}
+
+// The rules every scene keeps (tests/cli/cli_test.cpp): the same pixels, AOVs included, for
+// any --threads, in every mode; a CAD model's trimmed pieces (a box with a hole through it)
+// and its own mesh in tess mode (a torus) among them.
+TEST(CadRender, SamePixelsForAnyNumberOfThreads) {
+  Folder dir("cad_threads");
+  ASSERT_TRUE(cad_models::WriteStep(cad_models::BoxWithHole(), (dir.path / "h.step").string()));
+  ASSERT_TRUE(cad_models::WriteStep(cad_models::Torus(), (dir.path / "t.step").string()));
+  for (const char* model : {"h.step", "t.step"})
+    for (const char* mode : {"exact", "theta", "tess"}) {
+      const std::string common = std::string("render ") + model + " --size 96x72 --aa 2 --aov --mode " + mode;
+      ASSERT_EQ(dir.Run(common + " --threads 1 -o one.exr"), 0) << dir.Err();
+      for (int n : {2, 3}) {
+        ASSERT_EQ(dir.Run(common + " --threads " + std::to_string(n) + " -o many.exr"), 0) << dir.Err();
+        EXPECT_EQ(Pixels((dir.path / "one.exr").string()), Pixels((dir.path / "many.exr").string()))
+            << model << " " << mode << ", --threads " << n;
+      }
+    }
 }
 
 TEST(CadRender, InfoAndConvertOfAStepFile) {

@@ -1,13 +1,18 @@
 // Trimmed NURBS through the scans: the exact scan of a square trimmed by a circle against
 // the analytic answer; trimmed surfaces (loops across pieces, nested and separate loops, a
 // loop along the patch's boundary and one touching it, a trimmed sphere) against the ray
-// caster sample by sample; θ rows against the same reference.
+// caster sample by sample; θ rows against the same reference; tess mode near the trim.
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
 #include "patch/nurbs_shapes.h"
 #include "patch/surface.h"
+#include "patch/tessellate.h"
 #include "xscan/agreement.h"
 
 namespace patchscan {
@@ -91,6 +96,33 @@ TEST(TrimScan, SquareTrimmedByACircleMatchesTheAnalyticAnswer) {
       }
       EXPECT_GT(wanted, 500);
     }
+  }
+}
+
+// Tess mode keeps a trimmed piece's whole triangles whose centroid the trim keeps: none may
+// reach further outside the disc than a triangle of the fine grid does. A flat square's
+// edges, of rate 1, were once stitched to the grid in slivers that ran along the whole
+// square and drew its outline round the disc. The disc touches the square's four sides, as
+// a CAD face's trim touches the box of (u,v) it is given.
+TEST(TrimScan, TessOfASquareTrimmedToADiscStaysNearTheDisc) {
+  // The grid's triangles are about kTrimTessPx on the screen: 96 px across the square of
+  // side 1 in (u,v) here, so a few pixels is a few hundredths of (u,v).
+  constexpr double kOutsideUv = 0.05;
+  const Vec2 c(0.5, 0.5);
+  const double r = 0.5;
+  const std::vector<Surface> trimmed = Trimmed(test::FlatSquare(1), {{TrimCircle(c, r)}}, true);
+  for (const Camera& camera : {test::View(Vec3(0.4, -0.5, 3.5), 96, Vec3(0, 1, 0)), test::View(Vec3(2.5, -1.5, 1.2), 96)}) {
+    TessMesh m;
+    TessellateToChordError(trimmed[0], camera, kDefaultChordErrorPx, 0, &m);
+    ASSERT_FALSE(m.triangles.empty());
+    double area = 0.0, farthest = 0.0;
+    for (const auto& t : m.triangles) {
+      const Vec2 a = m.vertices[t[0]].uv, b = m.vertices[t[1]].uv, d = m.vertices[t[2]].uv;
+      area += 0.5 * std::abs((b - a).x() * (d - a).y() - (b - a).y() * (d - a).x());
+      for (const Vec2& q : {a, b, d}) farthest = std::max(farthest, (q - c).norm());
+    }
+    EXPECT_LT(farthest, r + kOutsideUv);
+    EXPECT_NEAR(area, std::numbers::pi * r * r, 2.0 * std::numbers::pi * r * kOutsideUv);
   }
 }
 
