@@ -1,7 +1,6 @@
 #include "patch/nurbs.h"
 
 #include "core/shortest_number.h"
-#include "patch/trim.h"
 
 #include <algorithm>
 #include <cmath>
@@ -42,8 +41,6 @@ std::string NurbsPiece::Describe() const {
   std::ostringstream s;
   s << "NURBS piece, degree " << p_ << "x" << q_ << ", u [" << u0_ << ", " << u1_ << "] v [" << v0_ << ", " << v1_
     << "]";
-  if (trim_)
-    s << ", trimmed: " << trim_->segments.size() << " of " << trim_->loops->Segments().size() << " trim segments reach it";
   return s.str();
 }
 

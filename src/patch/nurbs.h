@@ -7,7 +7,6 @@
 // share a knot line are one curve there: the scans see no crack between them.
 #pragma once
 
-#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -27,7 +26,6 @@ struct NurbsSurface {
   std::vector<Vec4> pw;
 };
 
-struct PieceTrim;  // trim.h
 
 // The highest order a NuPatch may have here (degree 15): evaluation keeps its Bernstein
 // values on the stack.
@@ -53,16 +51,12 @@ class NurbsPiece {
   double U1() const { return u1_; }
   double V0() const { return v0_; }
   double V1() const { return v1_; }
-  // The trim curves that cut into the piece (trim.h), or null: the piece is whole.
-  const PieceTrim* Trim() const { return trim_.get(); }
-  void SetTrim(std::shared_ptr<const PieceTrim> trim) { trim_ = std::move(trim); }
 
  private:
   int p_, q_;
   std::vector<Vec4> pw_;
   std::vector<Vec3> hull_;
   double u0_, u1_, v0_, v1_;
-  std::shared_ptr<const PieceTrim> trim_;
 };
 
 // The Bézier pieces of `nurbs`, v spans outer, u spans inner. Throws std::invalid_argument

@@ -9,7 +9,11 @@ Bounds3 WorldBounds(const Surface& s) {
 }
 
 std::string Describe(const Surface& s) {
-  return VisitShape(s, [](const auto& shape) { return shape.Describe(); });
+  std::string d = VisitShape(s, [](const auto& shape) { return shape.Describe(); });
+  if (s.trim)
+    d += ", trimmed: " + std::to_string(s.trim->segments.size()) + " of " +
+         std::to_string(s.trim->loops->Segments().size()) + " trim segments reach it";
+  return d;
 }
 
 }  // namespace patchscan

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <memory>
 #include <span>
 #include <string>
 #include <variant>
@@ -26,6 +27,8 @@ using Affine3 = Eigen::Affine3d;
 struct Surface {
   Shape shape;
   Affine3 worldFromObject = Affine3::Identity();
+  // The trim curves that cut into the surface (trim.h), or null: the surface is whole.
+  std::shared_ptr<const PieceTrim> trim = nullptr;
 };
 
 template <class F>
@@ -33,11 +36,8 @@ decltype(auto) VisitShape(const Surface& s, F&& f) {
   return std::visit(std::forward<F>(f), s.shape);
 }
 
-// The trim of a trimmed NURBS piece; null for every other surface.
-inline const PieceTrim* TrimOf(const Surface& s) {
-  const auto* n = std::get_if<NurbsPiece>(&s.shape);
-  return n ? n->Trim() : nullptr;
-}
+// The surface's trim; null where it is whole.
+inline const PieceTrim* TrimOf(const Surface& s) { return s.trim.get(); }
 
 // Texture coordinates at (u, v) with their derivatives in (u, v): a subdivision face's "st"
 // where its cage has them, else (u, v) itself.

@@ -136,25 +136,30 @@ Vec2 PieceTrim::CurveAt(int k, double t, Vec2* d) const {
   return (p - Vec2(u0, v0)).cwiseProduct(scale);
 }
 
-void TrimPieces(std::shared_ptr<const TrimLoops> loops, std::vector<NurbsPiece>* pieces) {
-  std::vector<NurbsPiece> kept;
-  for (NurbsPiece& piece : *pieces) {
-    auto trim = std::make_shared<PieceTrim>(PieceTrim{loops, {}, piece.U0(), piece.U1(), piece.V0(), piece.V1()});
-    const double su = kBoxSlackRel * (piece.U1() - piece.U0()), sv = kBoxSlackRel * (piece.V1() - piece.V0());
-    const auto& segs = loops->Segments();
-    for (std::size_t k = 0; k < segs.size(); ++k)
-      if (segs[k].BoxLo().x() <= piece.U1() + su && segs[k].BoxHi().x() >= piece.U0() - su &&
-          segs[k].BoxLo().y() <= piece.V1() + sv && segs[k].BoxHi().y() >= piece.V0() - sv)
-        trim->segments.push_back(static_cast<int>(k));
-    if (trim->segments.empty()) {
-      // No curve reaches the piece: all of it is on one side.
-      if (!trim->Kept(Vec2(0.5, 0.5))) continue;
-    } else {
-      piece.SetTrim(std::move(trim));
-    }
-    kept.push_back(std::move(piece));
+bool CutRectangle(const std::shared_ptr<const TrimLoops>& loops, double u0, double u1, double v0, double v1,
+                  std::shared_ptr<const PieceTrim>* trim) {
+  auto cut = std::make_shared<PieceTrim>(PieceTrim{loops, {}, u0, u1, v0, v1});
+  const double su = kBoxSlackRel * (u1 - u0), sv = kBoxSlackRel * (v1 - v0);
+  const auto& segs = loops->Segments();
+  for (std::size_t k = 0; k < segs.size(); ++k)
+    if (segs[k].BoxLo().x() <= u1 + su && segs[k].BoxHi().x() >= u0 - su && segs[k].BoxLo().y() <= v1 + sv &&
+        segs[k].BoxHi().y() >= v0 - sv)
+      cut->segments.push_back(static_cast<int>(k));
+  trim->reset();
+  // No curve reaches the rectangle: all of it is on one side.
+  if (cut->segments.empty()) return cut->Kept(Vec2(0.5, 0.5));
+  *trim = std::move(cut);
+  return true;
+}
+
+std::vector<TrimmedPiece> TrimPieces(const std::shared_ptr<const TrimLoops>& loops, std::vector<NurbsPiece> pieces) {
+  std::vector<TrimmedPiece> kept;
+  for (NurbsPiece& piece : pieces) {
+    std::shared_ptr<const PieceTrim> trim;
+    if (CutRectangle(loops, piece.U0(), piece.U1(), piece.V0(), piece.V1(), &trim))
+      kept.push_back(TrimmedPiece{std::move(piece), std::move(trim)});
   }
-  *pieces = std::move(kept);
+  return kept;
 }
 
 }  // namespace patchscan

@@ -84,9 +84,10 @@ class TrimLoops {
   bool keepInside_;
 };
 
-// The trim of one NURBS piece: the loops, the segments that can meet the piece, and the
-// piece's rectangle in the NuPatch's parameters (the piece's own (s,t) in [0,1]^2 is
-// u = u0 + s (u1 - u0), v = v0 + t (v1 - v0)).
+// The trim of one surface: the loops, the segments that can meet it, and its rectangle in
+// the loops' parameters (the surface's own (s,t) in [0,1]^2 is u = u0 + s (u1 - u0),
+// v = v0 + t (v1 - v0)): a NURBS piece's in its NuPatch's (u,v), a CAD face's analytic
+// surface's in the face's.
 struct PieceTrim {
   std::shared_ptr<const TrimLoops> loops;
   std::vector<int> segments;
@@ -99,8 +100,17 @@ struct PieceTrim {
   Vec2 CurveAt(int k, double t, Vec2* d = nullptr) const;
 };
 
-// Applies `loops` to the pieces of one NuPatch: a piece no segment's box meets is kept
-// whole or dropped whole (by its centre), any other carries its PieceTrim.
-void TrimPieces(std::shared_ptr<const TrimLoops> loops, std::vector<NurbsPiece>* pieces);
+// What `loops` leave of the rectangle [u0,u1] x [v0,v1] of their (u,v): false where no
+// segment's box meets it and it is dropped whole (by its centre); else true, *trim the
+// rectangle's PieceTrim, or null where no segment meets it and it is kept whole.
+bool CutRectangle(const std::shared_ptr<const TrimLoops>& loops, double u0, double u1, double v0, double v1,
+                  std::shared_ptr<const PieceTrim>* trim);
+
+// The pieces of one NuPatch that `loops` leave, each with its trim (null: whole).
+struct TrimmedPiece {
+  NurbsPiece piece;
+  std::shared_ptr<const PieceTrim> trim;
+};
+std::vector<TrimmedPiece> TrimPieces(const std::shared_ptr<const TrimLoops>& loops, std::vector<NurbsPiece> pieces);
 
 }  // namespace patchscan

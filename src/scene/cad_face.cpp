@@ -212,8 +212,13 @@ CadFace ConvertFace(const TopoDS_Face& face) {
   for (TopExp_Explorer w(face, TopAbs_WIRE); w.More(); w.Next())
     loops.push_back(LoopOf(TopoDS::Wire(w.Current()), face, b, &out.largestGap));
   try {
-    out.pieces = SplitNurbs(NuPatchOf(b, face));
-    if (!loops.empty()) TrimPieces(std::make_shared<const TrimLoops>(loops, true), &out.pieces);
+    std::vector<NurbsPiece> pieces = SplitNurbs(NuPatchOf(b, face));
+    if (loops.empty()) {
+      for (NurbsPiece& piece : pieces) out.pieces.push_back(Surface{std::move(piece)});
+    } else {
+      for (TrimmedPiece& t : TrimPieces(std::make_shared<const TrimLoops>(loops, true), std::move(pieces)))
+        out.pieces.push_back(Surface{std::move(t.piece), Affine3::Identity(), std::move(t.trim)});
+    }
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(e.what());
   }

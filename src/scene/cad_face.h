@@ -27,7 +27,7 @@ class gp_Trsf;
 namespace patchscan {
 
 struct CadFace {
-  std::vector<NurbsPiece> pieces;  // object space: the face's surface without its location
+  std::vector<Surface> pieces;     // the face's surface without its location, trimmed
   Affine3 location = Affine3::Identity();  // the face's own location in its shape
   bool reversed = false;           // the face's normal is the surface's P_u x P_v reversed
   double largestGap = 0.0;         // the widest joint between consecutive edges of a wire,

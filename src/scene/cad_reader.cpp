@@ -358,8 +358,9 @@ Scene Build(const Model& model, const std::string& path) {
       const auto [at, fresh] = appearanceOf.try_emplace(key, static_cast<std::uint32_t>(scene.appearances.size()));
       if (fresh) scene.appearances.push_back(a);
       scene.ReserveSurfaces(pf.face.pieces.size(), true);
-      for (const NurbsPiece& piece : pf.face.pieces) {
-        scene.surfaces.push_back(Surface{piece, placement * pf.face.location});
+      for (const Surface& piece : pf.face.pieces) {
+        scene.surfaces.push_back(piece);
+        scene.surfaces.back().worldFromObject = placement * pf.face.location * piece.worldFromObject;
         scene.sourceLines.push_back(pf.number);
         scene.sourceFiles.push_back(path);
         scene.appearanceOf.push_back(at->second);

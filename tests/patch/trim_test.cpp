@@ -125,21 +125,21 @@ TEST(Trim, PiecesAreTrimmedKeptWholeOrDropped) {
       std::vector<std::vector<TrimCurveInput>>{{TrimCircle(Vec2(0.375, 0.625), 0.1)},
                                                {TrimPolygon({{0.7, -0.1}, {1.1, -0.1}, {1.1, 0.3}, {0.7, 0.3}})}},
       false);
-  TrimPieces(loops, &pieces);
+  const std::vector<TrimmedPiece> kept = TrimPieces(loops, std::move(pieces));
   int trimmed = 0;
-  for (const NurbsPiece& p : pieces) {
+  for (const auto& [p, trim] : kept) {
     EXPECT_FALSE(p.U0() == 0.75 && p.V0() == 0.0) << "the covered piece is dropped";
-    if (!p.Trim()) continue;
+    if (!trim) continue;
     ++trimmed;
     const bool circle = p.U0() == 0.25 && p.V0() == 0.5;
     const bool nearSquare = p.U1() == 0.75 || p.V0() == 0.25;  // pieces the square's box reaches
     EXPECT_TRUE(circle || nearSquare) << p.Describe();
     if (circle) {
-      EXPECT_FALSE(p.Trim()->Kept(Vec2(0.5, 0.5)));  // the circle's centre, in the piece's own (u,v)
-      EXPECT_TRUE(p.Trim()->Kept(Vec2(0.02, 0.02)));
+      EXPECT_FALSE(trim->Kept(Vec2(0.5, 0.5)));  // the circle's centre, in the piece's own (u,v)
+      EXPECT_TRUE(trim->Kept(Vec2(0.02, 0.02)));
     }
   }
-  EXPECT_EQ(pieces.size(), 15u);
+  EXPECT_EQ(kept.size(), 15u);
   EXPECT_GE(trimmed, 1);
 }
 

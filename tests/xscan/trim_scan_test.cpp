@@ -23,10 +23,9 @@ using test::TrimPolygon;
 
 std::vector<Surface> Trimmed(const NurbsSurface& n, const std::vector<std::vector<TrimCurveInput>>& loops, bool keepInside,
                              const Affine3& placed = Affine3::Identity()) {
-  std::vector<NurbsPiece> pieces = SplitNurbs(n);
-  TrimPieces(std::make_shared<const TrimLoops>(loops, keepInside), &pieces);
   std::vector<Surface> out;
-  for (NurbsPiece& p : pieces) out.push_back(Surface{std::move(p), placed});
+  for (TrimmedPiece& p : TrimPieces(std::make_shared<const TrimLoops>(loops, keepInside), SplitNurbs(n)))
+    out.push_back(Surface{std::move(p.piece), placed, std::move(p.trim)});
   return out;
 }
 

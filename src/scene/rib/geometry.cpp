@@ -19,8 +19,8 @@ bool RibParser::InWorld(const Request& r) {
   return true;
 }
 
-void RibParser::AddSurface(const Request& r, Shape shape) {
-  Surface s{std::move(shape), Affine3(attr_.transform)};
+void RibParser::AddSurface(const Request& r, Shape shape, std::shared_ptr<const PieceTrim> trim) {
+  Surface s{std::move(shape), Affine3(attr_.transform), std::move(trim)};
   scene_.surfaces.push_back(std::move(s));
   scene_.sourceLines.push_back(r.line);
   scene_.sourceFiles.push_back(file_);
@@ -279,7 +279,10 @@ bool RibParser::NuPatch(const Request& r) {
   if (attr_.trim) {
     auto trim = attr_.trim;
     if (trim->KeepsInside() != attr_.trimKeepsInside) trim = std::make_shared<const TrimLoops>(trim->WithSense(attr_.trimKeepsInside));
-    TrimPieces(trim, &pieces);
+    std::vector<TrimmedPiece> kept = TrimPieces(trim, std::move(pieces));
+    scene_.ReserveSurfaces(kept.size(), true);
+    for (TrimmedPiece& k : kept) AddSurface(r, std::move(k.piece), std::move(k.trim));
+    return true;
   }
   scene_.ReserveSurfaces(pieces.size(), true);
   for (NurbsPiece& piece : pieces) AddSurface(r, std::move(piece));

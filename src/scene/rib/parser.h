@@ -209,7 +209,7 @@ class RibParser {
 
   // ---- geometry ----
   bool InWorld(const Request& r);
-  void AddSurface(const Request& r, Shape shape);
+  void AddSurface(const Request& r, Shape shape, std::shared_ptr<const PieceTrim> trim = nullptr);
   // The index into the scene's appearances of the current appearance (added if new).
   std::uint32_t AppearanceIndex();
   static std::size_t HashOf(const Appearance& a);

@@ -55,8 +55,7 @@ std::string ShapeRequest(const Shape& shape) {
 // same piece. A trimmed piece is written in its own attribute block after the sense and
 // every trim loop of its NuPatch, each segment a curve of one Bézier span, in the
 // NuPatch's (u,v): read back, the loops are the same segments.
-void NuPatch(std::ostream& out, const NurbsPiece& n) {
-  const PieceTrim* trim = n.Trim();
+void NuPatch(std::ostream& out, const NurbsPiece& n, const PieceTrim* trim) {
   if (trim) {
     const TrimLoops& loops = *trim->loops;
     out << "AttributeBegin\nAttribute \"trimcurve\" \"sense\" \"" << (loops.KeepsInside() ? "inside" : "outside")
@@ -341,6 +340,9 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
     // A cage's faces come from one request: the cage is written once, at its first face.
     const auto* face = std::get_if<SubdivFace>(&s.shape);
     if (face && !cagesWritten.insert(&face->Mesh()).second) continue;
+    if (s.trim && !std::holds_alternative<NurbsPiece>(s.shape))
+      return RibWriteError{"surface " + std::to_string(k + 1) + " (" + Describe(s) +
+                           ") is trimmed: RenderMan trims NuPatches only"};
     const bool placed = !s.worldFromObject.matrix().isIdentity(0.0);
     const bool dressed = !scene.appearanceOf.empty();
     if (placed || dressed) out << "AttributeBegin\n";
@@ -362,7 +364,7 @@ std::variant<std::string, RibWriteError> WriteRib(const Scene& scene, const Came
       for (const Vec3& p : l->Hull()) Point(out, p);
       out << " ]\n";
     } else if (const auto* n = std::get_if<NurbsPiece>(&s.shape)) {
-      NuPatch(out, *n);
+      NuPatch(out, *n, s.trim.get());
     } else if (face) {
       SubdivisionMesh(out, face->Mesh());
     } else {
