@@ -32,7 +32,9 @@ CLI::App* AddConvertCommand(CLI::App* app, ConvertOptions* o) {
 }
 
 int RunConvert(const ConvertOptions& o, std::ostream& err) {
-  auto loaded = render::LoadSceneAndCamera(o.file, o.camera, err);
+  render::CameraOptions camera = o.camera;
+  camera.cadAsNurbs = true;  // RenderMan trims NuPatches only
+  auto loaded = render::LoadSceneAndCamera(o.file, camera, err);
   if (const auto* failed = std::get_if<render::Failure>(&loaded)) return Fail(*failed, err);
   const render::LoadedScene& ls = std::get<render::LoadedScene>(loaded);
   RibWriteOptions wo;

@@ -295,7 +295,7 @@ int RunInfo(const InfoOptions& o, std::ostream& out, std::ostream& err) {
         << t.corners << " corners, " << t.triangles << " triangles (surface ids " << scene.surfaces.size() + 1 << " to "
         << scene.Ids() << ")\n";
   if (t.trimmed > 0)
-    out << "trimmed NURBS pieces: " << t.trimmed << ", by " << t.trimSets << " trim curve sets of " << t.loops
+    out << "trimmed surfaces: " << t.trimmed << ", by " << t.trimSets << " trim curve sets of " << t.loops
         << " loops, " << t.segments << " Bézier segments\n";
   if (scene.cad) PrintCad(*scene.cad, out);
 

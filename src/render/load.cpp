@@ -159,6 +159,7 @@ Result<LoadedScene> LoadSceneAndCamera(const std::string& file, const CameraOpti
   LoadOptions lo;
   lo.frame = opts.frame;
   lo.objScheme = opts.objScheme;
+  lo.cadAsNurbs = opts.cadAsNurbs;
   auto loaded = LoadScene(file, lo);
   if (auto* e = std::get_if<SourceError>(&loaded)) return Failure{Outcome::InputError, e->What()};
   auto resolved = ResolveCamera(opts, std::get<Scene>(loaded));

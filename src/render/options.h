@@ -39,6 +39,7 @@ struct CameraOptions {
   std::string hither;  // empty: the scene's Clipping, else automatic
   int frame = -1;      // RIB: the frame to read; -1: the first
   SubdivScheme objScheme = SubdivScheme::CatmullClark;  // .obj: how its cage is subdivided
+  bool cadAsNurbs = false;  // CAD: every face as trimmed NURBS (LoadOptions)
 };
 
 constexpr int kDefaultWidth = 640, kDefaultHeight = 480;

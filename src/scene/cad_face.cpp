@@ -1,12 +1,15 @@
 #include "scene/cad_face.h"
 
+#include <BRepBuilderAPI_NurbsConvert.hxx>
 #include <BRepTools.hxx>
 #include <BRepTools_WireExplorer.hxx>
 #include <BRep_Tool.hxx>
 #include <Geom2dConvert.hxx>
 #include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_TrimmedCurve.hxx>
+#include <GeomConvert.hxx>
 #include <Geom_BSplineSurface.hxx>
+#include <Geom_BezierSurface.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -28,14 +31,17 @@ namespace {
 
 using Curve2 = Handle(Geom2d_BSplineCurve);
 
-// The face's surface as a B-spline, not periodic (a periodic one's knots would not give
-// RenderMan's clamped NuPatch); its location is returned apart.
-Handle(Geom_BSplineSurface) BSplineOf(const TopoDS_Face& face, TopLoc_Location* location) {
-  Handle(Geom_Surface) s = BRep_Tool::Surface(face, *location);
-  if (s.IsNull()) throw std::runtime_error("the face has no surface");
+// The face's B-spline or Bezier surface as a B-spline (a Bezier one's parameters kept), not
+// periodic (a periodic one's knots would not give RenderMan's clamped NuPatch); null for
+// any other surface.
+Handle(Geom_BSplineSurface) BSplineOf(const TopoDS_Face& face) {
+  TopLoc_Location location;
+  Handle(Geom_Surface) s = BRep_Tool::Surface(face, location);
   while (auto t = Handle(Geom_RectangularTrimmedSurface)::DownCast(s)) s = t->BasisSurface();
-  auto b = Handle(Geom_BSplineSurface)::DownCast(s);
-  if (b.IsNull()) throw std::runtime_error(std::string("its surface is a ") + s->DynamicType()->Name() + ", not a B-spline");
+  Handle(Geom_BSplineSurface) b;
+  if (auto bezier = Handle(Geom_BezierSurface)::DownCast(s)) b = GeomConvert::SurfaceToBSplineSurface(bezier);
+  else b = Handle(Geom_BSplineSurface)::DownCast(s);
+  if (b.IsNull()) return b;
   if (b->IsUPeriodic() || b->IsVPeriodic()) {
     b = Handle(Geom_BSplineSurface)::DownCast(b->Copy());
     if (b->IsUPeriodic()) b->SetUNotPeriodic();
@@ -205,18 +211,34 @@ double LargestEdgeGap(const TopoDS_Shape& shape, int samples) {
 CadFace ConvertFace(const TopoDS_Face& face) {
   CadFace out;
   TopLoc_Location location;
-  const Handle(Geom_BSplineSurface) b = BSplineOf(face, &location);
+  const Handle(Geom_Surface) surface = BRep_Tool::Surface(face, location);
+  if (surface.IsNull()) throw std::runtime_error("the face has no surface");
   out.location = AffineOf(location.Transformation());
   out.reversed = (face.Orientation() == TopAbs_REVERSED) != (location.Transformation().IsNegative() != 0);
-  std::vector<std::vector<TrimCurveInput>> loops;
+  std::vector<std::vector<TrimCurveInput>> wires;
   for (TopExp_Explorer w(face, TopAbs_WIRE); w.More(); w.Next())
-    loops.push_back(LoopOf(TopoDS::Wire(w.Current()), face, b, &out.largestGap));
+    wires.push_back(LoopOf(TopoDS::Wire(w.Current()), face, surface, &out.largestGap));
   try {
+    const auto loops = wires.empty() ? nullptr : std::make_shared<const TrimLoops>(wires, true);
+    bool mirrored = false;
+    if (AnalyticFace(face, loops, &out.pieces, &mirrored)) {
+      out.reversed = out.reversed != mirrored;
+      return out;
+    }
+    const Handle(Geom_BSplineSurface) b = BSplineOf(face);
+    if (b.IsNull()) {
+      // Another kind (the model's swept and offset surfaces are made B-splines as it is read:
+      // cad_reader.cpp): NurbsConvert's approximation of the face, its pcurves with it.
+      BRepBuilderAPI_NurbsConvert convert(face, Standard_True);
+      for (TopExp_Explorer f(convert.Shape(), TopAbs_FACE); f.More(); f.Next())
+        if (!BSplineOf(TopoDS::Face(f.Current())).IsNull()) return ConvertFace(TopoDS::Face(f.Current()));
+      throw std::runtime_error(std::string("its surface, a ") + surface->DynamicType()->Name() + ", cannot be made a B-spline");
+    }
     std::vector<NurbsPiece> pieces = SplitNurbs(NuPatchOf(b, face));
-    if (loops.empty()) {
+    if (!loops) {
       for (NurbsPiece& piece : pieces) out.pieces.push_back(Surface{std::move(piece)});
     } else {
-      for (TrimmedPiece& t : TrimPieces(std::make_shared<const TrimLoops>(loops, true), std::move(pieces)))
+      for (TrimmedPiece& t : TrimPieces(loops, std::move(pieces)))
         out.pieces.push_back(Surface{std::move(t.piece), Affine3::Identity(), std::move(t.trim)});
     }
   } catch (const std::invalid_argument& e) {

@@ -1,7 +1,8 @@
-// One face of a B-rep (Open CASCADE's TopoDS_Face) as the trimmed NURBS pieces patchscan
-// scans: its surface as a NuPatch over the face's parameter box, its wires' pcurves as the
-// trim loops (RenderMan's TrimCurve, patch/trim.h). The face must already be a B-spline
-// face (BRepBuilderAPI_NurbsConvert makes every surface one and keeps its pcurves on it).
+// One face of a B-rep (Open CASCADE's TopoDS_Face) as the trimmed surfaces patchscan scans:
+// a plane, cylinder, cone, sphere or torus as its analytic shape (cad_analytic.cpp), a
+// B-spline or Bezier surface as a NuPatch over the face's parameter box, any other surface
+// first made a B-spline by BRepBuilderAPI_NurbsConvert (which keeps the pcurves on it); its
+// wires' pcurves are the trim loops (RenderMan's TrimCurve, patch/trim.h).
 //
 // A wire's edges come in the order BRepTools_WireExplorer connects them, each pcurve taken
 // the way the wire runs; a seam edge of a closed surface comes twice, once per side of the
@@ -13,12 +14,14 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <utility>
 #include <vector>
 
 #include "patch/nurbs.h"
 #include "patch/surface.h"
 #include "patch/tessellate.h"
+#include "patch/trim.h"
 
 class TopoDS_Face;
 class TopoDS_Shape;
@@ -34,9 +37,21 @@ struct CadFace {
                                    // on the surface (model units)
 };
 
-// Throws std::runtime_error saying what is wrong: a surface that is not a B-spline, a wire
-// whose pcurves are missing or do not close, a NuPatch the pieces refuse (nurbs.h).
+// Throws std::runtime_error saying what is wrong: a surface that cannot be made a B-spline,
+// a wire whose pcurves are missing or do not close, a NuPatch the pieces refuse (nurbs.h).
 CadFace ConvertFace(const TopoDS_Face& face);
+
+// The face's elementary surface as patchscan's analytic shape(s) over the face's parameter
+// box, placed in the surface's axes (without the face's location), each cut by `loops`
+// (null: whole), appended to *pieces; *mirrored where the axes are left-handed. False,
+// appending nothing, for any other surface (and a sphere or torus whose box reaches past
+// its own). Throws std::runtime_error for a face of no area or unbounded.
+bool AnalyticFace(const TopoDS_Face& face, const std::shared_ptr<const TrimLoops>& loops, std::vector<Surface>* pieces,
+                  bool* mirrored);
+// Whether the face's surface is elementary with left-handed axes: its analytic shape is then
+// placed by a mirroring map, and its appearance's side is turned to match (as RenderMan turns
+// it under a mirroring transformation); tess mode's normals follow.
+bool HasMirroredAxes(const TopoDS_Face& face);
 
 // Open CASCADE's transformation (rotation, scale, translation) as an affine map.
 Affine3 AffineOf(const gp_Trsf& t);

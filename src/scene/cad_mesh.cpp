@@ -34,7 +34,9 @@ void AppendFace(const TopoDS_Face& face, const Affine3& placement, std::uint32_t
   const Affine3 nodes = placement * AffineOf(location.Transformation());
   const Affine3 tangents = placement * AffineOf(surfaceLocation.Transformation());
   const auto base = static_cast<std::uint32_t>(out->vertices.size());
-  const Eigen::Matrix3d normalMatrix = tangents.linear().inverse().transpose();
+  // P_u x P_v as the direct modes give it: turned where the analytic shape is placed by a
+  // mirroring map (cad_face.h HasMirroredAxes), which the face's appearance turns back.
+  const Eigen::Matrix3d normalMatrix = (HasMirroredAxes(face) ? -1.0 : 1.0) * tangents.linear().inverse().transpose();
   std::vector<bool> vanished(static_cast<std::size_t>(tri->NbNodes()), false);
   for (int i = 1; i <= tri->NbNodes(); ++i) {
     TessVertex v{Vec3::Zero(), Vec3(0, 0, 1), Vec2::Zero(), Vec2::Zero()};

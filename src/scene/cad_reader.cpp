@@ -8,6 +8,7 @@
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepBuilderAPI_NurbsConvert.hxx>
 #include <BRepTools.hxx>
+#include <BRepTools_Modifier.hxx>
 #include <BRep_Builder.hxx>
 #include <BRep_Tool.hxx>
 #include <IGESCAFControl_Reader.hxx>
@@ -17,6 +18,7 @@
 #include <OSD.hxx>
 #include <Quantity_Color.hxx>
 #include <STEPCAFControl_Reader.hxx>
+#include <ShapeCustom_ConvertToBSpline.hxx>
 #include <Standard_ErrorHandler.hxx>
 #include <Standard_Failure.hxx>
 #include <TDF_Tool.hxx>
@@ -286,7 +288,7 @@ struct PreparedFace {
   bool original = false;  // number is the face's as read (NurbsConvert says which it was)
 };
 
-std::vector<PreparedFace> Prepare(const Prototype& p, SceneCad* cad, std::map<std::string, int>* kinds,
+std::vector<PreparedFace> Prepare(const Prototype& p, bool asNurbs, SceneCad* cad, std::map<std::string, int>* kinds,
                                   std::vector<std::string>* warnings, const std::string& path) {
   TopTools_IndexedMapOfShape faces, edges, wires;
   TopExp::MapShapes(p.shape, TopAbs_FACE, faces);
@@ -303,10 +305,26 @@ std::vector<PreparedFace> Prepare(const Prototype& p, SceneCad* cad, std::map<st
       if (const int i = faces.FindIndex(f.Current()); i > 0) colour[static_cast<std::size_t>(i)] = c;
   for (int i = 1; i <= faces.Extent(); ++i) ++(*kinds)[KindName(BRepAdaptor_Surface(TopoDS::Face(faces(i)), false).GetType())];
 
-  BRepBuilderAPI_NurbsConvert convert(p.shape, Standard_True);
-  const TopoDS_Shape converted = convert.Shape();
+  // Swept (extrusion, revolution) and offset surfaces made B-splines in their own parameters,
+  // so that the pcurves stay as they are; the elementary and B-spline surfaces kept as read.
+  // As NURBS: every surface a B-spline, its pcurves with it (BRepBuilderAPI_NurbsConvert).
+  std::optional<BRepBuilderAPI_NurbsConvert> nurbs;
+  std::optional<BRepTools_Modifier> swept;
+  if (asNurbs) {
+    nurbs.emplace(p.shape, Standard_True);
+  } else {
+    Handle(ShapeCustom_ConvertToBSpline) toBSpline = new ShapeCustom_ConvertToBSpline();
+    toBSpline->SetExtrusionMode(Standard_True);
+    toBSpline->SetRevolutionMode(Standard_True);
+    toBSpline->SetOffsetMode(Standard_True);
+    toBSpline->SetPlaneMode(Standard_False);
+    swept.emplace(p.shape, toBSpline);
+    if (!swept->IsDone()) throw std::runtime_error("Open CASCADE could not make its swept surfaces B-splines");
+  }
+  const auto modified = [&](const TopoDS_Shape& s) { return nurbs ? nurbs->ModifiedShape(s) : swept->ModifiedShape(s); };
+  const TopoDS_Shape converted = modified(p.shape);
   NCollection_DataMap<TopoDS_Shape, int, TopTools_ShapeMapHasher> original;
-  for (int i = 1; i <= faces.Extent(); ++i) original.Bind(convert.ModifiedShape(faces(i)), i);
+  for (int i = 1; i <= faces.Extent(); ++i) original.Bind(modified(faces(i)), i);
   cad->largestGap = std::max(cad->largestGap, LargestEdgeGap(converted, kGapSamples));
 
   std::vector<PreparedFace> out;
@@ -331,13 +349,13 @@ std::vector<PreparedFace> Prepare(const Prototype& p, SceneCad* cad, std::map<st
 }
 
 // The model's instances as the scene's surfaces, one appearance per colour and side.
-Scene Build(const Model& model, const std::string& path) {
+Scene Build(const Model& model, const std::string& path, bool asNurbs) {
   Scene scene;
   scene.source = path;
   SceneCad cad;
   std::map<std::string, int> kinds;
   std::vector<std::vector<PreparedFace>> prepared;
-  for (const Prototype& p : model.prototypes) prepared.push_back(Prepare(p, &cad, &kinds, &scene.warnings, path));
+  for (const Prototype& p : model.prototypes) prepared.push_back(Prepare(p, asNurbs, &cad, &kinds, &scene.warnings, path));
   if (cad.skipped > kNamedSkips)
     scene.warnings.push_back(path + ": " + std::to_string(cad.skipped - kNamedSkips) + " more faces skipped");
   std::map<std::pair<std::array<double, 3>, bool>, std::uint32_t> appearanceOf;
@@ -383,14 +401,14 @@ bool IsCadExtension(const std::string& extension) {
   return e == ".step" || e == ".stp" || e == ".iges" || e == ".igs" || e == ".brep";
 }
 
-std::variant<Scene, SourceError> ReadCad(const std::string& path) {
+std::variant<Scene, SourceError> ReadCad(const std::string& path, bool asNurbs) {
   if (!std::ifstream(path)) return SourceError{path, 0, "cannot open the file"};
   const std::string ext = Lower(std::filesystem::path(path).extension().string());
   QuietOcct quiet;
   OcctSignals signals;
   try {
     OCC_CATCH_SIGNALS
-    Scene scene = Build(ReadModel(path, ext), path);
+    Scene scene = Build(ReadModel(path, ext), path, asNurbs);
     if (scene.surfaces.empty()) return SourceError{path, 0, "no face of the model could be converted"};
     return scene;
   } catch (const std::runtime_error& e) {

@@ -1,7 +1,7 @@
 // CAD models read through Open CASCADE Technology: STEP (.step, .stp: AP203, AP214, AP242
-// B-rep), IGES (.iges, .igs) and OCCT's own .brep. Every B-rep face becomes trimmed NURBS
-// pieces (scene/cad_face.h) that the scans render directly, after
-// BRepBuilderAPI_NurbsConvert has made each surface a B-spline with its pcurves on it.
+// B-rep), IGES (.iges, .igs) and OCCT's own .brep. Every B-rep face becomes trimmed
+// surfaces (scene/cad_face.h) that the scans render directly: planes and quadrics as their
+// analytic shapes, B-splines as NURBS, swept and offset surfaces made B-splines first.
 //
 // STEP and IGES go through OCCT's XDE document: an assembly's parts are instances of one
 // prepared shape each (a part placed five times is converted once), and a face takes the
@@ -24,6 +24,7 @@ namespace patchscan {
 // Whether `extension` (with its dot, any case) names a CAD file ReadCad reads.
 bool IsCadExtension(const std::string& extension);
 
-std::variant<Scene, SourceError> ReadCad(const std::string& path);
+// asNurbs: every face as trimmed NURBS (LoadOptions::cadAsNurbs).
+std::variant<Scene, SourceError> ReadCad(const std::string& path, bool asNurbs = false);
 
 }  // namespace patchscan

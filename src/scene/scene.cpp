@@ -40,7 +40,7 @@ std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOp
   const std::string ext = p.extension().string();
   if (ext == ".rib" || (ext == ".gz" && p.stem().extension() == ".rib")) return ReadRib(path, options);
   if (ext == ".obj") return ReadObj(path, ObjOptions{options.objScheme});
-  if (IsCadExtension(ext)) return ReadCad(path);
+  if (IsCadExtension(ext)) return ReadCad(path, options.cadAsNurbs);
   if (ext != ".bpt")
     return SourceError{path, 0, "unknown scene format '" + ext +
                                     "' (known: .bpt, .rib, .rib.gz, .obj, .step, .stp, .iges, .igs, .brep)"};

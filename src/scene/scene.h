@@ -166,6 +166,10 @@ struct Scene {
 struct LoadOptions {
   int frame = -1;  // RIB: the FrameBegin number to read; -1: the first frame
   SubdivScheme objScheme = SubdivScheme::CatmullClark;  // .obj: how its cage is subdivided
+  // CAD: every face as trimmed NURBS pieces (Open CASCADE's NurbsConvert), its planes and
+  // quadrics too, which are otherwise their analytic shapes; RenderMan trims NuPatches only,
+  // so this is what a RIB file can hold.
+  bool cadAsNurbs = false;
 };
 
 // Read a scene file. Known extensions: .bpt (Bézier patch text), .rib (RenderMan

@@ -26,7 +26,7 @@ struct RowTrackers {
   std::vector<Vec2> edgePoints;        // on the boundary, y = ys
   std::vector<PatchEdge> edgeOf;       // per edge point
   std::vector<Vec2> silhouettePoints;  // inside, y = ys and J = 0
-  std::vector<Vec2> trimPoints;        // on a trim curve, y = ys (trimmed NURBS pieces)
+  std::vector<Vec2> trimPoints;        // on a trim curve, y = ys (trimmed surfaces)
   std::vector<double> trimX;           // their screen x
   void Clear() {
     edgePoints.clear();
@@ -135,7 +135,7 @@ class SurfaceScan {
   double yTop_ = 0.0;  // the topmost stationary point's y
   EdgeScan edges_;
   SilhouetteScan silhouettes_;
-  std::unique_ptr<TrimScan> trims_;  // trimmed NURBS pieces only
+  std::unique_ptr<TrimScan> trims_;  // trimmed surfaces only
   RowTrackers row_;
 };
 

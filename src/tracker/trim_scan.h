@@ -31,7 +31,7 @@ constexpr int kTrimCriticalSamples = 64;
 
 class TrimScan {
  public:
-  // The trackers of the trim of `surface` (a NURBS piece; `trim` its PieceTrim) seen
+  // The trackers of the trim of `surface` (any shape; `trim` its PieceTrim) seen
   // through `map`. All references must outlive the scan.
   TrimScan(const Surface& surface, const PieceTrim& trim, const ScreenMap& map, Counters& counters, bool extrapolate,
            double tolerancePx = kEdgeTolPx);

@@ -1,9 +1,10 @@
 // Small CAD models made with Open CASCADE and written as STEP, IGES or BRep files, for the
-// CAD reader's tests: a box, a cylinder, a sphere, a torus, a box with a hole, a coloured
-// box and an assembly of two placed boxes.
+// CAD reader's tests: a box, a cylinder, a sphere, a torus, a cylinder's side on left-handed
+// axes, a box with a hole, a coloured box and an assembly of two placed boxes.
 #pragma once
 
 #include <BRepAlgoAPI_Cut.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
@@ -22,7 +23,11 @@
 #include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
+#include <Geom_CylindricalSurface.hxx>
 #include <gp_Ax2.hxx>
+#include <gp_Ax3.hxx>
+
+#include <cmath>
 
 #include <string>
 
@@ -37,6 +42,13 @@ inline TopoDS_Shape Cylinder() { return BRepPrimAPI_MakeCylinder(2.0, 5.0).Shape
 inline TopoDS_Shape Sphere() { return BRepPrimAPI_MakeSphere(gp_Pnt(1, 1, 1), 3.0).Shape(); }
 // Axis +z through the origin, radii 4 and 1.
 inline TopoDS_Shape Torus() { return BRepPrimAPI_MakeTorus(4.0, 1.0).Shape(); }
+// One face, the side of Cylinder() on left-handed axes (u runs clockwise seen from +z): its
+// P_u x P_v points into the cylinder.
+inline TopoDS_Shape MirroredCylinderSide() {
+  gp_Ax3 axes(gp_Pnt(0, 0, 0), gp_Dir(0, 0, 1), gp_Dir(1, 0, 0));
+  axes.YReverse();
+  return BRepBuilderAPI_MakeFace(new Geom_CylindricalSurface(axes, 2.0), 0.0, 2.0 * M_PI, 0.0, 5.0, 1e-7).Face();
+}
 // A 10 x 10 x 4 box with a hole of radius 2 through it, along z at (5, 5).
 inline TopoDS_Shape BoxWithHole() {
   const TopoDS_Shape box = BRepPrimAPI_MakeBox(10, 10, 4).Shape();
