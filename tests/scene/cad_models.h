@@ -10,6 +10,7 @@
 #include <BRepPrimAPI_MakeSphere.hxx>
 #include <BRepPrimAPI_MakeTorus.hxx>
 #include <BRepTools.hxx>
+#include <Geom_CylindricalSurface.hxx>
 #include <IGESControl_Writer.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
@@ -23,7 +24,6 @@
 #include <XCAFDoc_ColorTool.hxx>
 #include <XCAFDoc_DocumentTool.hxx>
 #include <XCAFDoc_ShapeTool.hxx>
-#include <Geom_CylindricalSurface.hxx>
 #include <gp_Ax2.hxx>
 #include <gp_Ax3.hxx>
 
