@@ -195,29 +195,36 @@ std::vector<Span> Spans(const std::vector<double>& knots, int degree, double lo,
 
 }  // namespace
 
-std::vector<std::vector<Vec3>> SplitNurbsCurve(int order, const std::vector<double>& knot, double tmin, double tmax,
-                                               const std::vector<Vec3>& points) {
+std::vector<std::vector<Vec4>> SplitNurbsCurve(int order, const std::vector<double>& knot, double tmin, double tmax,
+                                               const std::vector<Vec4>& points) {
   CheckDirection("", static_cast<int>(points.size()), order, knot, &tmin, &tmax);
   Grid g{static_cast<int>(points.size()), 1, {}};
   for (std::size_t k = 0; k < points.size(); ++k) {
-    const Vec3& h = points[k];
+    const Vec4& h = points[k];
     if (!h.allFinite()) throw std::invalid_argument("control point " + std::to_string(k) + " is not finite");
-    if (!(h.z() > 0.0))
-      throw std::invalid_argument("control point " + std::to_string(k) + " has weight " + Str(h.z()) +
+    if (!(h.w() > 0.0))
+      throw std::invalid_argument("control point " + std::to_string(k) + " has weight " + Str(h.w()) +
                                   " (weights are positive)");
-    g.pts.emplace_back(h.x(), h.y(), 0.0, h.z());
+    g.pts.push_back(h);
   }
   const int p = order - 1;
   std::vector<double> k = knot;
   SplitAtKnots(&g, &k, p, tmin, tmax);
+  std::vector<std::vector<Vec4>> segments;
+  for (const Span& s : Spans(k, p, tmin, tmax))
+    segments.emplace_back(g.pts.begin() + s.first, g.pts.begin() + s.first + p + 1);
+  return segments;
+}
+
+std::vector<std::vector<Vec3>> SplitNurbsCurve(int order, const std::vector<double>& knot, double tmin, double tmax,
+                                               const std::vector<Vec3>& points) {
+  std::vector<Vec4> h;
+  h.reserve(points.size());
+  for (const Vec3& p : points) h.emplace_back(p.x(), p.y(), 0.0, p.z());
   std::vector<std::vector<Vec3>> segments;
-  for (const Span& s : Spans(k, p, tmin, tmax)) {
-    std::vector<Vec3> seg;
-    for (int i = 0; i <= p; ++i) {
-      const Vec4& h = g.pts[static_cast<std::size_t>(s.first + i)];
-      seg.emplace_back(h.x(), h.y(), h.w());
-    }
-    segments.push_back(std::move(seg));
+  for (const auto& seg : SplitNurbsCurve(order, knot, tmin, tmax, h)) {
+    segments.emplace_back();
+    for (const Vec4& q : seg) segments.back().emplace_back(q.x(), q.y(), q.w());
   }
   return segments;
 }

@@ -79,9 +79,31 @@ NurbsSurface RepeatPeriods(const NurbsSurface& nurbs, bool alongU, double lo, do
 // std::invalid_argument as SplitNurbs does for one direction.
 std::vector<std::vector<Vec3>> SplitNurbsCurve(int order, const std::vector<double>& knot, double tmin, double tmax,
                                                const std::vector<Vec3>& points);
+// The same for a curve in space: homogeneous (x w, y w, z w, w) points.
+std::vector<std::vector<Vec4>> SplitNurbsCurve(int order, const std::vector<double>& knot, double tmin, double tmax,
+                                               const std::vector<Vec4>& points);
 
 // The Bernstein polynomials of degree n (n < kMaxNurbsOrder) at t and their first and
 // second derivatives, b[0..n].
 void Bernstein(int n, double t, double* b, double* db, double* ddb);
+
+// The point at t of a rational Bézier curve given by its homogeneous control points (the
+// last coordinate the weight; at most kMaxNurbsOrder of them), and its derivative when `d`
+// is given (the quotient rule). Allocates nothing.
+template <int N>
+Eigen::Matrix<double, N, 1> RationalBezierAt(std::span<const Eigen::Matrix<double, N + 1, 1>> h, double t,
+                                             Eigen::Matrix<double, N, 1>* d) {
+  double b[kMaxNurbsOrder], db[kMaxNurbsOrder], ddb[kMaxNurbsOrder];
+  const int n = static_cast<int>(h.size()) - 1;
+  Bernstein(n, t, b, db, ddb);
+  Eigen::Matrix<double, N + 1, 1> p = Eigen::Matrix<double, N + 1, 1>::Zero(), dp = p;
+  for (int i = 0; i <= n; ++i) {
+    p += b[i] * h[static_cast<std::size_t>(i)];
+    dp += db[i] * h[static_cast<std::size_t>(i)];
+  }
+  const Eigen::Matrix<double, N, 1> x = p.template head<N>() / p[N];
+  if (d) *d = (dp.template head<N>() - dp[N] * x) / p[N];
+  return x;
+}
 
 }  // namespace patchscan

@@ -26,6 +26,12 @@ class ScreenMap {
         depth_((ViewDepthRow(camera).transpose() * worldFromObject.matrix()).transpose()),
         affine_(camera.orthographic) {}
 
+  // The map of another space, placed in this map's object space by objectFromOther.
+  ScreenMap(const ScreenMap& map, const Affine3& objectFromOther)
+      : m_(map.m_ * objectFromOther.matrix()),
+        depth_((map.depth_.transpose() * objectFromOther.matrix()).transpose()),
+        affine_(map.affine_) {}
+
   const Mat4& ScreenFromObject() const { return m_; }
 
   // Distance of an object-space point along the view axis (ScreenDerivs::w).

@@ -37,19 +37,7 @@ TrimSegment::TrimSegment(std::vector<Vec3> uvw) : h_(std::move(uvw)) {
   }
 }
 
-Vec2 TrimSegment::At(double t, Vec2* d) const {
-  double b[kMaxNurbsOrder], db[kMaxNurbsOrder], ddb[kMaxNurbsOrder];
-  const int n = Degree();
-  Bernstein(n, t, b, db, ddb);
-  Vec3 h = Vec3::Zero(), dh = Vec3::Zero();
-  for (int i = 0; i <= n; ++i) {
-    h += b[i] * h_[static_cast<std::size_t>(i)];
-    dh += db[i] * h_[static_cast<std::size_t>(i)];
-  }
-  const Vec2 p = h.head<2>() / h.z();
-  if (d) *d = (dh.head<2>() - dh.z() * p) / h.z();  // the quotient rule
-  return p;
-}
+Vec2 TrimSegment::At(double t, Vec2* d) const { return RationalBezierAt<2>(std::span<const Vec3>(h_), t, d); }
 
 TrimLoops::TrimLoops(const std::vector<std::vector<TrimCurveInput>>& loops, bool keepInside) : keepInside_(keepInside) {
   for (std::size_t l = 0; l < loops.size(); ++l) {
@@ -60,7 +48,10 @@ TrimLoops::TrimLoops(const std::vector<std::vector<TrimCurveInput>>& loops, bool
       const TrimCurveInput& in = loops[l][c];
       const std::string where = "loop " + std::to_string(l + 1) + ", curve " + std::to_string(c + 1) + ": ";
       try {
-        for (auto& seg : SplitNurbsCurve(in.order, in.knot, in.tmin, in.tmax, in.uvw)) segments_.emplace_back(std::move(seg));
+        for (auto& seg : SplitNurbsCurve(in.order, in.knot, in.tmin, in.tmax, in.uvw)) {
+          segments_.emplace_back(std::move(seg));
+          segmentEdge_.push_back(in.edge);
+        }
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument(where + e.what());
       }

@@ -16,7 +16,10 @@
 #include <span>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 #include "core/vec.h"
+#include "patch/edge_curve.h"
 #include "patch/nurbs.h"
 
 namespace patchscan {
@@ -28,6 +31,9 @@ struct TrimCurveInput {
   std::vector<double> knot;
   double tmin = 0.0, tmax = 1.0;
   std::vector<Vec3> uvw;
+  // The B-rep edge the curve runs along, when it is one two faces share (a CAD face's
+  // pcurve); null for RenderMan's trims.
+  std::shared_ptr<const EdgeCurve> edge;
 };
 
 // A rational Bézier segment of a trim curve on t in [0,1], in the NuPatch's (u,v).
@@ -61,6 +67,8 @@ class TrimLoops {
   bool InsideLoops(const Vec2& uv) const;
 
   const std::vector<TrimSegment>& Segments() const { return segments_; }
+  // The edge segment k runs along (TrimCurveInput::edge), or null.
+  const EdgeCurve* EdgeOf(int k) const { return segmentEdge_[static_cast<std::size_t>(k)].get(); }
   // The segments of loop k are [LoopBegin(k), LoopBegin(k + 1)).
   int Loops() const { return static_cast<int>(loopBegin_.size()) - 1; }
   int LoopBegin(int k) const { return loopBegin_[static_cast<std::size_t>(k)]; }
@@ -79,6 +87,7 @@ class TrimLoops {
     double t0, t1, v0, v1;
   };
   std::vector<TrimSegment> segments_;
+  std::vector<std::shared_ptr<const EdgeCurve>> segmentEdge_;  // per segment
   std::vector<int> loopBegin_;
   std::vector<VPiece> vpieces_;
   bool keepInside_;
@@ -92,6 +101,8 @@ struct PieceTrim {
   std::shared_ptr<const TrimLoops> loops;
   std::vector<int> segments;
   double u0, u1, v0, v1;
+  // Where the loops' edge curves (TrimLoops::EdgeOf) lie in the surface's object space.
+  Eigen::Affine3d objectFromEdges = Eigen::Affine3d::Identity();
 
   Vec2 ToPatch(const Vec2& st) const { return {u0 + st.x() * (u1 - u0), v0 + st.y() * (v1 - v0)}; }
   // Whether the piece keeps its point st.

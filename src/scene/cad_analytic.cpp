@@ -118,7 +118,13 @@ bool AnalyticFace(const TopoDS_Face& face, const std::shared_ptr<const TrimLoops
     const double a = u0 + (u1 - u0) * k / parts, b = k + 1 == parts ? u1 : u0 + (u1 - u0) * (k + 1) / parts;
     std::shared_ptr<const PieceTrim> trim;
     if (loops && !CutRectangle(loops, a, b, v0, v1, &trim)) continue;
-    pieces->push_back(Surface{shape(a, b), revolves ? frame * TurnedBy(a) : frame, std::move(trim)});
+    const Affine3 placed = revolves ? frame * TurnedBy(a) : frame;
+    if (trim) {  // the edges are in the face's coordinates, the shape in its axes
+      auto inAxes = std::make_shared<PieceTrim>(*trim);
+      inAxes->objectFromEdges = placed.inverse();
+      trim = std::move(inAxes);
+    }
+    pieces->push_back(Surface{shape(a, b), placed, std::move(trim)});
   }
   return true;
 }

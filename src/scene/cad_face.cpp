@@ -8,6 +8,8 @@
 #include <Geom2d_BSplineCurve.hxx>
 #include <Geom2d_TrimmedCurve.hxx>
 #include <GeomConvert.hxx>
+#include <Geom_BSplineCurve.hxx>
+#include <Geom_TrimmedCurve.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_BezierSurface.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>
@@ -115,6 +117,29 @@ Curve2 PcurveOf(const TopoDS_Edge& edge, const TopoDS_Face& face) {
   return b;
 }
 
+// The 3D curve of `edge` over its range, in the coordinates of `face`'s surface (without the
+// face's location), as the faces that share it meet along it; null for a degenerate edge
+// (a pole, a cone's apex) or one without a 3D curve.
+std::shared_ptr<const EdgeCurve> EdgeCurveOf(const TopoDS_Edge& edge, const TopoDS_Face& face) {
+  if (BRep_Tool::Degenerated(edge)) return nullptr;
+  TopLoc_Location edgeLocation, faceLocation;
+  double first = 0, last = 0;
+  const Handle(Geom_Curve) c = BRep_Tool::Curve(edge, edgeLocation, first, last);
+  BRep_Tool::Surface(face, faceLocation);
+  if (c.IsNull() || !(first < last)) return nullptr;
+  Handle(Geom_BSplineCurve) b = GeomConvert::CurveToBSplineCurve(new Geom_TrimmedCurve(c, first, last));
+  if (b->IsPeriodic()) b->SetNotPeriodic();
+  b->Transform(faceLocation.Inverted().Multiplied(edgeLocation).Transformation());
+  std::vector<Vec4> points;
+  for (int i = 1; i <= b->NbPoles(); ++i) {
+    const gp_Pnt& p = b->Pole(i);
+    const double w = b->Weight(i);
+    points.emplace_back(w * p.X(), w * p.Y(), w * p.Z(), w);
+  }
+  return std::make_shared<const EdgeCurve>(b->Degree() + 1, Knots(b->KnotSequence()), b->FirstParameter(),
+                                           b->LastParameter(), points);
+}
+
 TrimCurveInput TrimCurveOf(const Curve2& b) {
   TrimCurveInput t;
   t.order = b->Degree() + 1;
@@ -134,7 +159,11 @@ TrimCurveInput TrimCurveOf(const Curve2& b) {
 std::vector<TrimCurveInput> LoopOf(const TopoDS_Wire& wire, const TopoDS_Face& face, const Handle(Geom_Surface)& surface,
                                    double* gap) {
   std::vector<Curve2> curves;
-  for (BRepTools_WireExplorer e(wire, face); e.More(); e.Next()) curves.push_back(PcurveOf(e.Current(), face));
+  std::vector<std::shared_ptr<const EdgeCurve>> edges3d;
+  for (BRepTools_WireExplorer e(wire, face); e.More(); e.Next()) {
+    curves.push_back(PcurveOf(e.Current(), face));
+    edges3d.push_back(EdgeCurveOf(e.Current(), face));
+  }
   int edges = 0;
   for (TopExp_Explorer e(wire, TopAbs_EDGE); e.More(); e.Next()) ++edges;
   if (curves.empty() || static_cast<int>(curves.size()) < edges)
@@ -151,7 +180,10 @@ std::vector<TrimCurveInput> LoopOf(const TopoDS_Wire& wire, const TopoDS_Face& f
   }
   std::vector<TrimCurveInput> loop;
   loop.reserve(curves.size());
-  for (const Curve2& c : curves) loop.push_back(TrimCurveOf(c));
+  for (std::size_t k = 0; k < curves.size(); ++k) {
+    loop.push_back(TrimCurveOf(curves[k]));
+    loop.back().edge = std::move(edges3d[k]);
+  }
   return loop;
 }
 

@@ -85,11 +85,13 @@ void SurfaceScan::AdvanceTo(double y) {
   for (const SilhouetteTracker& t : silhouettes_.Trackers()) row_.silhouettePoints.push_back(t.uv);
   if (trims_) {
     trims_->Advance(y);
-    for (const Vec2& uv : trims_->Points()) {
+    for (std::size_t k = 0; k < trims_->Points().size(); ++k) {
+      const Vec2& uv = trims_->Points()[k];
       ScreenDerivs d;
       EvaluateScreen(surface_, map_, uv.x(), uv.y(), DerivOrder::Position, &d);
       row_.trimPoints.push_back(uv);
       row_.trimX.push_back(d.p.x());
+      row_.trimEdgeX.push_back(trims_->EdgeX(trims_->Curves()[k], y, d.p.x()));
     }
   }
   counters_[Counter::TrackerRows] += static_cast<std::int64_t>(row_.edgePoints.size() + row_.silhouettePoints.size());

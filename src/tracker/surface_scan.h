@@ -28,12 +28,15 @@ struct RowTrackers {
   std::vector<Vec2> silhouettePoints;  // inside, y = ys and J = 0
   std::vector<Vec2> trimPoints;        // on a trim curve, y = ys (trimmed surfaces)
   std::vector<double> trimX;           // their screen x
+  std::vector<double> trimEdgeX;       // the screen x of the B-rep edge each runs along
+                                       // (TrimScan::EdgeX), NaN where none
   void Clear() {
     edgePoints.clear();
     edgeOf.clear();
     silhouettePoints.clear();
     trimPoints.clear();
     trimX.clear();
+    trimEdgeX.clear();
   }
 };
 

@@ -66,6 +66,22 @@ TrimScan::TrimScan(const Surface& surface, const PieceTrim& trim, const ScreenMa
   std::stable_sort(pieces_.begin(), pieces_.end(), [](const TrimPiece& a, const TrimPiece& b) { return a.yTop < b.yTop; });
   trackers_.reserve(pieces_.size());
   points_.reserve(pieces_.size());
+  curves_.reserve(pieces_.size());
+  // The edges the curves run along, each once, seen through the surface's map.
+  const ScreenMap edgeMap(map_, trim_.objectFromEdges);
+  std::vector<const EdgeCurve*> seen;
+  for (const int segment : trim_.segments) {
+    const EdgeCurve* edge = trim_.loops->EdgeOf(segment);
+    int e = -1;
+    if (edge) {
+      e = static_cast<int>(std::find(seen.begin(), seen.end(), edge) - seen.begin());
+      if (e == static_cast<int>(seen.size())) {
+        seen.push_back(edge);
+        edges_.emplace_back(*edge, edgeMap);
+      }
+    }
+    edgeOfCurve_.push_back(e);
+  }
 }
 
 void TrimScan::Advance(double yScan) {
@@ -86,6 +102,7 @@ void TrimScan::Advance(double yScan) {
       ++events_;
     }
     points_.clear();
+    curves_.clear();
     for (Tracker& tr : trackers_) {
       const TrimPiece& p = pieces_[static_cast<std::size_t>(tr.piece)];
       auto f = [&](double t, double* v, double* d) {
@@ -106,6 +123,7 @@ void TrimScan::Advance(double yScan) {
       tr.t = t;
       ++tr.nSolved;
       points_.push_back(trim_.CurveAt(p.curve, t));
+      curves_.push_back(p.curve);
     }
   });
 }

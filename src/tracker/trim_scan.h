@@ -13,6 +13,7 @@
 #include "patch/screen.h"
 #include "patch/surface.h"
 #include "patch/trim.h"
+#include "tracker/edge_crossings.h"
 #include "tracker/edge_scan.h"
 
 namespace patchscan {
@@ -40,8 +41,16 @@ class TrimScan {
   // deleting trackers at the pieces' ends. Allocation-free once the lists have their size.
   void Advance(double yScan);
 
-  // The crossings of the latest line, in the piece's (u,v).
+  // The crossings of the latest line, in the piece's (u,v), and the curve of each (an index
+  // into PieceTrim::segments).
   const std::vector<Vec2>& Points() const { return points_; }
+  const std::vector<int>& Curves() const { return curves_; }
+  // Where line ys crosses the B-rep edge curve `curve` runs along, nearest the screen x of
+  // the curve's own crossing (EdgeCrossings::Nearest); NaN where the curve is no edge's.
+  double EdgeX(int curve, double ys, double x) const {
+    const int e = edgeOfCurve_[static_cast<std::size_t>(curve)];
+    return e < 0 ? NAN : edges_[static_cast<std::size_t>(e)].Nearest(ys, x);
+  }
   const std::vector<TrimPiece>& Pieces() const { return pieces_; }
   // Trackers born and died so far.
   long Events() const { return events_; }
@@ -58,11 +67,16 @@ class TrimScan {
   struct State {
     std::vector<Tracker> trackers;
     std::vector<Vec2> points;
+    std::vector<int> curves;
     std::size_t nextPiece = 0;
     long events = 0;
   };
-  void Save(State* s) const { s->trackers = trackers_, s->points = points_, s->nextPiece = nextPiece_, s->events = events_; }
-  void Restore(const State& s) { trackers_ = s.trackers, points_ = s.points, nextPiece_ = s.nextPiece, events_ = s.events; }
+  void Save(State* s) const {
+    s->trackers = trackers_, s->points = points_, s->curves = curves_, s->nextPiece = nextPiece_, s->events = events_;
+  }
+  void Restore(const State& s) {
+    trackers_ = s.trackers, points_ = s.points, curves_ = s.curves, nextPiece_ = s.nextPiece, events_ = s.events;
+  }
 
  private:
   const Surface& surface_;
@@ -74,6 +88,9 @@ class TrimScan {
   std::vector<TrimPiece> pieces_;  // sorted by yTop
   std::vector<Tracker> trackers_;
   std::vector<Vec2> points_;
+  std::vector<int> curves_;
+  std::vector<EdgeCrossings> edges_;   // the distinct edges the curves run along
+  std::vector<int> edgeOfCurve_;       // per curve: an index into edges_, or -1
   std::size_t nextPiece_ = 0;
   long events_ = 0;
 };

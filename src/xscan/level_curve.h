@@ -67,6 +67,33 @@ class LevelCurve {
     return uv.x() >= 0.0 && uv.x() <= 1.0 && uv.y() >= 0.0 && uv.y() <= 1.0;
   }
 
+  // The walk's sense whose tangent at p, on boundary edge `edge`, points into the domain;
+  // 0 when the curve only touches the edge there (the scan line at an edge extremum).
+  static double InwardSense(const LevelPoint& p, PatchEdge edge) {
+    const Vec2 t = Tangent(p, 1.0);
+    double inward = 0.0;
+    switch (edge) {
+      case PatchEdge::U0: inward = t.x(); break;
+      case PatchEdge::U1: inward = -t.x(); break;
+      case PatchEdge::V0: inward = t.y(); break;
+      case PatchEdge::V1: inward = -t.y(); break;
+    }
+    constexpr double kTangentialInward = 1e-12;
+    if (std::abs(inward) <= kTangentialInward) return 0.0;
+    return inward > 0 ? 1.0 : -1.0;
+  }
+
+  // Marks the trackers among `points` at uv as passed in *used; false if none is there.
+  static bool UseTracker(const std::vector<Vec2>& points, std::vector<char>* used, const Vec2& uv) {
+    bool found = false;
+    for (size_t k = 0; k < points.size(); ++k)
+      if ((points[k] - uv).norm() <= kSameCrossingUv) {
+        (*used)[k] = 1;
+        found = true;
+      }
+    return found;
+  }
+
   // Back onto the level curve from q, moving along grad y (the shortest way to first
   // order). Allowed to leave the domain slightly: the caller checks.
   LevelPoint Correct(Vec2 q) const {

@@ -60,6 +60,7 @@ constexpr double kTrimMatchArc = 1e-3;
 struct TrimScratch {
   std::vector<char> used;     // per trim crossing of the row: passed already
   std::vector<std::pair<double, int>> arc;  // the crossings on the current arc (x, index), in walk order
+  std::vector<std::pair<int, LevelPoint>> fills;  // columns reaching to shared edges (LevelWalker::FillToEdge)
 };
 
 // What one try at a step along a level curve came to (LevelWalker::TryStep).
@@ -82,7 +83,7 @@ class LevelWalker : public LevelCurve<ShapeT> {
   template <class Emit>
   void WalkAll(const RowTrackers& t, std::vector<char>* edgeUsed, std::vector<char>* silUsed,
                Emit&& emit) {
-    Bind(t, edgeUsed, silUsed);
+    Bind(t, edgeUsed, silUsed, /*fills=*/true);
     auto kept = [&](int column, const LevelPoint& p) {
       if (KeptAt(cols_.At(column))) emit(column, p);
     };
@@ -97,6 +98,10 @@ class LevelWalker : public LevelCurve<ShapeT> {
       (*silUsed)[k] = 1;
       WalkClosed(t.silhouettePoints[k], kept);
     }
+    if (trim_) {
+      for (const auto& [column, p] : trimScratch_->fills) emit(column, p);
+      trimScratch_->fills.clear();
+    }
   }
 
   // The walks are of a trimmed NURBS piece: `trim` its trim, `scratch` kept by the caller.
@@ -107,8 +112,9 @@ class LevelWalker : public LevelCurve<ShapeT> {
 
  protected:
   using typename Curve::CurvePoint;
-  using Curve::Correct, Curve::DirX, Curve::Failed, Curve::Inside, Curve::LocateSilhouette, Curve::NextColumn,
-      Curve::PredictColumn, Curve::Repaired, Curve::SolveColumn, Curve::SolveX, Curve::Tangent;
+  using Curve::Correct, Curve::DirX, Curve::Failed, Curve::Inside, Curve::InwardSense, Curve::LocateSilhouette,
+      Curve::NextColumn, Curve::PredictColumn, Curve::Repaired, Curve::SolveColumn, Curve::SolveX, Curve::Tangent,
+      Curve::UseTracker;
   using Curve::cols_, Curve::counters_, Curve::events_, Curve::map_, Curve::shape_, Curve::ys_;
 
 
@@ -155,31 +161,50 @@ class LevelWalker : public LevelCurve<ShapeT> {
   // Marks the silhouette tracker at s as passed; false if none holds it.
   bool UseSilhouetteTracker(const Vec2& uv) { return UseTracker(trackers_->silhouettePoints, silUsed_, uv); }
   bool UseEdgeTracker(const Vec2& uv) { return UseTracker(trackers_->edgePoints, edgeUsed_, uv); }
-  static bool UseTracker(const std::vector<Vec2>& points, std::vector<char>* used, const Vec2& uv) {
-    bool found = false;
-    for (size_t k = 0; k < points.size(); ++k)
-      if ((points[k] - uv).norm() <= kSameCrossingUv) {
-        (*used)[k] = 1;
-        found = true;
-      }
-    return found;
-  }
-
   // Takes the line's trackers `t` as the walks' starting points, none used yet.
-  void Bind(const RowTrackers& t, std::vector<char>* edgeUsed, std::vector<char>* silUsed) {
+  void Bind(const RowTrackers& t, std::vector<char>* edgeUsed, std::vector<char>* silUsed, bool fills = false) {
+    fills_ = fills;
     trackers_ = &t;
     edgeUsed_ = edgeUsed;
     silUsed_ = silUsed;
     edgeUsed->assign(t.edgePoints.size(), 0);
     silUsed->assign(t.silhouettePoints.size(), 0);
-    if (trim_) trimScratch_->used.assign(t.trimPoints.size(), 0);
+    if (trim_) {
+      trimScratch_->used.assign(t.trimPoints.size(), 0);
+      trimScratch_->fills.clear();
+    }
   }
 
   // ---- trims (SetTrim) ----
   // A walk starts at p going with `sense`: whether it is in the kept region, decided
   // kTrimStartUv along the curve, and the trim crossings nearer the start than that passed.
   void StartTrim(const LevelPoint& p, double sense) {
-    if (trim_) StartTrimToward(p.uv, Tangent(p, sense));
+    if (!trim_) return;
+    StartTrimToward(p.uv, Tangent(p, sense));
+    if (kept_)  // the walk enters the kept region at its start: it reaches back to an edge there
+      for (std::size_t k = 0; k < trackers_->trimPoints.size(); ++k)
+        if ((trackers_->trimPoints[k] - p.uv).norm() <= kTrimStartUv) FillToEdge(k, -DirX(p, sense));
+  }
+
+  // ---- shared edges (tracker/edge_crossings.h) ----
+  // Where trim crossing k runs along a B-rep edge, the face reaches at least to the edge's
+  // crossing: when that lies past the face's own end, on the side `outward` (+1: greater x)
+  // of it, the columns between take the face's point at its own end (a sliver as wide as
+  // the gap between the two faces' surfaces there; a column within kColumnEpsPx of the end
+  // is the walk's). The neighbour does the same from its side, so no column between them is
+  // left uncovered; where a face overshoots the edge, the two overlap by the gap.
+  void FillToEdge(std::size_t k, double outward) {
+    if (!fills_) return;
+    const double own = trackers_->trimX[k], edge = trackers_->trimEdgeX[k];
+    if (!std::isfinite(edge) || outward * (edge - own) <= kColumnEpsPx) return;
+    const int lo = cols_.Ceil(std::min(own, edge) - kColumnEpsPx), hi = cols_.Floor(std::max(own, edge) + kColumnEpsPx);
+    if (lo > hi) return;
+    const LevelPoint q = Eval(trackers_->trimPoints[k]);
+    if (!q.ok) return;
+    for (int c = lo; c <= hi; ++c) {
+      const double x = cols_.At(c);
+      if (outward * (x - own) > kColumnEpsPx && outward * (x - edge) <= kColumnEpsPx) trimScratch_->fills.emplace_back(c, q);
+    }
   }
   // The same, for a walk leaving uv in the unit direction `dir`.
   void StartTrimToward(const Vec2& uv, const Vec2& dir) {
@@ -221,6 +246,12 @@ class LevelWalker : public LevelCurve<ShapeT> {
       arc.emplace_back(x, static_cast<int>(k));
     }
     std::sort(arc.begin(), arc.end(), [&](const auto& p, const auto& q) { return arcDir_ * p.first < arcDir_ * q.first; });
+    // An exit from the kept region reaches on to its edge, an entry back to its edge.
+    bool kept = kept_;
+    for (const auto& [x, k] : arc) {
+      FillToEdge(static_cast<std::size_t>(k), kept ? arcDir_ : -arcDir_);
+      kept = !kept;
+    }
   }
   // The rest of the arc's crossings, after its last sample.
   void EndArc() {
@@ -378,22 +409,6 @@ class LevelWalker : public LevelCurve<ShapeT> {
     }
   }
 
-  // The walk's sense whose tangent at p, on boundary edge `edge`, points into the domain;
-  // 0 when the curve only touches the edge there (the scan line at an edge extremum).
-  static double InwardSense(const LevelPoint& p, PatchEdge edge) {
-    const Vec2 t = Tangent(p, 1.0);
-    double inward = 0.0;
-    switch (edge) {
-      case PatchEdge::U0: inward = t.x(); break;
-      case PatchEdge::U1: inward = -t.x(); break;
-      case PatchEdge::V0: inward = t.y(); break;
-      case PatchEdge::V1: inward = -t.y(); break;
-    }
-    constexpr double kTangentialInward = 1e-12;
-    if (std::abs(inward) <= kTangentialInward) return 0.0;
-    return inward > 0 ? 1.0 : -1.0;
-  }
-
   long MaxSteps() const { return kWalkMaxStepsBase + kWalkMaxStepsPerColumn * cols_.n; }
 
   template <class Emit>
@@ -471,6 +486,7 @@ class LevelWalker : public LevelCurve<ShapeT> {
   const PieceTrim* trim_ = nullptr;
   TrimScratch* trimScratch_ = nullptr;
   bool kept_ = true;           // the walk is in the kept region
+  bool fills_ = false;         // the exact walk: columns reach to shared edges (FillToEdge)
   std::size_t arcNext_ = 0;    // the next crossing of the current arc to toggle at
   double arcDir_ = 1.0;        // the current arc runs this way in x
   CurvePoint before_;          // the walk's point before the current one (TryStep's `before`)

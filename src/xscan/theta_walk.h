@@ -387,6 +387,16 @@ class ThetaWalker : public LevelWalker<ShapeT> {
   // chain's links are the walk's arcs (x-monotone between vertices), and the crossings on
   // each are found and toggled as the exact walk does. A closed chain cut somewhere is
   // open pieces; its last piece runs on into its first.
+  // A piece ending at v on a trim crossing along a shared edge whose crossing edgeX lies
+  // past v on the side `outward` reaches on to it: a vertex there with v's attributes (the
+  // exact walk's LevelWalker::FillToEdge, as a chord).
+  static void ReachEdge(const Vertex& v, double edgeX, double outward, std::vector<Vertex>* piece) {
+    if (!std::isfinite(edgeX) || outward * (edgeX - v.x) <= kColumnEpsPx) return;
+    Vertex w = v;
+    w.x = edgeX;
+    piece->push_back(w);
+  }
+
   template <class Make, class Take>
   void TakeTrimmed(const std::vector<Vertex>& chain, bool closed, Make& make, Take& take) {
     if (!this->trim_ || chain.size() < 2) {
@@ -401,7 +411,14 @@ class ThetaWalker : public LevelWalker<ShapeT> {
     this->StartTrimToward(chain[0].uv, d0.norm() > 0.0 ? Vec2(d0 / d0.norm()) : Vec2(1.0, 0.0));
     const bool startKept = this->kept_;
     bool cut = false;
-    if (this->kept_) piece.push_back(chain[0]);
+    if (this->kept_) {
+      // The walk enters the kept region at its start: it reaches back to a shared edge there.
+      const double outward = chain[1].x >= chain[0].x ? -1.0 : 1.0;
+      for (std::size_t k = 0; k < this->trackers_->trimPoints.size(); ++k)
+        if ((this->trackers_->trimPoints[k] - chain[0].uv).norm() <= kTrimStartUv)
+          ReachEdge(chain[0], this->trackers_->trimEdgeX[k], outward, &piece);
+      piece.push_back(chain[0]);
+    }
     for (std::size_t k = 1; k < chain.size(); ++k) {
       const Vertex &a = chain[k - 1], &b = chain[k];
       this->BeginArc(a.uv, a.x, b.uv, b.x);
@@ -409,13 +426,17 @@ class ThetaWalker : public LevelWalker<ShapeT> {
         const LevelPoint q = this->Eval(this->trackers_->trimPoints[static_cast<std::size_t>(index)]);
         if (!q.ok) continue;
         const Vertex v = MakeVertex(q, make);
+        const double edgeX = this->trackers_->trimEdgeX[static_cast<std::size_t>(index)];
         if (this->kept_) {
           piece.push_back(v);
+          ReachEdge(v, edgeX, this->arcDir_, &piece);
           if (!cut && closed && startKept) first.swap(piece);  // runs on from the last piece
           else take(std::span<const Vertex>(piece), false);
           piece.clear();
         } else {
-          piece.assign(1, v);
+          piece.clear();
+          ReachEdge(v, edgeX, -this->arcDir_, &piece);
+          piece.push_back(v);
         }
         this->kept_ = !this->kept_;
         cut = true;

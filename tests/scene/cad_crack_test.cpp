@@ -30,7 +30,7 @@
 namespace {
 
 constexpr int kWidth = 160, kHeight = 120;
-constexpr int kChannels = 11, kA = 3;  // R G B A Z id u v N.xyz, as OpenEXR orders them
+constexpr int kChannels = 11, kA = 3, kId = 5;  // R G B A Z id u v N.xyz, as OpenEXR orders them
 // The zoom on each shared edge: the 20 times the default framing's field of view.
 constexpr double kZoom = 20.0;
 // How many of a model's shared edges are looked at, spread over its edge list.
@@ -123,6 +123,33 @@ void ExpectNoCracks(const std::string& model) {
     views += inside > kWidth * kHeight / 10;  // a view that sees the solid, not past it
   }
   EXPECT_GT(views, 3);
+}
+
+// Faces whose own boundaries lie apart meet all the same: each ends where the scan line
+// crosses the edge they share. The right face of the diamond ends 0.02 (2.3 px) short of the
+// edge on its own; the pixels between are its own in the render, and none is short of whole.
+TEST(CadCracks, AGapBetweenTwoFacesIsClosedByTheEdgeTheyShare) {
+  Folder dir("cad_gap");
+  constexpr double kGap = 0.02;
+  ASSERT_TRUE(cad_models::WriteBrep(cad_models::GappedDiamond(kGap), (dir.path / "d.brep").string()));
+  const Result info = Patchscan("info " + (dir.path / "d.brep").string());
+  ASSERT_EQ(info.code, 0) << info.err;
+  EXPECT_NE(info.out.find("widest gap between faces along an edge 0.02"), std::string::npos) << info.out;
+  // The edge at x = 1 is the image's middle column, x = 80; 1 + kGap at 82.3.
+  const std::string view = " --size 160x120 --aa 3 --aov --eye 1,-5,0.5 --look-at 1,0,0.5 --fov 16";
+  ASSERT_EQ(dir.Run("render d.brep -o mesh.exr --mode tess --tess-error 0.25" + view), 0) << dir.Err();
+  const std::vector<float> mesh = Pixels((dir.path / "mesh.exr").string());
+  for (const char* mode : {"exact", "theta"}) {
+    SCOPED_TRACE(mode);
+    ASSERT_EQ(dir.Run(std::string("render d.brep -o direct.exr --mode ") + mode + view), 0) << dir.Err();
+    const std::vector<float> direct = Pixels((dir.path / "direct.exr").string());
+    int inside = 0;
+    EXPECT_EQ(Cracks(direct, mesh, &inside), 0);
+    EXPECT_GT(inside, kWidth * kHeight / 10);
+    const auto id = [&](int x, int y) { return direct[(static_cast<std::size_t>(y) * kWidth + x) * kChannels + kId]; };
+    for (int y = 40; y < 80; ++y)
+      for (int x : {80, 81}) EXPECT_EQ(id(x, y), id(120, 60)) << "(" << x << ", " << y << ")";
+  }
 }
 
 TEST(CadCracks, NoneInABoxWithAHoleAtAnyZoom) {

@@ -4,7 +4,14 @@
 #pragma once
 
 #include <BRepAlgoAPI_Cut.hxx>
+#include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakeVertex.hxx>
+#include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRep_Builder.hxx>
+#include <Geom2d_Line.hxx>
+#include <TopoDS_Compound.hxx>
+#include <gp_Pln.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
@@ -54,6 +61,25 @@ inline TopoDS_Shape BoxWithHole() {
   const TopoDS_Shape box = BRepPrimAPI_MakeBox(10, 10, 4).Shape();
   const TopoDS_Shape hole = BRepPrimAPI_MakeCylinder(gp_Ax2(gp_Pnt(5, 5, -1), gp_Dir(0, 0, 1)), 2.0, 6.0).Shape();
   return BRepAlgoAPI_Cut(box, hole).Shape();
+}
+// Two triangles in the plane y = 0 sharing the edge x = 1, 0 <= z <= 1 (a diamond 2 wide
+// and 1 high), the right one's pcurve of that edge moved `gap` along x: its face ends `gap`
+// short of the edge, as the faces of an exported model may within their tolerance.
+inline TopoDS_Shape GappedDiamond(double gap) {
+  const auto vertex = [](double x, double z) { return BRepBuilderAPI_MakeVertex(gp_Pnt(x, 0, z)).Vertex(); };
+  const TopoDS_Vertex a = vertex(1, 0), b = vertex(1, 1), left = vertex(0, 0.5), right = vertex(2, 0.5);
+  const auto edge = [](const TopoDS_Vertex& p, const TopoDS_Vertex& q) { return BRepBuilderAPI_MakeEdge(p, q).Edge(); };
+  const TopoDS_Edge shared = edge(a, b);
+  const gp_Pln plane(gp_Ax3(gp_Pnt(0, 0, 0), gp_Dir(0, -1, 0), gp_Dir(1, 0, 0)));  // u along x, v along z
+  const TopoDS_Face leftFace = BRepBuilderAPI_MakeFace(plane, BRepBuilderAPI_MakeWire(shared, edge(b, left), edge(left, a)));
+  const TopoDS_Face rightFace = BRepBuilderAPI_MakeFace(plane, BRepBuilderAPI_MakeWire(edge(a, right), edge(right, b), shared));
+  BRep_Builder builder;
+  builder.UpdateEdge(shared, new Geom2d_Line(gp_Pnt2d(1 + gap, 0), gp_Dir2d(0, 1)), rightFace, gap);
+  TopoDS_Compound both;
+  builder.MakeCompound(both);
+  builder.Add(both, leftFace);
+  builder.Add(both, rightFace);
+  return both;
 }
 
 inline bool WriteStep(const TopoDS_Shape& shape, const std::string& path) {

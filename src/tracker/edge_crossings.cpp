@@ -1,0 +1,87 @@
+#include "tracker/edge_crossings.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/sign_changes.h"
+#include "tracker/trim_scan.h"
+
+namespace patchscan {
+namespace {
+
+// The crossing is solved to this (pixels in y): far below kColumnEpsPx, so that the x it
+// gives is as good as the edge itself.
+constexpr double kCrossingTolPx = 1e-10;
+// Newton iterations on a piece before the bracket is taken as the answer.
+constexpr int kCrossingMaxIterations = 100;
+
+}  // namespace
+
+EdgeCrossings::EdgeCrossings(const EdgeCurve& edge, const ScreenMap& map) : edge_(edge), map_(map) {
+  for (std::size_t k = 0; k < edge_.Segments(); ++k) {
+    // A segment any sample of which is behind the eye has no crossings on the screen.
+    bool visible = true;
+    for (int i = 0; i <= kTrimCriticalSamples && visible; ++i) {
+      Vec2 p, d;
+      visible = Screen(k, static_cast<double>(i) / kTrimCriticalSamples, &p, &d);
+    }
+    if (!visible) continue;
+    std::vector<double> turns = {0.0};
+    SignChanges([&](double t) {
+      Vec2 p, d;
+      Screen(k, t, &p, &d);
+      return std::pair(d.y(), NAN);
+    }, 0.0, 1.0, kTrimCriticalSamples, &turns);
+    turns.push_back(1.0);
+    for (std::size_t m = 0; m + 1 < turns.size(); ++m) {
+      if (!(turns[m + 1] > turns[m])) continue;
+      Vec2 a, b, d;
+      Screen(k, turns[m], &a, &d);
+      Screen(k, turns[m + 1], &b, &d);
+      pieces_.push_back({k, turns[m], turns[m + 1], std::min(a.y(), b.y()), std::max(a.y(), b.y())});
+    }
+  }
+}
+
+bool EdgeCrossings::Screen(std::size_t k, double t, Vec2* p, Vec2* d) const {
+  Vec3 dc;
+  const Vec3 c = edge_.At(k, t, &dc);
+  const Vec4 h = map_.Homogeneous(c);
+  const Vec4 dh = map_.ScreenFromObject().block<4, 3>(0, 0) * dc;
+  if (!(h.w() > 0.0)) return false;
+  *p = h.head<2>() / h.w();
+  *d = (dh.head<2>() - dh.w() * *p) / h.w();  // the quotient rule
+  return true;
+}
+
+double EdgeCrossings::Solve(const Piece& piece, double ys) const {
+  Vec2 p, d;
+  double a = piece.t0, b = piece.t1;
+  Screen(piece.segment, a, &p, &d);
+  double fa = p.y() - ys;
+  Screen(piece.segment, b, &p, &d);
+  const double fb = p.y() - ys;
+  double t = fa == fb ? 0.5 * (a + b) : std::clamp(a + (b - a) * fa / (fa - fb), a, b);
+  for (int it = 0; it < kCrossingMaxIterations; ++it) {
+    Screen(piece.segment, t, &p, &d);
+    const double f = p.y() - ys;
+    if (std::abs(f) <= kCrossingTolPx || !(b > a)) break;
+    if ((f > 0) == (fa > 0)) a = t, fa = f;
+    else b = t;
+    const double newton = t - f / d.y();
+    t = newton > a && newton < b && std::isfinite(newton) ? newton : 0.5 * (a + b);
+  }
+  return p.x();
+}
+
+double EdgeCrossings::Nearest(double ys, double x, double maxPx) const {
+  double best = NAN, bestDistance = maxPx;
+  for (const Piece& piece : pieces_) {
+    if (ys < piece.yLo || ys > piece.yHi) continue;
+    const double xe = Solve(piece, ys);
+    if (std::abs(xe - x) <= bestDistance) best = xe, bestDistance = std::abs(xe - x);
+  }
+  return best;
+}
+
+}  // namespace patchscan
