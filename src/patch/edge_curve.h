@@ -19,6 +19,8 @@ class EdgeCurve {
   EdgeCurve(int order, const std::vector<double>& knot, double tmin, double tmax, const std::vector<Vec4>& points);
 
   std::size_t Segments() const { return segments_.size(); }
+  // Segment k's homogeneous control points: the curve lies in their hull.
+  const std::vector<Vec4>& Points(std::size_t k) const { return segments_[k]; }
   // The point of segment k at t in [0, 1], and its derivative when `d` is given.
   Vec3 At(std::size_t k, double t, Vec3* d = nullptr) const;
 

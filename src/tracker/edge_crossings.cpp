@@ -19,26 +19,32 @@ constexpr int kCrossingMaxIterations = 100;
 
 EdgeCrossings::EdgeCrossings(const EdgeCurve& edge, const ScreenMap& map) : edge_(edge), map_(map) {
   for (std::size_t k = 0; k < edge_.Segments(); ++k) {
-    // A segment any sample of which is behind the eye has no crossings on the screen.
+    // The projected control points hold the segment's screen image when all are in front of
+    // the eye (a rational curve is their convex combination there); a segment whose hull
+    // reaches behind the eye is left to the faces' own ends.
+    const std::vector<Vec4>& hull = edge_.Points(k);
+    double xLo = INFINITY, xHi = -INFINITY;
     bool visible = true;
-    for (int i = 0; i <= kTrimCriticalSamples && visible; ++i) {
-      Vec2 p, d;
-      visible = Screen(k, static_cast<double>(i) / kTrimCriticalSamples, &p, &d);
+    for (const Vec4& h : hull) {
+      const Vec4 s = map_.ScreenFromObject() * h;
+      visible = visible && s.w() > 0.0;
+      xLo = std::min(xLo, s.x() / s.w()), xHi = std::max(xHi, s.x() / s.w());
     }
     if (!visible) continue;
     std::vector<double> turns = {0.0};
-    SignChanges([&](double t) {
-      Vec2 p, d;
-      Screen(k, t, &p, &d);
-      return std::pair(d.y(), NAN);
-    }, 0.0, 1.0, kTrimCriticalSamples, &turns);
+    if (hull.size() > 2)  // a straight segment's screen y is monotone
+      SignChanges([&](double t) {
+        Vec2 p, d;
+        Screen(k, t, &p, &d);
+        return std::pair(d.y(), NAN);
+      }, 0.0, 1.0, kTrimCriticalSamples, &turns);
     turns.push_back(1.0);
     for (std::size_t m = 0; m + 1 < turns.size(); ++m) {
       if (!(turns[m + 1] > turns[m])) continue;
       Vec2 a, b, d;
       Screen(k, turns[m], &a, &d);
       Screen(k, turns[m + 1], &b, &d);
-      pieces_.push_back({k, turns[m], turns[m + 1], std::min(a.y(), b.y()), std::max(a.y(), b.y())});
+      pieces_.push_back({k, turns[m], turns[m + 1], a.y(), b.y(), xLo, xHi});
     }
   }
 }
@@ -57,10 +63,8 @@ bool EdgeCrossings::Screen(std::size_t k, double t, Vec2* p, Vec2* d) const {
 double EdgeCrossings::Solve(const Piece& piece, double ys) const {
   Vec2 p, d;
   double a = piece.t0, b = piece.t1;
-  Screen(piece.segment, a, &p, &d);
-  double fa = p.y() - ys;
-  Screen(piece.segment, b, &p, &d);
-  const double fb = p.y() - ys;
+  double fa = piece.y0 - ys;
+  const double fb = piece.y1 - ys;
   double t = fa == fb ? 0.5 * (a + b) : std::clamp(a + (b - a) * fa / (fa - fb), a, b);
   for (int it = 0; it < kCrossingMaxIterations; ++it) {
     Screen(piece.segment, t, &p, &d);
@@ -77,7 +81,9 @@ double EdgeCrossings::Solve(const Piece& piece, double ys) const {
 double EdgeCrossings::Nearest(double ys, double x, double maxPx) const {
   double best = NAN, bestDistance = maxPx;
   for (const Piece& piece : pieces_) {
-    if (ys < piece.yLo || ys > piece.yHi) continue;
+    if (ys < std::min(piece.y0, piece.y1) || ys > std::max(piece.y0, piece.y1) || x < piece.xLo - bestDistance ||
+        x > piece.xHi + bestDistance)
+      continue;
     const double xe = Solve(piece, ys);
     if (std::abs(xe - x) <= bestDistance) best = xe, bestDistance = std::abs(xe - x);
   }

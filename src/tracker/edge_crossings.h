@@ -36,7 +36,8 @@ class EdgeCrossings {
  private:
   struct Piece {
     std::size_t segment;
-    double t0, t1, yLo, yHi;
+    double t0, t1, y0, y1;  // screen y at t0 and t1
+    double xLo, xHi;        // the segment's screen x lies between (its projected hull)
   };
   // Screen (x, y) of segment k at t, and d/dt; false behind the eye.
   bool Screen(std::size_t k, double t, Vec2* p, Vec2* d) const;
