@@ -12,8 +12,10 @@ namespace {
 // The crossing is solved to this (pixels in y): far below kColumnEpsPx, so that the x it
 // gives is as good as the edge itself.
 constexpr double kCrossingTolPx = 1e-10;
-// Newton iterations on a piece before the bracket is taken as the answer.
+// Newton iterations on a piece, each at worst a bisection: 100 halve any bracket to below
+// kCrossingBracketT, where the crossing is as exact as the segment's parameter can say.
 constexpr int kCrossingMaxIterations = 100;
+constexpr double kCrossingBracketT = 1e-15;
 
 }  // namespace
 
@@ -69,13 +71,13 @@ double EdgeCrossings::Solve(const Piece& piece, double ys) const {
   for (int it = 0; it < kCrossingMaxIterations; ++it) {
     Screen(piece.segment, t, &p, &d);
     const double f = p.y() - ys;
-    if (std::abs(f) <= kCrossingTolPx || !(b > a)) break;
+    if (std::abs(f) <= kCrossingTolPx || !(b - a > kCrossingBracketT)) return p.x();
     if ((f > 0) == (fa > 0)) a = t, fa = f;
     else b = t;
     const double newton = t - f / d.y();
     t = newton > a && newton < b && std::isfinite(newton) ? newton : 0.5 * (a + b);
   }
-  return p.x();
+  return NAN;  // not settled: the faces keep their own ends on this line
 }
 
 double EdgeCrossings::Nearest(double ys, double x, double maxPx) const {
@@ -85,7 +87,7 @@ double EdgeCrossings::Nearest(double ys, double x, double maxPx) const {
         x > piece.xHi + bestDistance)
       continue;
     const double xe = Solve(piece, ys);
-    if (std::abs(xe - x) <= bestDistance) best = xe, bestDistance = std::abs(xe - x);
+    if (std::isfinite(xe) && std::abs(xe - x) <= bestDistance) best = xe, bestDistance = std::abs(xe - x);
   }
   return best;
 }

@@ -41,6 +41,7 @@ class EdgeCrossings {
   };
   // Screen (x, y) of segment k at t, and d/dt; false behind the eye.
   bool Screen(std::size_t k, double t, Vec2* p, Vec2* d) const;
+  // The crossing's screen x on `piece`, NaN where the solve does not settle.
   double Solve(const Piece& piece, double ys) const;
 
   const EdgeCurve& edge_;
