@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <string>
 
+#include "raster/cube_environment.h"
 #include "render/load.h"
 #include "scene/rib/reader.h"
 
@@ -73,6 +74,11 @@ raster::Material SceneMaterial(const Appearance& a, const raster::Material& fall
   m.specularColour = a.specularColour;
   return m;
 }
+std::string RequestName(SceneMakeTexture::Kind kind) {
+  using K = SceneMakeTexture::Kind;
+  return kind == K::Shadow ? "MakeShadow" : kind == K::LatLong ? "MakeLatLongEnvironment" : "MakeCubeFaceEnvironment";
+}
+
 // Where the depth or shadow map `name` comes from, for a warning that it is missing: the
 // frame of `ribFile` whose Display writes it, or the MakeShadow of `scene` that makes it
 // and the frame that writes that one's depth map.
@@ -85,7 +91,7 @@ std::string WhereMade(const std::string& name, const Scene& scene, const std::st
   };
   for (const SceneMakeTexture& m : scene.makeTextures)
     if (m.output == name)
-      return std::string(m.kind == SceneMakeTexture::Kind::Shadow ? "MakeShadow" : "MakeLatLongEnvironment") + " at " + m.file + ':' + std::to_string(m.line) + " makes it from " + m.input + "; " + writer(m.input);
+      return RequestName(m.kind) + " at " + m.file + ':' + std::to_string(m.line) + " makes it from " + m.input + "; " + writer(m.input);
   return writer(name);
 }
 
@@ -251,11 +257,18 @@ raster::ShadowCamera LightCamera(const Camera& camera) {
 std::vector<std::string> MakeTextures(const Scene& scene, const std::string& ribFile) {
   std::vector<std::string> warnings;
   for (const SceneMakeTexture& m : scene.makeTextures) {
-    const bool shadow = m.kind == SceneMakeTexture::Kind::Shadow;
-    const auto why = shadow ? raster::MakeShadowTexture(m.input, m.output) : raster::MakeLatLongEnvironment(m.input, m.output);
-    if (why)
-      warnings.push_back(m.file + ':' + std::to_string(m.line) + (shadow ? ": MakeShadow: " : ": MakeLatLongEnvironment: ") +
-                         *why + " (" + WhereMade(m.input, scene, ribFile) + "); " + m.output + " is not made");
+    using K = SceneMakeTexture::Kind;
+    const auto why = m.kind == K::Shadow    ? raster::MakeShadowTexture(m.input, m.output)
+                     : m.kind == K::LatLong ? raster::MakeLatLongEnvironment(m.input, m.output)
+                                            : raster::MakeCubeFaceEnvironment(m.faces, m.fovDeg, m.output);
+    if (!why) continue;
+    std::string input = m.input;  // a cube's first face that is missing, if one is
+    std::error_code ec;
+    if (m.kind == K::CubeFace)
+      for (auto face = m.faces.rbegin(); face != m.faces.rend(); ++face)
+        if (!std::filesystem::exists(*face, ec)) input = *face;
+    warnings.push_back(m.file + ':' + std::to_string(m.line) + ": " + RequestName(m.kind) + ": " + *why + " (" +
+                       WhereMade(input, scene, ribFile) + "); " + m.output + " is not made");
   }
   return warnings;
 }

@@ -2,6 +2,7 @@
 // came from. Readers are chosen by file extension.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -65,12 +66,16 @@ struct SceneLight {
   int line = 0;
 };
 
-// A texture made before the frame is rendered: MakeShadow (a shadow texture of a depth map)
-// or MakeLatLongEnvironment (an environment texture of a lat-long image).
+// A texture made before the frame is rendered: MakeShadow (a shadow texture of a depth map),
+// MakeLatLongEnvironment (an environment texture of a lat-long image) or
+// MakeCubeFaceEnvironment (one of six face images, `input` and `faces`, px nx py ny pz nz,
+// rendered with a `fovDeg` field of view).
 struct SceneMakeTexture {
-  enum class Kind { Shadow, LatLong };
+  enum class Kind { Shadow, LatLong, CubeFace };
   Kind kind = Kind::Shadow;
   std::string input, output;
+  std::array<std::string, 6> faces;  // CubeFace: input is faces[0]
+  double fovDeg = 90.0;
   std::string file;
   int line = 0;
 };

@@ -4,7 +4,9 @@
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <numbers>
@@ -19,27 +21,62 @@ constexpr double kPi = std::numbers::pi;
 constexpr int kWidth = 200, kHeight = 150;
 constexpr double kFovDeg = 40, kDistance = 5;
 
-// A folder with dir.exr, a lat-long map (OpenEXR's layout: +y up, longitude pi at the left
-// edge, longitude 0 along +z) whose colour at direction d is (1 + d) / 2, and m.rib: a mirror
-// sphere (shinymetal, nothing but Kr) at the origin, its poles along y, seen from
-// -kDistance along z; MakeLatLongEnvironment makes dir.tx of dir.exr.
+// Writes a float RGB OpenEXR image of w x h texels whose colour at texel (x, y) is
+// (1 + d) / 2 for d = direction(x, y) of unit length.
+template <class Direction>
+void WriteDirections(const std::filesystem::path& file, int w, int h, Direction&& direction) {
+  std::vector<float> texels(static_cast<std::size_t>(w) * h * 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::array<double, 3> d = direction(x, y);
+      const double l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      for (int c = 0; c < 3; ++c) texels[(static_cast<std::size_t>(y) * w + x) * 3 + c] = static_cast<float>(0.5 + 0.5 * d[c] / l);
+    }
+  auto out = OIIO::ImageOutput::create("exr");
+  EXPECT_TRUE(out && out->open(file.string(), OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::FLOAT)));
+  EXPECT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, texels.data()));
+  out->close();
+}
+
+// A folder with a map of the surroundings whose colour at direction d is (1 + d) / 2, and
+// m.rib: a mirror sphere (shinymetal, nothing but Kr) at the origin, its poles along y, seen
+// from -kDistance along z. With cubeFovDeg 0 the map is dir.exr, a lat-long image (OpenEXR's
+// layout: +y up, longitude pi at the left edge, longitude 0 along +z), made into dir.tx by
+// MakeLatLongEnvironment; otherwise six cube faces px.exr ... nz.exr of that field of view,
+// oriented as the RenderMan Interface's cube faces (OpenGL's cube map table: on face +x,
+// s = -z / x and t = -y / x, from -1 at the left and top edges), made into dir.tx by
+// MakeCubeFaceEnvironment.
 struct MirrorScene : Folder {
-  MirrorScene() : Folder("environment") {
-    constexpr int w = 256, h = 128;
-    std::vector<float> texels(w * h * 3);
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
+  explicit MirrorScene(double cubeFovDeg = 0) : Folder("environment") {
+    std::string make = "MakeLatLongEnvironment \"dir.exr\" \"dir.tx\" \"gaussian\" 1 1";
+    if (cubeFovDeg == 0) {
+      constexpr int w = 256, h = 128;
+      WriteDirections(path / "dir.exr", w, h, [&](int x, int y) {
         const double lat = kPi / 2 - kPi * (y + 0.5) / h, lon = kPi - 2 * kPi * (x + 0.5) / w;
-        const double d[3] = {std::cos(lat) * std::sin(lon), std::sin(lat), std::cos(lat) * std::cos(lon)};
-        for (int c = 0; c < 3; ++c) texels[(static_cast<std::size_t>(y) * w + x) * 3 + c] = static_cast<float>(0.5 + 0.5 * d[c]);
-      }
-    auto out = OIIO::ImageOutput::create("exr");
-    EXPECT_TRUE(out && out->open((path / "dir.exr").string(), OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::FLOAT)));
-    EXPECT_TRUE(out->write_image(OIIO::TypeDesc::FLOAT, texels.data()));
-    out->close();
+        return std::array<double, 3>{std::cos(lat) * std::sin(lon), std::sin(lat), std::cos(lat) * std::cos(lon)};
+      });
+    } else {
+      constexpr int n = 64;
+      const double tanHalf = std::tan(cubeFovDeg / 2 * kPi / 180);
+      const char* names[6] = {"px", "nx", "py", "ny", "pz", "nz"};
+      for (int face = 0; face < 6; ++face)
+        WriteDirections(path / (std::string(names[face]) + ".exr"), n, n, [&](int x, int y) {
+          const double s = (2 * (x + 0.5) / n - 1) * tanHalf, t = (2 * (y + 0.5) / n - 1) * tanHalf;
+          switch (face) {
+            case 0: return std::array<double, 3>{1, -t, -s};
+            case 1: return std::array<double, 3>{-1, -t, s};
+            case 2: return std::array<double, 3>{s, 1, t};
+            case 3: return std::array<double, 3>{s, -1, -t};
+            case 4: return std::array<double, 3>{s, -t, 1};
+            default: return std::array<double, 3>{-s, -t, -1};
+          }
+        });
+      make = "MakeCubeFaceEnvironment \"px.exr\" \"nx.exr\" \"py.exr\" \"ny.exr\" \"pz.exr\" \"nz.exr\" \"dir.tx\" " +
+             std::to_string(cubeFovDeg) + " \"gaussian\" 1 1";
+    }
     std::ofstream(path / "m.rib") << "Format " << kWidth << ' ' << kHeight << " 1\nProjection \"perspective\" \"fov\" ["
-                                  << kFovDeg << "]\nTranslate 0 0 " << kDistance
-                                  << "\nMakeLatLongEnvironment \"dir.exr\" \"dir.tx\" \"gaussian\" 1 1\nWorldBegin\n"
+                                  << kFovDeg << "]\nTranslate 0 0 " << kDistance << '\n' << make
+                                  << "\nWorldBegin\n"
                                      "Surface \"shinymetal\" \"Ka\" [0] \"Ks\" [0] \"Kr\" [1] \"texturename\" \"dir.tx\"\n"
                                      "Rotate 90 1 0 0\nSphere 1 -1 1 360\nWorldEnd\n";
   }
@@ -86,6 +123,27 @@ TEST(Environment, MirrorSphereReflectsTheAnalyticDirectionInEveryMode) {
   }
 }
 
+// MakeCubeFaceEnvironment: six faces resampled into the lat-long map the lookups read; faces
+// of 90 degrees and, overlapping, of 100 (the images then span tan 50 degrees).
+TEST(Environment, CubeFacesReflectTheAnalyticDirection) {
+  // As above, with the faces' 64 x 64 texels (2 to 0.7 degrees apart) bilinearly resampled
+  // once more into the lat-long image before it is filtered.
+  constexpr double kTolerance = 3e-3;
+  for (const double fov : {90.0, 100.0}) {
+    MirrorScene cube(fov);
+    ASSERT_EQ(cube.Run("render m.rib -o m.exr --aov --aa 1"), 0) << cube.Err();
+    EXPECT_EQ(cube.Err().find("warning"), std::string::npos) << cube.Err();
+    const auto [worst, counted] = WorstReflection(Pixels((cube.path / "m.exr").string()));
+    std::cout << "cube faces of " << fov << " degrees: largest colour error " << worst << " over " << counted
+              << " pixels\n";
+    EXPECT_GT(counted, 2500);
+    EXPECT_LT(worst, kTolerance) << fov;
+    // The lat-long image went through a temporary file, which is gone.
+    for (const auto& entry : std::filesystem::directory_iterator(cube.path))
+      EXPECT_EQ(entry.path().filename().string().find(".dir.tx"), std::string::npos) << entry.path();
+  }
+}
+
 TEST(Environment, OptionReflectsOnMetalAndPlasticNotOnMatte) {
   MirrorScene dir;
   ASSERT_EQ(dir.Run("render m.rib -o m.exr --aa 1"), 0) << dir.Err();  // makes dir.tx
@@ -122,6 +180,15 @@ TEST(Environment, MissingMapsAreNamed) {
   EXPECT_NE(dir.Err().find("MakeLatLongEnvironment: dir.exr: no such file"), std::string::npos) << dir.Err();
   EXPECT_NE(dir.Err().find("shinymetal environment map 'dir.tx' not found"), std::string::npos) << dir.Err();
   EXPECT_FALSE(std::filesystem::exists(dir.path / "m.png"));
+
+  MirrorScene cube(90);
+  std::filesystem::remove(cube.path / "ny.exr");
+  EXPECT_EQ(cube.Run("render m.rib -o m.png"), 1);
+  EXPECT_NE(cube.Err().find("m.rib:4: MakeCubeFaceEnvironment: ny.exr: no such file (no frame of m.rib writes ny.exr); "
+                            "dir.tx is not made"),
+            std::string::npos)
+      << cube.Err();
+  EXPECT_FALSE(std::filesystem::exists(cube.path / "m.png"));
 }
 
 }  // namespace

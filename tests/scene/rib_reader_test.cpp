@@ -605,6 +605,25 @@ TEST(Rib, ShinyMetalAndMakeLatLongEnvironment) {
   EXPECT_TRUE(s.warnings.empty());
 }
 
+TEST(Rib, MakeCubeFaceEnvironment) {
+  const Scene s = Parse("MakeCubeFaceEnvironment \"a\" \"b\" \"c\" \"d\" \"e\" \"f\" \"env.tx\" 95 \"gaussian\" 2 2\n" +
+                        World("Sphere 1 -1 1 360"));
+  ASSERT_EQ(s.makeTextures.size(), 1u);
+  const SceneMakeTexture& m = s.makeTextures[0];
+  EXPECT_EQ(m.kind, SceneMakeTexture::Kind::CubeFace);
+  EXPECT_EQ(m.faces, (std::array<std::string, 6>{"a", "b", "c", "d", "e", "f"}));  // beside the scene file
+  EXPECT_EQ(m.input, "a");
+  EXPECT_EQ(m.output, "env.tx");
+  EXPECT_EQ(m.fovDeg, 95);
+  EXPECT_TRUE(s.warnings.empty());
+  EXPECT_EQ(Error("MakeCubeFaceEnvironment \"a\" \"b\" \"c\" \"d\" \"e\" \"f\" \"env.tx\" 60 \"box\" 1 1\n"),
+            "t.rib:1: MakeCubeFaceEnvironment: the field of view must be at least 90 and less than 180 degrees");
+  EXPECT_EQ(Error("MakeCubeFaceEnvironment \"a\" \"b\" \"c\" \"d\" \"e\" \"f\" \"env.tx\"\n"),
+            "t.rib:1: MakeCubeFaceEnvironment expects the faces' field of view as argument 8");
+  EXPECT_EQ(Error("MakeCubeFaceEnvironment \"a\" \"b\" \"c\" \"d\" \"e\" 1 \"env.tx\" 90\n"),
+            "t.rib:1: MakeCubeFaceEnvironment expects a string as argument 6");
+}
+
 TEST(Rib, LightSourcesInWorldSpace) {
   const Scene s = Parse(
       "Translate 0 0 10\n"

@@ -201,7 +201,7 @@ class RibParser {
   bool SurfaceShader(const Request& r);
   bool DisplacementShader(const Request& r);
   bool LightSource(const Request& r);
-  bool MakeTexture(const Request& r);  // MakeShadow, MakeLatLongEnvironment
+  bool MakeTexture(const Request& r);  // MakeShadow, MakeLatLong- and MakeCubeFaceEnvironment
   // Hider "hidden" "depthfilter" and Option "shadow" "bias": how depth maps are written
   // and the bias of the shadow lights that give none.
   bool Hider(const Request& r);

@@ -25,7 +25,7 @@ const std::set<std::string, std::less<>>& SkippedRequests() {
       "Exterior", "Imager", "Exposure", "Quantize", "PixelFilter", "PixelVariance",
       "ShadingRate", "ShadingInterpolation", "Matte", "Bound", "Detail", "DetailRange",
       "GeometricApproximation", "MakeTexture",
-      "MakeCubeFaceEnvironment", "MakeBump", "FrameAspectRatio", "DepthOfField",
+      "MakeBump", "FrameAspectRatio", "DepthOfField",
       "Shutter", "ColorSamples", "RelativeDetail", "TextureCoordinates", "Illuminate",
       "AreaLightSource", "CoordinateSystem", "CoordSysTransform", "ScopedCoordinateSystem",
       "Perspective", "Skew", "Deformation", "SolidBegin", "SolidEnd", "MotionBegin",
@@ -119,6 +119,7 @@ const std::unordered_map<std::string_view, RibParser::Handler>& RibParser::Reque
       {"LightSource", &RibParser::LightSource},
       {"MakeShadow", &RibParser::MakeTexture},
       {"MakeLatLongEnvironment", &RibParser::MakeTexture},
+      {"MakeCubeFaceEnvironment", &RibParser::MakeTexture},
       {"Hider", &RibParser::Hider},
       {"Option", &RibParser::Option},
       // Geometry.

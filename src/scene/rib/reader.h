@@ -25,7 +25,7 @@
 //               "paintedplastic"/"shinymetal", Displacement "bumpy" (a bump map),
 //               LightSource "ambientlight"/"distantlight"/"pointlight"/"spotlight" and
 //               "shadowspot"/"shadowdistant"/"shadowpoint", MakeShadow,
-//               MakeLatLongEnvironment
+//               MakeLatLongEnvironment, MakeCubeFaceEnvironment
 // Every other request is read and skipped with one warning per kind naming file:line and
 // counting how often it came. Malformed input (unbalanced blocks, wrong argument counts or
 // array lengths, unknown bases, truncated files, bad numbers) is an error naming

@@ -359,18 +359,38 @@ bool RibParser::Option(const Request& r) {
 
 bool RibParser::MakeTexture(const Request& r) {
   // MakeShadow picturename texturename, MakeLatLongEnvironment picturename texturename
-  // filter swidth twidth: run before the frame renders (a depth map of an earlier frame
-  // becomes a shadow texture; an image of the surroundings an environment texture, filtered
-  // as OpenImageIO's maketx filters, whatever the request's filter). The texture is written
-  // to the working directory, as Display writes; a depth map is read from there (a frame
-  // wrote it), a lat-long image, which the scene brings, beside the scene file.
-  std::string in, out;
-  if (!StringArg(r, 0, &in) || !StringArg(r, 1, &out)) return false;
+  // filter swidth twidth, MakeCubeFaceEnvironment px nx py ny pz nz texturename fov filter
+  // swidth twidth: run before the frame renders (a depth map of an earlier frame becomes a
+  // shadow texture; images of the surroundings an environment texture, filtered as
+  // OpenImageIO's maketx filters, whatever the request's filter). The texture is written to
+  // the working directory, as Display writes; a depth map is read from there (a frame wrote
+  // it), environment images, which the scene brings, beside the scene file.
   using K = SceneMakeTexture::Kind;
-  const K kind = r.name == "MakeShadow" ? K::Shadow : K::LatLong;
-  if (kind == K::LatLong && std::filesystem::path(in).is_relative())
-    in = (std::filesystem::path(file_).parent_path() / in).string();
-  scene_.makeTextures.push_back({kind, in, out, file_, r.line});
+  SceneMakeTexture make;
+  make.kind = r.name == "MakeShadow" ? K::Shadow : r.name == "MakeLatLongEnvironment" ? K::LatLong : K::CubeFace;
+  make.file = file_;
+  make.line = r.line;
+  const auto besideScene = [&](std::string* in) {
+    if (std::filesystem::path(*in).is_relative()) *in = (std::filesystem::path(file_).parent_path() / *in).string();
+  };
+  if (make.kind == K::CubeFace) {
+    for (size_t k = 0; k < make.faces.size(); ++k) {
+      if (!StringArg(r, k, &make.faces[k])) return false;
+      besideScene(&make.faces[k]);
+    }
+    if (!StringArg(r, 6, &make.output)) return false;
+    if (r.args.size() < 8 || r.args[7].kind != Value::Kind::Number)
+      return Fail(r.line, r.name + " expects the faces' field of view as argument 8");
+    make.fovDeg = r.args[7].numbers[0];
+    // Narrower faces would leave directions no face holds.
+    if (!(make.fovDeg >= 90.0 && make.fovDeg < 180.0))
+      return Fail(r.args[7].line, r.name + ": the field of view must be at least 90 and less than 180 degrees");
+    make.input = make.faces[0];
+  } else {
+    if (!StringArg(r, 0, &make.input) || !StringArg(r, 1, &make.output)) return false;
+    if (make.kind == K::LatLong) besideScene(&make.input);
+  }
+  scene_.makeTextures.push_back(std::move(make));
   return true;
 }
 
