@@ -582,6 +582,8 @@ TEST(Rib, BumpyDisplacementIsABumpMap) {
                             "t.rib:10: Displacement: unknown shader 'dented': the surface is not displaced"});
   EXPECT_EQ(Error(World("Attribute \"displacementbound\" \"sphere\" [-1]")),
             "t.rib:2: Attribute \"displacementbound\" \"sphere\" must be 0 or more");
+  EXPECT_EQ(Parse(World("Attribute \"displacementbound\" \"radius\" [1]\nSphere 1 -1 1 360")).warnings,
+            std::vector<std::string>{"t.rib:2: Attribute: parameter \"radius\" is not supported here: ignored"});
 }
 
 TEST(Rib, ShinyMetalAndMakeLatLongEnvironment) {

@@ -366,7 +366,11 @@ bool RibParser::AttributeRequest(const Request& r) {
     // The bound a displacement may move the surface by: a bump never moves it, so no bound
     // widens; its values are checked all the same.
     for (const Param& p : params) {
-      if (p.name != "sphere") continue;
+      if (p.name == "coordinatesystem") continue;  // the space of "sphere": any is valid
+      if (p.name != "sphere") {
+        IgnoreParam(r, p);
+        continue;
+      }
       double sphere = 0.0;
       if (!ParamNumbers(r, p, 1, &sphere)) return false;
       if (!(sphere >= 0.0)) return Fail(p.value->line, "Attribute \"displacementbound\" \"sphere\" must be 0 or more");
