@@ -17,6 +17,7 @@
 #include "render/load.h"
 #include "render/progress.h"
 #include "render/shared_rows.h"
+#include "scene/cad_library.h"
 #include "scene/rib/reader.h"
 #include "xscan/overlay.h"
 #include "xscan/partitioned_scan.h"
@@ -273,6 +274,7 @@ Result<RenderReport> RenderFrame(const RenderOptions& o, std::ostream& log, std:
   report.peakKiB = PeakResidentKiB();
   report.texture = backEnd.TextureReport();
   report.imageLibrary = raster::imageio::Loaded();
+  report.cadLibrary = CadLoaded();
   return report;
 }
 

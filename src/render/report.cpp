@@ -82,7 +82,8 @@ void PrintReport(const RenderReport& r, std::ostream& out) {
   out << "time: load " << r.load << " s, " << (Direct(r.mode) ? "set up " : "tessellate ") << r.setUp
       << " s, render " << r.render << " s (of which writing the image " << r.output << " s)\npeak memory: "
       << r.peakKiB << " KiB\ntexture: " << r.texture << "\nimage library (OpenImageIO): "
-      << (r.imageLibrary ? "loaded" : "not loaded") << '\n';
+      << (r.imageLibrary ? "loaded" : "not loaded") << "\nCAD library (Open CASCADE): "
+      << (r.cadLibrary ? "loaded" : "not loaded") << '\n';
 }
 
 std::string ReportJson(const RenderReport& r) {
@@ -97,7 +98,8 @@ std::string ReportJson(const RenderReport& r) {
      << ", \"seconds_hand_over\": " << r.backEnd.handOver << ", \"seconds_shading\": [";
   for (std::size_t k = 0; k < r.backEnd.shading.size(); ++k) js << (k ? ", " : "") << r.backEnd.shading[k];
   js << "], \"peak_rss_kib\": " << r.peakKiB
-     << ", \"image_library_loaded\": " << (r.imageLibrary ? "true" : "false");
+     << ", \"image_library_loaded\": " << (r.imageLibrary ? "true" : "false")
+     << ", \"cad_library_loaded\": " << (r.cadLibrary ? "true" : "false");
   if (!r.processes.empty()) {
     js << ", \"processes\": [";
     for (std::size_t k = 0; k < r.processes.size(); ++k) {

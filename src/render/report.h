@@ -43,6 +43,7 @@ struct RenderReport {
   raster::BackEndTimes backEnd;
   std::string texture;  // what became of the texture: "none", "opened, N lookups", ...
   bool imageLibrary = false;  // whether OpenImageIO's module was loaded (raster/image_io.h)
+  bool cadLibrary = false;    // whether the CAD module was loaded (scene/cad_library.h)
   // A render shared between processes: each process's seconds, traffic and peak memory.
   std::vector<ProcessReport> processes;
 };

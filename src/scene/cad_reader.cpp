@@ -48,6 +48,7 @@
 #include <stdexcept>
 
 #include "scene/cad_face.h"
+#include "scene/occt_leaks.h"
 
 namespace patchscan {
 namespace {
@@ -396,11 +397,6 @@ Scene Build(const Model& model, const std::string& path, bool asNurbs) {
 
 }  // namespace
 
-bool IsCadExtension(const std::string& extension) {
-  const std::string e = Lower(extension);
-  return e == ".step" || e == ".stp" || e == ".iges" || e == ".igs" || e == ".brep";
-}
-
 std::variant<Scene, SourceError> ReadCad(const std::string& path, bool asNurbs) {
   if (!std::ifstream(path)) return SourceError{path, 0, "cannot open the file"};
   const std::string ext = Lower(std::filesystem::path(path).extension().string());
@@ -420,28 +416,3 @@ std::variant<Scene, SourceError> ReadCad(const std::string& path, bool asNurbs) 
 }
 
 }  // namespace patchscan
-
-#if defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define PATCHSCAN_ADDRESS_SANITIZER 1
-#endif
-#endif
-#if defined(__SANITIZE_ADDRESS__) || defined(PATCHSCAN_ADDRESS_SANITIZER)
-// LeakSanitizer's suppressions for a build under the sanitizers. Open CASCADE's data exchange
-// registers its controllers, editors and static parameters once per process, on the first
-// reader or writer made, and never frees them; its XDE application and driver table are
-// process-wide singletons; its STEP writer (the tests' models) leaves its default axis in a
-// reference cycle. Only these are named: a reader, document or shape that outlives its use is
-// still reported. OCCT is built without frame pointers: the names show in a leak's stack
-// with ASAN_OPTIONS=fast_unwind_on_malloc=0 (tests/CMakeLists.txt, .ci/fuzz).
-extern "C" const char* __lsan_default_suppressions() {
-  return "leak:STEPControl_Controller::Init\n"
-         "leak:STEPCAFControl_Controller::Init\n"
-         "leak:IGESControl_Controller::Init\n"
-         "leak:IGESCAFControl_Controller::Init\n"
-         "leak:XSAlgo::Init\n"
-         "leak:XCAFApp_Application::GetApplication\n"
-         "leak:TPrsStd_DriverTable::Get\n"
-         "leak:STEPConstruct_ContextTool::GetDefaultAxis\n";
-}
-#endif

@@ -12,17 +12,18 @@
 // tessellated-only files give OCCT a null shape). A face that cannot be converted (no
 // B-spline, no pcurves, wires that do not close) is skipped, counted in a warning naming
 // its number and reason.
+//
+// The program reads CAD files through patchscan-cad.so (scene/cad_library.h), which this
+// reader is built into; it links Open CASCADE itself.
 #pragma once
 
 #include <string>
 #include <variant>
 
+#include "scene/cad_library.h"
 #include "scene/scene.h"
 
 namespace patchscan {
-
-// Whether `extension` (with its dot, any case) names a CAD file ReadCad reads.
-bool IsCadExtension(const std::string& extension);
 
 // asNurbs: every face as trimmed NURBS (LoadOptions::cadAsNurbs).
 std::variant<Scene, SourceError> ReadCad(const std::string& path, bool asNurbs = false);

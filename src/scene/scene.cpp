@@ -4,19 +4,11 @@
 #include <filesystem>
 
 #include "scene/bpt_reader.h"
-#include "scene/cad_reader.h"
+#include "scene/cad_library.h"
 #include "scene/obj_reader.h"
 #include "scene/rib/reader.h"
 
 namespace patchscan {
-
-void Scene::ReserveSurfaces(std::size_t more, bool withAppearances) {
-  const auto grow = [more](auto& v) {
-    if (v.size() + more > v.capacity()) v.reserve(std::max(v.size() + more, 2 * v.capacity()));
-  };
-  grow(surfaces), grow(sourceLines), grow(sourceFiles);
-  if (withAppearances) grow(appearanceOf);
-}
 
 Bounds3 Scene::WorldBounds() const {
   Bounds3 b;
@@ -40,7 +32,7 @@ std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOp
   const std::string ext = p.extension().string();
   if (ext == ".rib" || (ext == ".gz" && p.stem().extension() == ".rib")) return ReadRib(path, options);
   if (ext == ".obj") return ReadObj(path, ObjOptions{options.objScheme});
-  if (IsCadExtension(ext)) return ReadCad(path, options.cadAsNurbs);
+  if (IsCadExtension(ext)) return ReadCadModel(path, options.cadAsNurbs);
   if (ext != ".bpt")
     return SourceError{path, 0, "unknown scene format '" + ext +
                                     "' (known: .bpt, .rib, .rib.gz, .obj, .step, .stp, .iges, .igs, .brep)"};

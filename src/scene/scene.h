@@ -2,6 +2,7 @@
 // came from. Readers are chosen by file extension.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -159,7 +160,14 @@ struct Scene {
   // `withAppearances`), growing at least by doubling across calls. A Surface is a kilobyte:
   // growing one by one moved each about twice into fresh pages (a third of a 2,688-face
   // cage's load).
-  void ReserveSurfaces(std::size_t more, bool withAppearances);
+  // Inline: the CAD module (scene/cad_library.h) calls it and links none of scene.cpp.
+  void ReserveSurfaces(std::size_t more, bool withAppearances) {
+    const auto grow = [more](auto& v) {
+      if (v.size() + more > v.capacity()) v.reserve(std::max(v.size() + more, 2 * v.capacity()));
+    };
+    grow(surfaces), grow(sourceLines), grow(sourceFiles);
+    if (withAppearances) grow(appearanceOf);
+  }
 
   // A conservative world-space box of the whole scene.
   Bounds3 WorldBounds() const;
@@ -178,8 +186,8 @@ struct LoadOptions {
 };
 
 // Read a scene file. Known extensions: .bpt (Bézier patch text), .rib (RenderMan
-// Interface Bytestream) and .obj (Wavefront, read as a subdivision cage). Errors name
-// file:line.
+// Interface Bytestream), .obj (Wavefront, read as a subdivision cage) and CAD models
+// (scene/cad_library.h). Errors name file:line.
 std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOptions& options = {});
 
 }  // namespace patchscan

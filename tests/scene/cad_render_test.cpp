@@ -117,4 +117,19 @@ TEST(CadRender, InfoAndConvertOfAStepFile) {
   EXPECT_LT(g.meanCoverage, 1e-4);  // NuPatch and TrimCurve written with every digit
 }
 
+// Open CASCADE lives in a module (scene/cad_library.h) that a run loads when it reads a CAD
+// file, and only then.
+TEST(CadRender, TheCadModuleIsLoadedForACadFileOnly) {
+  Folder dir("cad_module");
+  ASSERT_TRUE(cad_models::WriteStep(cad_models::BoxWithHole(), (dir.path / "h.step").string()));
+  const auto loaded = [&](const std::string& scene) {
+    EXPECT_EQ(dir.Run("render " + scene + " -o a.png --size 8x6 --stats-json s.json"), 0) << dir.Err();
+    const std::string json = Slurp(dir.path / "s.json");
+    EXPECT_NE(json.find("\"cad_library_loaded\": "), std::string::npos) << json;
+    return json.find("\"cad_library_loaded\": true") != std::string::npos;
+  };
+  EXPECT_TRUE(loaded("h.step"));
+  EXPECT_FALSE(loaded(PATCHSCAN_SURFACES_DIR "/teapot.bpt"));
+}
+
 }  // namespace
