@@ -132,17 +132,24 @@ bool CutRectangle(const std::shared_ptr<const TrimLoops>& loops, double u0, doub
   auto cut = std::make_shared<PieceTrim>(PieceTrim{loops, {}, u0, u1, v0, v1});
   const double su = kBoxSlackRel * (u1 - u0), sv = kBoxSlackRel * (v1 - v0);
   const auto& segs = loops->Segments();
-  bool enters = false;
+  bool enters = false, shared = false;
   for (std::size_t k = 0; k < segs.size(); ++k) {
     const Vec2 &lo = segs[k].BoxLo(), &hi = segs[k].BoxHi();
-    if (lo.x() <= u1 + su && hi.x() >= u0 - su && lo.y() <= v1 + sv && hi.y() >= v0 - sv)
+    if (lo.x() <= u1 + su && hi.x() >= u0 - su && lo.y() <= v1 + sv && hi.y() >= v0 - sv) {
       cut->segments.push_back(static_cast<int>(k));
+      shared = shared || loops->EdgeOf(static_cast<int>(k));
+    }
     enters = enters || (lo.x() < u1 - su && hi.x() > u0 + su && lo.y() < v1 - sv && hi.y() > v0 + sv);
   }
   trim->reset();
   // No curve enters the rectangle (none reaches it, or those that do run along its edges,
   // as a CAD face's wire runs round the box of its parameters): all of it is on one side.
-  if (!enters) return cut->Kept(Vec2(0.5, 0.5));
+  // Kept whole, unless a curve on its edge is one a neighbouring face shares: the scans
+  // then end the piece at that edge's crossings (tracker/edge_crossings.h), not at its own.
+  if (!enters) {
+    const bool kept = cut->Kept(Vec2(0.5, 0.5));
+    if (!kept || !shared) return kept;
+  }
   *trim = std::move(cut);
   return true;
 }

@@ -112,8 +112,9 @@ struct PieceTrim {
 };
 
 // What `loops` leave of the rectangle [u0,u1] x [v0,v1] of their (u,v): false where no
-// segment's box meets it and it is dropped whole (by its centre); else true, *trim the
-// rectangle's PieceTrim, or null where no segment meets it and it is kept whole.
+// curve enters it and its centre is cut away (dropped whole); else true, *trim the
+// rectangle's PieceTrim, or null where it is kept whole: no curve enters it and none on its
+// edges runs along an edge another face shares (TrimCurveInput::edge).
 bool CutRectangle(const std::shared_ptr<const TrimLoops>& loops, double u0, double u1, double v0, double v1,
                   std::shared_ptr<const PieceTrim>* trim);
 

@@ -213,15 +213,19 @@ class LevelWalker : public LevelCurve<ShapeT> {
       if ((trackers_->trimPoints[k] - uv).norm() <= kTrimStartUv) trimScratch_->used[k] = 1;
   }
   // Whether the walk keeps a sample at x on the current arc: the arc's crossings before x
-  // toggle the state.
+  // toggle the state. A sample within kColumnEpsPx of a crossing is on the trim curve, which
+  // bounds the kept side: kept (as EmitArc emits a column that close past an arc's end; a
+  // trim curve along the boundary crosses the line where the walk leaves the domain, and a
+  // column on that boundary would otherwise fall to the rounding of the two crossings).
   bool KeptAt(double x) {
     if (!trim_) return true;
     auto& arc = trimScratch_->arc;
-    while (arcNext_ < arc.size() && arcDir_ * (x - arc[arcNext_].first) > 0.0) {
+    bool onCurve = false;
+    for (; arcNext_ < arc.size() && arcDir_ * (x - arc[arcNext_].first) > -kColumnEpsPx; ++arcNext_) {
+      onCurve = onCurve || arcDir_ * (x - arc[arcNext_].first) <= kColumnEpsPx;
       kept_ = !kept_;
-      ++arcNext_;
     }
-    return kept_;
+    return kept_ || onCurve;
   }
   // The walk passes the arc of the level curve from a to b (x-monotone): the trim
   // crossings on it, not yet passed, in walk order. Each is confirmed by Newton on the

@@ -82,6 +82,35 @@ inline TopoDS_Shape GappedDiamond(double gap) {
   return both;
 }
 
+// Two unit squares in the plane y = 0 sharing the edge x = 1, 0 <= z <= 1 (a rectangle 2
+// wide and 1 high), every pcurve of the right one moved `gap` along x: its wire still runs
+// round its box of parameters (a face scanned whole to that box), which ends `gap` short of
+// the edge.
+inline TopoDS_Shape GappedSquares(double gap) {
+  const auto vertex = [](double x, double z) { return BRepBuilderAPI_MakeVertex(gp_Pnt(x, 0, z)).Vertex(); };
+  const TopoDS_Vertex a = vertex(1, 0), b = vertex(1, 1), l0 = vertex(0, 0), l1 = vertex(0, 1), r0 = vertex(2, 0),
+                      r1 = vertex(2, 1);
+  const auto edge = [](const TopoDS_Vertex& p, const TopoDS_Vertex& q) { return BRepBuilderAPI_MakeEdge(p, q).Edge(); };
+  const TopoDS_Edge shared = edge(a, b), bottom = edge(a, r0), side = edge(r0, r1), top = edge(r1, b);
+  const gp_Pln plane(gp_Ax3(gp_Pnt(0, 0, 0), gp_Dir(0, -1, 0), gp_Dir(1, 0, 0)));  // u along x, v along z
+  const TopoDS_Face leftFace = BRepBuilderAPI_MakeFace(plane, BRepBuilderAPI_MakeWire(edge(l0, a), shared, edge(b, l1), edge(l1, l0)));
+  const TopoDS_Face rightFace = BRepBuilderAPI_MakeFace(plane, BRepBuilderAPI_MakeWire(bottom, side, top, shared));
+  // Each edge runs from its first vertex at parameter 0 to its second at 1.
+  BRep_Builder builder;
+  const auto moved = [&](const TopoDS_Edge& e, double u, double v, double du, double dv) {
+    builder.UpdateEdge(e, new Geom2d_Line(gp_Pnt2d(u + gap, v), gp_Dir2d(du, dv)), rightFace, gap);
+  };
+  moved(shared, 1, 0, 0, 1);
+  moved(bottom, 1, 0, 1, 0);
+  moved(side, 2, 0, 0, 1);
+  moved(top, 2, 1, -1, 0);
+  TopoDS_Compound both;
+  builder.MakeCompound(both);
+  builder.Add(both, leftFace);
+  builder.Add(both, rightFace);
+  return both;
+}
+
 inline bool WriteStep(const TopoDS_Shape& shape, const std::string& path) {
   Quiet();
   STEPControl_Writer w;

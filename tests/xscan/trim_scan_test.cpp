@@ -1,6 +1,6 @@
 // Trimmed NURBS through the scans: the exact scan of a square trimmed by a circle against
 // the analytic answer; trimmed surfaces (loops across pieces, nested and separate loops, a
-// loop along the patch's boundary and one touching it, a trimmed sphere) against the ray
+// loop along the patch's boundary and one touching it, a column on a boundary a loop runs along, a trimmed sphere) against the ray
 // caster sample by sample; θ rows against the same reference; tess mode near the trim.
 #include <gtest/gtest.h>
 
@@ -122,6 +122,37 @@ TEST(TrimScan, TessOfASquareTrimmedToADiscStaysNearTheDisc) {
     }
     EXPECT_LT(farthest, r + kOutsideUv);
     EXPECT_NEAR(area, std::numbers::pi * r * r, 2.0 * std::numbers::pi * r * kOutsideUv);
+  }
+}
+
+// A trim loop along the patch's boundary ends each walk where the boundary does: a sample
+// column lying on the boundary (the square's side x = 1 in the plane through the eye and
+// the image's centre column) is kept as the untrimmed boundary keeps it. It was once cut
+// where a walk ended there, the loop's crossing lying a rounding before the column.
+TEST(TrimScan, ALoopAlongTheBoundaryKeepsAColumnOnIt) {
+  const std::vector<Vec2> boundary = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  const TrimCurveInput hole = TrimCircle(Vec2(0.5, 0.5), 0.2, true);
+  // The same region twice: inside the boundary's loop and outside the hole, and outside the
+  // hole alone (the domain's own boundary).
+  const std::vector<Surface> looped = Trimmed(test::FlatSquare(1), {{TrimPolygon(boundary)}, {hole}}, true);
+  const std::vector<Surface> holed = Trimmed(test::FlatSquare(1), {{hole}}, false);
+  ASSERT_EQ(looped.size(), 1u);
+  ASSERT_TRUE(looped[0].trim);
+  for (const Vec3& eye : {Vec3(1.0, -2.0, 3.0), Vec3(1.0, -0.7, 1.7)}) {
+    Camera camera = test::View(eye, 95);  // odd: column 47 is the centre
+    camera.lookAt = Vec3(1.0, 0.0, 0.0);
+    for (const int theta : {0, 32}) {
+      const std::vector<char> a = Coverage(looped, camera, {true, theta, 0}), b = Coverage(holed, camera, {true, theta, 0});
+      long onSide = 0, differ = 0;
+      for (int j = 0; j < camera.height; ++j) {
+        const std::size_t k = static_cast<std::size_t>(j * camera.width + 47);
+        onSide += b[k];
+        differ += a[k] != b[k];
+      }
+      EXPECT_GT(onSide, 10) << "theta " << theta << ": the view does not put the side on a column";
+      EXPECT_EQ(differ, 0) << "theta " << theta << ", eye " << eye.transpose();
+      EXPECT_TRUE(a == b) << "theta " << theta << ", eye " << eye.transpose();
+    }
   }
 }
 
