@@ -7,6 +7,7 @@
 
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepBuilderAPI_NurbsConvert.hxx>
+#include <BRepBuilderAPI_Sewing.hxx>
 #include <BRepTools.hxx>
 #include <BRepTools_Modifier.hxx>
 #include <BRep_Builder.hxx>
@@ -59,6 +60,10 @@ constexpr int kGapSamples = 9;
 constexpr std::size_t kTreeLines = 200;
 // Faces whose conversion failed named one by one in the warnings; the rest are counted.
 constexpr int kNamedSkips = 5;
+// The distance within which the sewing of an IGES part takes two faces' boundaries for one
+// edge, in model units: Open CASCADE's default (BRepBuilderAPI_Sewing), which also sews
+// boundaries lying apart within their own stated tolerances.
+constexpr double kSewTolerance = 1e-6;
 
 std::string Lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -211,6 +216,21 @@ class XdeWalk {
   std::map<std::string, int> prototypeOf_;
 };
 
+// IGES written face by face has no shared edges: each face comes with its own boundary.
+// Sewing makes the boundaries two faces meet along one edge, as a STEP file's are, so that
+// the scans end both faces at that edge's crossings (docs/cad.md). The part's coloured
+// faces and solids are followed into the sewn shape.
+void Sew(Prototype* p) {
+  BRepBuilderAPI_Sewing sewing(kSewTolerance);
+  sewing.Add(p->shape);
+  sewing.Perform();
+  const TopoDS_Shape sewn = sewing.SewedShape();
+  if (sewn.IsNull()) return;
+  for (auto& [part, colour] : p->colouredParts)
+    if (sewing.IsModifiedSubShape(part)) part = sewing.ModifiedSubShape(part);
+  p->shape = sewn;
+}
+
 // The file read into a model; throws std::runtime_error saying why it cannot be.
 Model ReadModel(const std::string& path, const std::string& ext) {
   Model model;
@@ -262,6 +282,8 @@ Model ReadModel(const std::string& path, const std::string& ext) {
   app->Close(doc);
   if (model.instances.empty())
     throw std::runtime_error(std::string("it holds no B-rep shape") + (step ? " (a tessellated-only STEP file?)" : ""));
+  if (!step)
+    for (Prototype& p : model.prototypes) Sew(&p);
   return model;
 }
 

@@ -117,9 +117,11 @@ inline bool WriteStep(const TopoDS_Shape& shape, const std::string& path) {
   return w.Transfer(shape, STEPControl_AsIs) == IFSelect_RetDone && w.Write(path.c_str()) == IFSelect_RetDone;
 }
 
-inline bool WriteIges(const TopoDS_Shape& shape, const std::string& path) {
+// In B-rep mode (solids, shells and their shared edges), else face by face (trimmed
+// surfaces, each with its own boundary, as many exporters write IGES).
+inline bool WriteIges(const TopoDS_Shape& shape, const std::string& path, bool brep = true) {
   Quiet();
-  IGESControl_Writer w("MM", 1);  // B-rep mode
+  IGESControl_Writer w("MM", brep ? 1 : 0);
   return w.AddShape(shape) && w.Write(path.c_str());
 }
 

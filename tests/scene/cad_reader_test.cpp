@@ -111,6 +111,13 @@ TEST(CadReader, ABoxFromStepIgesAndBrep) {
     EXPECT_GT(n, 6 * 60);
   }
   EXPECT_EQ(Read(dir.File("box.step")).cad->edges, 12);
+  // Written face by face, each face with its own four boundary curves, the box is read
+  // with its faces sewn (Open CASCADE's IGES translation sews them): each edge is shared.
+  ASSERT_TRUE(cad_models::WriteIges(cad_models::Box(), dir.File("faces.igs"), false));
+  const Scene faces = Read(dir.File("faces.igs"));
+  ASSERT_TRUE(faces.cad);
+  EXPECT_EQ(faces.cad->faces, 6);
+  EXPECT_EQ(faces.cad->edges, 12);
 }
 
 TEST(CadReader, QuadricFacesLieOnTheirQuadrics) {
