@@ -9,6 +9,7 @@
 #include <limits>
 #include <system_error>
 
+#include "core/ascii.h"
 #include "core/check.h"
 #include "raster/image_io.h"
 #include "raster/png_encoder.h"
@@ -45,11 +46,7 @@ ImageWriter::~ImageWriter() = default;
 
 namespace {
 
-std::string LowerExtension(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
+std::string LowerExtension(const std::filesystem::path& path) { return AsciiLower(path.extension().string()); }
 
 // Each format's default compression (image_writer.h).
 std::string DefaultCompression(const std::string& ext) {

@@ -1,17 +1,15 @@
 #include "scene/cad_library.h"
 
-#include <algorithm>
 #include <atomic>
-#include <cctype>
 
+#include "core/ascii.h"
 #include "core/module.h"
 #include "scene/occt_leaks.h"
 
 namespace patchscan {
 
 bool IsCadExtension(const std::string& extension) {
-  std::string e = extension;
-  std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string e = AsciiLower(extension);
   return e == ".step" || e == ".stp" || e == ".iges" || e == ".igs" || e == ".brep";
 }
 

@@ -37,7 +37,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -48,6 +47,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "core/ascii.h"
 #include "scene/cad_face.h"
 #include "scene/occt_leaks.h"
 
@@ -64,11 +64,6 @@ constexpr int kNamedSkips = 5;
 // edge, in model units: Open CASCADE's default (BRepBuilderAPI_Sewing), which also sews
 // boundaries lying apart within their own stated tolerances.
 constexpr double kSewTolerance = 1e-6;
-
-std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
 
 // Open CASCADE's default messenger prints to stdout: quiet while a file is read.
 class QuietOcct {
@@ -421,7 +416,7 @@ Scene Build(const Model& model, const std::string& path, bool asNurbs) {
 
 std::variant<Scene, SourceError> ReadCad(const std::string& path, bool asNurbs) {
   if (!std::ifstream(path)) return SourceError{path, 0, "cannot open the file"};
-  const std::string ext = Lower(std::filesystem::path(path).extension().string());
+  const std::string ext = AsciiLower(std::filesystem::path(path).extension().string());
   QuietOcct quiet;
   OcctSignals signals;
   try {

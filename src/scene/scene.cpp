@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "core/ascii.h"
 #include "scene/bpt_reader.h"
 #include "scene/cad_library.h"
 #include "scene/obj_reader.h"
@@ -29,8 +30,8 @@ void Scene::FaceCamera(const Camera& camera) {
 
 std::variant<Scene, SourceError> LoadScene(const std::string& path, const LoadOptions& options) {
   const std::filesystem::path p(path);
-  const std::string ext = p.extension().string();
-  if (ext == ".rib" || (ext == ".gz" && p.stem().extension() == ".rib")) return ReadRib(path, options);
+  const std::string ext = AsciiLower(p.extension().string());  // "TEAPOT.RIB" is a RIB file too
+  if (ext == ".rib" || (ext == ".gz" && AsciiLower(p.stem().extension().string()) == ".rib")) return ReadRib(path, options);
   if (ext == ".obj") return ReadObj(path, ObjOptions{options.objScheme});
   if (IsCadExtension(ext)) return ReadCadModel(path, options.cadAsNurbs);
   if (ext != ".bpt")

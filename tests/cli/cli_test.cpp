@@ -80,6 +80,17 @@ TEST(Cli, MissingFileAndUnknownFormat) {
   EXPECT_NE(r.err.find("unknown scene format '.md'"), std::string::npos) << r.err;
 }
 
+// A file's extension names its format in capitals too, as files from other systems come.
+TEST(Cli, ExtensionsInCapitals) {
+  Folder dir("capitals");
+  std::filesystem::copy_file(PATCHSCAN_SURFACES_DIR "/quadrics.rib", dir.path / "QUADRICS.RIB");
+  std::filesystem::copy_file(PATCHSCAN_SURFACES_DIR "/teapot.bpt", dir.path / "Teapot.Bpt");
+  EXPECT_EQ(dir.Run("render QUADRICS.RIB --size 32x24 -o Q.PNG --quiet"), 0) << dir.Err();
+  EXPECT_EQ(dir.Run("render Teapot.Bpt --size 32x24 -o T.EXR --quiet"), 0) << dir.Err();
+  EXPECT_EQ(Pixels((dir.path / "Q.PNG").string()).size(), 32u * 24u * 4u);
+  EXPECT_EQ(Pixels((dir.path / "T.EXR").string()).size(), 32u * 24u * 4u);
+}
+
 TEST(Cli, BadOptionsAreUsageErrors) {
   const std::pair<std::string, std::string> cases[] = {
       {"--size 640", "--size: expected WIDTHxHEIGHT with positive whole numbers, found '640'"},
