@@ -46,7 +46,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--binary", default="build/patchscan")
     ap.add_argument("--out", default="docs")
-    ap.add_argument("--sizes", default="1024x768", help="comma-separated WxH (the issue's pair: 1024x768,4096x3072)")
+    ap.add_argument("--sizes", default="1024x768,4096x3072", help="comma-separated WxH")
     ap.add_argument("--aa", type=int, default=3)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--models", default=",".join(m[0] for m in MODELS))
