@@ -214,8 +214,10 @@ class XdeWalk {
 // IGES written face by face has no shared edges: each face comes with its own boundary.
 // Sewing makes the boundaries two faces meet along one edge, as a STEP file's are, so that
 // the scans end both faces at that edge's crossings (docs/cad.md). The part's coloured
-// faces and solids are followed into the sewn shape.
+// faces and solids are followed into the sewn shape. A part with shells (IGES written as
+// B-rep solids) shares its edges already and is left as read.
 void Sew(Prototype* p) {
+  if (TopExp_Explorer(p->shape, TopAbs_SHELL).More()) return;
   BRepBuilderAPI_Sewing sewing(kSewTolerance);
   sewing.Add(p->shape);
   sewing.Perform();
